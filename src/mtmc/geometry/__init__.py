@@ -1,0 +1,3 @@
+"""mtmc.geometry."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""mtmc.graph."""
+
+__all__: list[str] = []

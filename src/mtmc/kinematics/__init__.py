@@ -1,0 +1,3 @@
+"""mtmc.kinematics."""
+
+__all__: list[str] = []

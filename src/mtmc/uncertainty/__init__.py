@@ -1,0 +1,3 @@
+"""mtmc.uncertainty."""
+
+__all__: list[str] = []
