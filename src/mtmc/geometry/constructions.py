@@ -1,0 +1,3 @@
+"""constructions."""
+
+__all__: list[str] = []

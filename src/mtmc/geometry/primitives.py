@@ -1,0 +1,3 @@
+"""primitives."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""Homogeneous transforms and rotations, batched."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""expression."""
+
+__all__: list[str] = []

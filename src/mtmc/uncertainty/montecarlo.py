@@ -1,0 +1,3 @@
+"""montecarlo."""
+
+__all__: list[str] = []

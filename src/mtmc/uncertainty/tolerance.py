@@ -1,0 +1,3 @@
+"""tolerance."""
+
+__all__: list[str] = []
