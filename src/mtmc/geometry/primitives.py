@@ -1,3 +1,264 @@
-"""primitives."""
+"""Batched geometric primitives: lines, planes, circles and spheres.
 
-__all__: list[str] = []
+Each primitive is a small frozen dataclass holding a whole batch of ``M`` trials, the
+trial axis first, like :class:`scipy.spatial.transform.Rotation`: ``len(line)`` is
+``M`` and ``line[i]`` or ``line[2:5]`` is a sub-batch (an integer index keeps a batch
+of one). Shapes are checked and values coerced to float64 on construction; a single
+``(3,)`` point or a plain number is a batch of one, and a batch of one broadcasts
+against a batch of ``M`` (e.g. one fixed line point with ``M`` sampled directions).
+
+Directions and normals are normalised to unit length on construction; a zero-length
+one raises :class:`mtmc.errors.DegenerateGeometryError`.
+
+Units: lengths in mm.
+
+Examples
+--------
+>>> import numpy as np
+>>> plane = Plane(point=[0, 0, 1], normal=[0, 0, 2])
+>>> len(plane), plane.normal
+(1, array([[0., 0., 1.]]))
+>>> plane.offset
+array([-1.])
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from mtmc.errors import InputError
+from mtmc.geometry._checks import (
+    batch_size,
+    broadcast_batch,
+    check_points,
+    check_scalars,
+    check_vectors,
+    degenerate,
+)
+
+__all__ = ["Circle", "Line", "Plane", "Sphere"]
+
+Index = int | slice | npt.NDArray[np.intp] | npt.NDArray[np.bool_] | list[int]
+
+
+def _normalised(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.float64]:
+    norm = np.sqrt(np.einsum("mi,mi->m", v, v))
+    degenerate(~(norm > 0.0), f"the {what} has zero length", f"a non-zero {what}", name)
+    return v / norm[:, None]
+
+
+def _index(arr: NDArray[np.float64], idx: Any) -> NDArray[np.float64]:
+    if isinstance(idx, int | np.integer):
+        m = arr.shape[0]
+        if not -m <= int(idx) < m:
+            raise IndexError(f"trial index {idx} out of range for a batch of {m}")
+        i = int(idx) % m
+        return arr[i : i + 1]
+    return arr[idx]
+
+
+def _set(obj: object, **values: NDArray[np.float64]) -> None:
+    for key, value in values.items():
+        object.__setattr__(obj, key, value)
+
+
+def _check_radius(r: NDArray[np.float64], name: str) -> None:
+    bad = ~(r >= 0.0)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise InputError(
+            f"expected a radius >= 0 mm, got {r[first]!r} in {int(bad.sum())} of "
+            f"{r.shape[0]} trials (first: trial {first})",
+            field=name,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Line:
+    """A batch of ``M`` straight lines, each a point and a unit direction.
+
+    Parameters
+    ----------
+    point : array_like, shape (M, 3) or (3,)
+        A point on each line, mm.
+    direction : array_like, shape (M, 3) or (3,)
+        The direction of each line; normalised to unit length on construction.
+
+    Raises
+    ------
+    InputError
+        If a shape is wrong or the batch sizes differ (other than 1 against ``M``).
+    DegenerateGeometryError
+        If a direction has zero length.
+    """
+
+    point: NDArray[np.float64]
+    direction: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        p = check_points(self.point, "point")
+        d = check_vectors(self.direction, "direction")
+        m = batch_size(point=p, direction=d)
+        _set(
+            self,
+            point=broadcast_batch(m, p),
+            direction=broadcast_batch(m, _normalised(d, "direction", "line direction")),
+        )
+
+    def __len__(self) -> int:
+        return int(self.point.shape[0])
+
+    def __getitem__(self, idx: Index) -> Line:
+        return Line(_index(self.point, idx), _index(self.direction, idx))
+
+    def at(self, t: npt.ArrayLike) -> NDArray[np.float64]:
+        """The points ``point + t * direction`` of the lines.
+
+        Parameters
+        ----------
+        t : array_like, shape (M,) or ()
+            The signed distance along each line, mm.
+
+        Returns
+        -------
+        ndarray, shape (M, 3)
+            The points, mm.
+        """
+        tt = check_scalars(t, "t")
+        return self.point + tt[:, None] * self.direction
+
+
+@dataclass(frozen=True, eq=False)
+class Plane:
+    """A batch of ``M`` planes, each a point and a unit normal.
+
+    The plane is ``{x : normal · (x - point) = 0}``, or in the form of Stryczek's eq. 28,
+    ``I x + J y + K z + D = 0`` with ``(I, J, K) = normal`` and ``D = offset``.
+
+    Parameters
+    ----------
+    point : array_like, shape (M, 3) or (3,)
+        A point on each plane, mm.
+    normal : array_like, shape (M, 3) or (3,)
+        The normal of each plane; normalised to unit length on construction.
+
+    Raises
+    ------
+    InputError
+        If a shape is wrong or the batch sizes differ.
+    DegenerateGeometryError
+        If a normal has zero length.
+    """
+
+    point: NDArray[np.float64]
+    normal: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        p = check_points(self.point, "point")
+        n = check_vectors(self.normal, "normal")
+        m = batch_size(point=p, normal=n)
+        _set(
+            self,
+            point=broadcast_batch(m, p),
+            normal=broadcast_batch(m, _normalised(n, "normal", "plane normal")),
+        )
+
+    def __len__(self) -> int:
+        return int(self.point.shape[0])
+
+    def __getitem__(self, idx: Index) -> Plane:
+        return Plane(_index(self.point, idx), _index(self.normal, idx))
+
+    @property
+    def offset(self) -> NDArray[np.float64]:
+        """``D = -normal · point`` of the plane equation ``n · x + D = 0`` (eq. 29), shape (M,)."""
+        return -np.einsum("mi,mi->m", self.normal, self.point)
+
+
+@dataclass(frozen=True, eq=False)
+class Circle:
+    """A batch of ``M`` circles in space: centre, unit normal of their plane, radius.
+
+    Parameters
+    ----------
+    centre : array_like, shape (M, 3) or (3,)
+        The centres, mm.
+    normal : array_like, shape (M, 3) or (3,)
+        The normals of the circles' planes; normalised on construction.
+    radius : array_like, shape (M,) or ()
+        The radii, mm, ``>= 0``.
+
+    Raises
+    ------
+    InputError
+        If a shape is wrong, the batch sizes differ, or a radius is negative or NaN.
+    DegenerateGeometryError
+        If a normal has zero length.
+    """
+
+    centre: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    radius: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        c = check_points(self.centre, "centre")
+        n = check_vectors(self.normal, "normal")
+        r = check_scalars(self.radius, "radius")
+        _check_radius(r, "radius")
+        m = batch_size(centre=c, normal=n, radius=r)
+        _set(
+            self,
+            centre=broadcast_batch(m, c),
+            normal=broadcast_batch(m, _normalised(n, "normal", "circle normal")),
+            radius=broadcast_batch(m, r),
+        )
+
+    def __len__(self) -> int:
+        return int(self.centre.shape[0])
+
+    def __getitem__(self, idx: Index) -> Circle:
+        return Circle(_index(self.centre, idx), _index(self.normal, idx), _index(self.radius, idx))
+
+    @property
+    def plane(self) -> Plane:
+        """The plane of each circle (through the centre, with the circle's normal)."""
+        return Plane(self.centre, self.normal)
+
+
+@dataclass(frozen=True, eq=False)
+class Sphere:
+    """A batch of ``M`` spheres: centre and radius.
+
+    Parameters
+    ----------
+    centre : array_like, shape (M, 3) or (3,)
+        The centres, mm.
+    radius : array_like, shape (M,) or ()
+        The radii, mm, ``>= 0``.
+
+    Raises
+    ------
+    InputError
+        If a shape is wrong, the batch sizes differ, or a radius is negative or NaN.
+    """
+
+    centre: NDArray[np.float64]
+    radius: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        c = check_points(self.centre, "centre")
+        r = check_scalars(self.radius, "radius")
+        _check_radius(r, "radius")
+        m = batch_size(centre=c, radius=r)
+        _set(self, centre=broadcast_batch(m, c), radius=broadcast_batch(m, r))
+
+    def __len__(self) -> int:
+        return int(self.centre.shape[0])
+
+    def __getitem__(self, idx: Index) -> Sphere:
+        return Sphere(_index(self.centre, idx), _index(self.radius, idx))
