@@ -1,3 +1,328 @@
-"""expression."""
+"""Measurement models written as text: a safe, vectorised expression language.
 
-__all__: list[str] = []
+``expression("m_rc + dm_rc")`` parses a formula with Python's :mod:`ast` module and
+accepts only a whitelist of node types: numbers, variable names, the binary operators
+``+ - * / **``, unary ``+``/``-``, parentheses, and calls of a fixed set of NumPy
+functions. Nothing is ever passed to :func:`eval`: the tree is walked by
+:class:`Expression` itself, so a formula can do arithmetic on arrays and nothing else.
+
+Examples
+--------
+>>> import numpy as np
+>>> f = expression("m_rc + dm_rc")
+>>> f.names
+('m_rc', 'dm_rc')
+>>> f(m_rc=np.array([1.0, 2.0]), dm_rc=np.array([0.5, 0.25]))
+array([1.5 , 2.25])
+>>> str(expression("sqrt(x**2 + y**2)"))
+'sqrt(x**2 + y**2)'
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, cast
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from mtmc.errors import ExpressionError
+
+__all__ = ["Expression", "expression", "ALLOWED_FUNCTIONS", "ALLOWED_CONSTANTS"]
+
+#: Functions an expression may call, by name, with the number of arguments each takes.
+ALLOWED_FUNCTIONS: dict[str, tuple[Callable[..., Any], int]] = {
+    "sqrt": (np.sqrt, 1),
+    "sin": (np.sin, 1),
+    "cos": (np.cos, 1),
+    "tan": (np.tan, 1),
+    "arcsin": (np.arcsin, 1),
+    "arccos": (np.arccos, 1),
+    "arctan": (np.arctan, 1),
+    "arctan2": (np.arctan2, 2),
+    "exp": (np.exp, 1),
+    "log": (np.log, 1),
+    "log10": (np.log10, 1),
+    "abs": (np.abs, 1),
+    "hypot": (np.hypot, 2),
+}
+
+#: Named constants an expression may use.
+ALLOWED_CONSTANTS: dict[str, float] = {"pi": float(np.pi), "e": float(np.e)}
+
+# Functions that do not carry the imaginary part of a complex argument through as an
+# analytic continuation (or refuse complex input): a model using them is not
+# complex-step safe, and GUM sensitivities fall back to central differences.
+_NOT_COMPLEX_SAFE = frozenset({"abs", "arctan2", "hypot"})
+
+_BINARY: dict[type[ast.operator], Callable[[Any, Any], Any]] = {
+    ast.Add: np.add,
+    ast.Sub: np.subtract,
+    ast.Mult: np.multiply,
+    ast.Div: np.true_divide,
+    ast.Pow: np.power,
+}
+_UNARY: dict[type[ast.unaryop], Callable[[Any], Any]] = {
+    ast.USub: np.negative,
+    ast.UAdd: np.positive,
+}
+
+_ALLOWED_TEXT = (
+    "numbers, variable names, + - * / **, unary -, parentheses, the constants pi and e, "
+    "and calls to " + ", ".join(ALLOWED_FUNCTIONS)
+)
+
+_MAX_LENGTH = 10_000
+
+
+def _describe(node: ast.AST) -> str:
+    names = {
+        ast.Attribute: "attribute access",
+        ast.Subscript: "subscripts",
+        ast.Lambda: "lambda",
+        ast.Compare: "comparisons",
+        ast.BoolOp: "boolean operators",
+        ast.IfExp: "conditional expressions",
+        ast.List: "lists",
+        ast.Tuple: "tuples",
+        ast.Dict: "dicts",
+        ast.Set: "sets",
+        ast.ListComp: "comprehensions",
+        ast.GeneratorExp: "generators",
+        ast.Starred: "starred arguments",
+        ast.NamedExpr: "assignment expressions",
+        ast.JoinedStr: "f-strings",
+        ast.Await: "await",
+    }
+    for kind, text in names.items():
+        if isinstance(node, kind):
+            return text
+    return type(node).__name__
+
+
+@dataclass(frozen=True)
+class Expression:
+    """A parsed model expression, callable on arrays.
+
+    Build it with :func:`expression`. Calling it, ``expr(**arrays)``, evaluates the
+    formula element-wise with NumPy broadcasting: give each variable as an array whose
+    leading axis is the trial, ``(M,)``, and get ``(M,)`` back (a formula without
+    variables gives an array broadcast to the inputs' shape, or a 0-d array).
+
+    Attributes
+    ----------
+    text : str
+        The formula as written; ``str(expr)`` gives it back.
+    names : tuple of str
+        The variables, in order of first appearance in the text (constants ``pi``
+        and ``e`` and function names are not variables).
+    functions : tuple of str
+        The functions called, in order of first appearance.
+    complex_safe : bool
+        True if every function used is analytic in its arguments, so the complex-step
+        derivative of :func:`mtmc.gum` is exact; False for ``abs``, ``arctan2`` and
+        ``hypot``.
+    """
+
+    text: str
+    names: tuple[str, ...]
+    functions: tuple[str, ...]
+    complex_safe: bool
+    _tree: ast.Expression = field(repr=False, compare=False)
+
+    def __str__(self) -> str:
+        return self.text
+
+    def __call__(self, **arrays: npt.ArrayLike) -> NDArray[Any]:
+        """Evaluate the formula.
+
+        Parameters
+        ----------
+        **arrays : array_like
+            One value per variable in :attr:`names`, e.g. shape ``(M,)`` with the trial
+            axis first; real or complex.
+
+        Returns
+        -------
+        ndarray
+            The formula's value, broadcast over the inputs (float64, or complex128 for
+            complex input).
+
+        Raises
+        ------
+        ExpressionError
+            If a variable of the formula is missing, or an argument is not one of its
+            variables.
+        """
+        missing = [n for n in self.names if n not in arrays]
+        if missing:
+            raise ExpressionError(
+                f"no value given for variable(s) {', '.join(missing)} of {self.text!r}",
+                field=missing[0],
+            )
+        extra = [n for n in arrays if n not in self.names]
+        if extra:
+            raise ExpressionError(
+                f"{', '.join(extra)} is not a variable of {self.text!r} "
+                f"(its variables: {', '.join(self.names) or 'none'})",
+                field=extra[0],
+            )
+        values = {}
+        for name, value in arrays.items():
+            arr = np.asarray(value)
+            if not np.iscomplexobj(arr):
+                arr = arr.astype(np.float64, copy=False)
+            values[name] = arr
+        return np.asarray(self._eval(self._tree.body, values))
+
+    def _eval(self, node: ast.AST, values: dict[str, NDArray[Any]]) -> Any:
+        if isinstance(node, ast.Constant):
+            return float(cast(float, node.value))
+        if isinstance(node, ast.Name):
+            if node.id in values:
+                return values[node.id]
+            return ALLOWED_CONSTANTS[node.id]
+        if isinstance(node, ast.BinOp):
+            left = self._eval(node.left, values)
+            right = self._eval(node.right, values)
+            return _BINARY[type(node.op)](left, right)
+        if isinstance(node, ast.UnaryOp):
+            return _UNARY[type(node.op)](self._eval(node.operand, values))
+        if isinstance(node, ast.Call):
+            func, _ = ALLOWED_FUNCTIONS[node.func.id]  # type: ignore[attr-defined]
+            return func(*(self._eval(a, values) for a in node.args))
+        raise AssertionError(f"unchecked node {type(node).__name__}")  # pragma: no cover
+
+
+class _Checker(ast.NodeVisitor):
+    """Walk a parsed tree, refuse every node outside the whitelist, collect names."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+        self.names: list[str] = []
+        self.functions: list[str] = []
+
+    def _fail(self, node: ast.AST, what: str) -> None:
+        col = getattr(node, "col_offset", 0) + 1
+        raise ExpressionError(
+            f"{what} not allowed in {self.text!r}; allowed: {_ALLOWED_TEXT}",
+            line=getattr(node, "lineno", 1),
+            column=col,
+        )
+
+    def generic_visit(self, node: ast.AST) -> None:
+        self._fail(node, _describe(node))
+
+    def visit_Expression(self, node: ast.Expression) -> None:
+        self.visit(node.body)
+
+    def visit_Constant(self, node: ast.Constant) -> None:
+        value = node.value
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            self._fail(node, f"the constant {value!r} (only real numbers are)")
+
+    def visit_Name(self, node: ast.Name) -> None:
+        if node.id.startswith("_"):
+            self._fail(node, f"the name {node.id!r} (names starting with '_' are)")
+        if node.id in ALLOWED_FUNCTIONS:
+            self._fail(node, f"the function name {node.id!r} used as a value")
+        if node.id not in ALLOWED_CONSTANTS and node.id not in self.names:
+            self.names.append(node.id)
+
+    def visit_BinOp(self, node: ast.BinOp) -> None:
+        if type(node.op) not in _BINARY:
+            self._fail(node, f"the operator {type(node.op).__name__}")
+        self.visit(node.left)
+        self.visit(node.right)
+
+    def visit_UnaryOp(self, node: ast.UnaryOp) -> None:
+        if type(node.op) not in _UNARY:
+            self._fail(node, f"the operator {type(node.op).__name__}")
+        self.visit(node.operand)
+
+    def visit_Call(self, node: ast.Call) -> None:
+        if not isinstance(node.func, ast.Name):
+            self._fail(node, "calling anything but a function name")
+            return
+        name = node.func.id
+        if name not in ALLOWED_FUNCTIONS:
+            self._fail(node, f"the function {name!r}")
+        if node.keywords:
+            self._fail(node, f"keyword arguments to {name}")
+        _, arity = ALLOWED_FUNCTIONS[name]
+        if len(node.args) != arity:
+            col = node.col_offset + 1
+            raise ExpressionError(
+                f"{name} takes {arity} argument(s), got {len(node.args)} in {self.text!r}",
+                line=node.lineno,
+                column=col,
+            )
+        if name not in self.functions:
+            self.functions.append(name)
+        for arg in node.args:
+            self.visit(arg)
+
+
+def expression(text: str) -> Expression:
+    """Parse a model formula into a vectorised callable.
+
+    Parameters
+    ----------
+    text : str
+        A formula in Python syntax restricted to: numbers, variable names, the binary
+        operators ``+ - * / **``, unary ``-`` and ``+``, parentheses, the constants
+        ``pi`` and ``e``, and calls to ``sqrt, sin, cos, tan, arcsin, arccos, arctan,
+        arctan2, exp, log, log10, abs, hypot`` (angles in rad). Variable names must not
+        start with ``_``.
+
+    Returns
+    -------
+    Expression
+        The parsed formula, with ``.names`` (its variables in order of appearance).
+
+    Raises
+    ------
+    ExpressionError
+        If the text is empty, does not parse, or uses anything outside the whitelist
+        (attribute access, subscripts, lambdas, unknown functions, ``__import__``,
+        strings, comparisons, ...). The message gives the column and what is allowed.
+
+    Examples
+    --------
+    >>> expression("x.real")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.ExpressionError: line 1, column 1: attribute access not allowed in 'x.real'; ...
+    """
+    if not isinstance(text, str):
+        raise ExpressionError(f"an expression must be a string, got {type(text).__name__}")
+    if len(text) > _MAX_LENGTH:
+        raise ExpressionError(f"expression longer than {_MAX_LENGTH} characters")
+    if "\x00" in text:
+        raise ExpressionError("expression contains a NUL character", column=text.index("\x00") + 1)
+    stripped = text.strip()
+    if not stripped:
+        raise ExpressionError("empty expression; expected a formula such as 'a + b'")
+    try:
+        tree = ast.parse(stripped, mode="eval")
+    except SyntaxError as exc:
+        raise ExpressionError(
+            f"syntax error in {stripped!r}: {exc.msg}", line=exc.lineno, column=exc.offset
+        ) from None
+    except (ValueError, RecursionError, MemoryError) as exc:
+        raise ExpressionError(f"cannot parse {stripped!r}: {exc}") from None
+    checker = _Checker(stripped)
+    try:
+        checker.visit(tree)
+    except RecursionError:
+        raise ExpressionError(f"expression nested too deeply: {stripped[:40]!r}...") from None
+    return Expression(
+        text=stripped,
+        names=tuple(checker.names),
+        functions=tuple(checker.functions),
+        complex_safe=not (_NOT_COMPLEX_SAFE & set(checker.functions)),
+        _tree=tree,
+    )
