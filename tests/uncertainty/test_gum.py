@@ -1,0 +1,274 @@
+"""GUM propagation: sensitivities vs analytic derivatives, u vs closed forms,
+Welch–Satterthwaite vs JCGM 100 H.1, correlated inputs vs C U Cᵀ, one batched call."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mtmc import (
+    Arcsine,
+    Constant,
+    InputError,
+    MultivariateNormal,
+    Normal,
+    StudentT,
+    Uniform,
+    expression,
+)
+from mtmc.uncertainty.gum import GumResult, coverage_factor, gum, welch_satterthwaite
+
+X0 = {"a": 1.3, "b": 0.7, "c": 2.1}
+U0 = {"a": 0.01, "b": 0.02, "c": 0.05}
+
+
+def _inputs(names):
+    return {n: Normal(X0[n], U0[n]) for n in names}
+
+
+# (formula, analytic gradient at X0) -- gradients written out by hand
+a, b, c = X0["a"], X0["b"], X0["c"]
+MODELS = [
+    ("a * b / c", {"a": b / c, "b": a / c, "c": -a * b / c**2}),
+    ("a ** b", {"a": b * a ** (b - 1), "b": a**b * math.log(a)}),
+    ("sin(a) * cos(b)", {"a": math.cos(a) * math.cos(b), "b": -math.sin(a) * math.sin(b)}),
+    (
+        "exp(a) * log(c) + sqrt(b)",
+        {"a": math.exp(a) * math.log(c), "b": 0.5 / math.sqrt(b), "c": math.exp(a) / c},
+    ),
+    (
+        "arctan(a / c) + arcsin(b)",
+        {"a": c / (a**2 + c**2), "c": -a / (a**2 + c**2), "b": 1 / math.sqrt(1 - b**2)},
+    ),
+    ("log10(a) - tan(b)", {"a": 1 / (a * math.log(10)), "b": -1 / math.cos(b) ** 2}),
+]
+
+
+@pytest.mark.parametrize(("text", "grad"), MODELS)
+def test_complex_step_sensitivities_match_analytic_derivatives(text, grad):
+    expr = expression(text)
+    res = gum(expr, _inputs(expr.names))
+    assert res.method == "complex-step"
+    for name, value in grad.items():
+        assert res.sensitivities[name] == pytest.approx(value, rel=1e-13, abs=1e-15)
+    u_ref = math.sqrt(sum((grad[n] * U0[n]) ** 2 for n in grad))
+    assert res.u == pytest.approx(u_ref, rel=1e-13)
+    f = {n: np.array([X0[n]]) for n in expr.names}
+    assert res.estimate == pytest.approx(float(expr(**f)[0]), rel=1e-15)
+
+
+def test_model_not_complex_safe_falls_back_to_central_differences():
+    # np.abs drops the imaginary part: the complex-step row gives c_a = 0, the central
+    # differences in the same call give c_a = sign(a) * b; the check must notice.
+    res = gum(lambda a, b: np.abs(a - 2.0) * b, {"a": Normal(1.3, 0.01), "b": Normal(0.7, 0.02)})
+    assert res.method == "central-difference"
+    assert res.sensitivities["a"] == pytest.approx(-0.7, rel=1e-8)
+    assert res.sensitivities["b"] == pytest.approx(0.7, rel=1e-8)
+
+
+def test_model_refusing_complex_input_uses_central_differences():
+    res = gum(lambda a, b: np.hypot(a, b), {"a": Normal(3.0, 0.1), "b": Normal(4.0, 0.1)})
+    assert res.method == "central-difference"
+    assert res.sensitivities["a"] == pytest.approx(0.6, rel=1e-8)
+    assert res.sensitivities["b"] == pytest.approx(0.8, rel=1e-8)
+    assert res.u == pytest.approx(0.1, rel=1e-8)
+    expr = expression("hypot(a, b)")
+    assert not expr.complex_safe
+    assert gum(expr, {"a": Normal(3.0, 0.1), "b": Normal(4.0, 0.1)}).method == "central-difference"
+
+
+def test_all_sensitivity_evaluations_in_one_batched_call():
+    calls = []
+
+    def model(a, b, c):
+        calls.append(a.shape)
+        return a * b + np.exp(c)
+
+    gum(model, _inputs("abc"))
+    assert len(calls) == 1
+    assert calls[0] == (1 + 3 * 3,)
+
+
+def test_linear_model_u_closed_form_and_budget():
+    # y = 2 x1 - 3 x2 + x3: u² = 4 u1² + 9 u2² + u3², shares = the terms / u².
+    inputs = {"x1": Normal(1.0, 0.3), "x2": Uniform(-1.0, 1.0), "x3": Arcsine(-2.0, 2.0)}
+    res = gum(expression("2*x1 - 3*x2 + x3"), inputs)
+    u1, u2, u3 = 0.3, 1 / math.sqrt(3), 2 / math.sqrt(2)
+    terms = np.array([(2 * u1) ** 2, (3 * u2) ** 2, u3**2])
+    assert res.u == pytest.approx(math.sqrt(terms.sum()), rel=1e-14)
+    assert [e.name for e in res.budget] == ["x1", "x2", "x3"]
+    for entry, term, c, ux in zip(res.budget, terms, (2, -3, 1), (u1, u2, u3), strict=True):
+        assert entry.sensitivity == pytest.approx(c, rel=1e-14)
+        assert entry.u == pytest.approx(ux, rel=1e-14)
+        assert entry.contribution == pytest.approx(math.sqrt(term), rel=1e-14)
+        assert entry.share == pytest.approx(term / terms.sum(), rel=1e-13)
+    assert sum(e.share for e in res.budget) == pytest.approx(1.0, rel=1e-14)
+    assert res.dof == math.inf
+    assert res.k == pytest.approx(1.959963984540054, rel=1e-14)
+    assert res.interval[0] == pytest.approx(res.estimate - res.k * res.u, rel=1e-14)
+    assert res.expanded_uncertainty == pytest.approx(res.k * res.u)
+    assert isinstance(res, GumResult)
+
+
+def test_product_relative_uncertainty_closed_form():
+    # y = a b / c: (u/y)² = Σ (u_i/x_i)² (JCGM 100 eq. (12)).
+    res = gum(expression("a * b / c"), _inputs("abc"))
+    rel = math.sqrt(sum((U0[n] / X0[n]) ** 2 for n in "abc"))
+    assert res.u / res.estimate == pytest.approx(rel, rel=1e-13)
+
+
+def test_constant_input_contributes_nothing():
+    res = gum(expression("a + k * b"), {"a": Normal(1, 0.1), "b": Normal(2, 0.2), "k": 3.0})
+    assert res.u == pytest.approx(math.sqrt(0.01 + 9 * 0.04), rel=1e-14)
+    entry = [e for e in res.budget if e.name == "k"][0]
+    assert entry.u == 0 and entry.contribution == 0 and entry.sensitivity == pytest.approx(2.0)
+    assert isinstance(Constant(3.0).std, float)
+
+
+def test_welch_satterthwaite_gum_h1_end_gauge():
+    """JCGM 100 H.1 (end-gauge calibration), model (H.3) with the inputs of Table H.1,
+    in nm and °C. A scaled-and-shifted t carries each (u, ν) pair: the GUM takes its
+    scale as u. Published: u_c(l) = 32 nm, ν_eff(l) = 16, k = t_95(16) = 2.12, U = 67 nm,
+    l = 50.000 838 mm."""
+    inputs = {
+        "l_s": StudentT(18, 50_000_623.6, 25.0),
+        "d_bar": StudentT(24, 215.0, 5.8),
+        "d1": StudentT(5, 0.0, 3.9),
+        "d2": StudentT(8, 0.0, 6.7),
+        "alpha_s": Uniform(9.5e-6, 13.5e-6),
+        "theta_bar": Normal(-0.1, 0.2),
+        "Delta": Arcsine(-0.5, 0.5),
+        "dalpha": StudentT(50, 0.0, 0.58e-6),
+        "dtheta": StudentT(2, 0.0, 0.029),
+    }
+    model = expression(
+        "l_s + d_bar + d1 + d2 - l_s * (alpha_s * dtheta + dalpha * (theta_bar + Delta))"
+    )
+    res = gum(model, inputs)
+    assert round(res.estimate) == 50_000_839  # 50 000 838.6 nm: "50.000 838 mm"
+    assert round(res.u) == 32
+    # Table H.1 sensitivities: c(δα) = -l_s θ, c(δθ) = -l_s α_s; c(α_s) = c(θ) = 0.
+    assert res.sensitivities["dalpha"] == pytest.approx(50_000_623.6 * 0.1, rel=1e-12)
+    assert res.sensitivities["dtheta"] == pytest.approx(-50_000_623.6 * 11.5e-6, rel=1e-12)
+    assert res.sensitivities["alpha_s"] == 0.0
+    assert math.floor(res.dof) == 16
+    assert round(res.k, 2) == 2.12
+    assert round(res.k * res.u) == 67
+    # hand computation of eq. (G.2b) from the contributions c_i u_i of Table H.1
+    contrib = np.array(
+        [25.0, 5.8, 3.9, 6.7, 50_000_623.6 * 0.1 * 0.58e-6, 50_000_623.6 * 11.5e-6 * 0.029]
+    )
+    nu = np.array([18, 24, 5, 8, 50, 2.0])
+    hand = (contrib**2).sum() ** 2 / np.sum(contrib**4 / nu)
+    assert res.dof == pytest.approx(hand, rel=1e-9)
+    assert welch_satterthwaite(contrib**2, nu) == pytest.approx(hand, rel=1e-14)
+
+
+def test_welch_satterthwaite_edge_cases():
+    assert welch_satterthwaite([1.0, 2.0], [math.inf, math.inf]) == math.inf
+    assert welch_satterthwaite([1.0, 0.0], [4.0, 1.0]) == pytest.approx(4.0)
+    with pytest.raises(InputError, match="same shape"):
+        welch_satterthwaite([1.0], [1.0, 2.0])
+    with pytest.raises(InputError, match="positive degrees of freedom"):
+        welch_satterthwaite([1.0], [0.0])
+
+
+def test_coverage_factor_against_t_table():
+    # t-table values (JCGM 100 Table G.2): ν = 16, p = 95 % -> 2.12; ν = 2 -> 4.30;
+    # p = 99 %, ν = inf -> 2.576
+    assert round(coverage_factor(0.95, 16), 2) == 2.12
+    assert round(coverage_factor(0.95, 2.9), 2) == 4.30
+    assert round(coverage_factor(0.99, math.inf), 3) == 2.576
+    assert round(coverage_factor(0.6827, math.inf), 3) == 1.000
+    with pytest.raises(InputError, match="0 < p < 1"):
+        coverage_factor(1.0, 5)
+
+
+def test_multivariate_input_closed_form_correlated():
+    # y = x1 + x2 with corr r: u² = u1² + u2² + 2 r u1 u2 (JCGM 100 eq. (13))
+    u1, u2, r = 0.3, 0.4, -0.6
+    cov = [[u1**2, r * u1 * u2], [r * u1 * u2, u2**2]]
+    res = gum(lambda x: x[:, 0] + x[:, 1], {"x": MultivariateNormal([1.0, 2.0], cov)})
+    assert res.u == pytest.approx(math.sqrt(u1**2 + u2**2 + 2 * r * u1 * u2), rel=1e-13)
+    assert res.sensitivities["x"] == pytest.approx([1.0, 1.0])
+    assert res.budget[0].share == pytest.approx(1.0)
+
+
+def test_vector_output_covariance_is_c_ux_ct():
+    """Polar to Cartesian with a correlated (r, φ) input and an independent offset:
+    U_y = C U_x Cᵀ with C the analytic Jacobian (JCGM 102 §6.2)."""
+    r0, phi0, off = 2.0, 0.6, 0.1
+    vx = np.array([[0.01, 0.002], [0.002, 0.0009]])
+    u_off = 0.05
+
+    def model(x, o):
+        return np.stack([x[:, 0] * np.cos(x[:, 1]) + o, x[:, 0] * np.sin(x[:, 1])], axis=1)
+
+    res = gum(model, {"x": MultivariateNormal([r0, phi0], vx), "o": Normal(off, u_off)})
+    jac = np.array(
+        [
+            [np.cos(phi0), -r0 * np.sin(phi0), 1.0],
+            [np.sin(phi0), r0 * np.cos(phi0), 0.0],
+        ]
+    )
+    ux = np.zeros((3, 3))
+    ux[:2, :2] = vx
+    ux[2, 2] = u_off**2
+    ref = jac @ ux @ jac.T
+    np.testing.assert_allclose(res.cov, ref, rtol=1e-13)
+    np.testing.assert_allclose(res.u, np.sqrt(np.diag(ref)), rtol=1e-13)
+    np.testing.assert_allclose(res.estimate, [r0 * np.cos(phi0) + off, r0 * np.sin(phi0)])
+    np.testing.assert_allclose(res.sensitivities["x"], jac[:, :2], rtol=1e-13)
+    np.testing.assert_allclose(res.sensitivities["o"], jac[:, 2], atol=1e-15)
+    assert res.k.shape == (2,) and res.interval[0].shape == (2,)
+    shares = sum(e.share for e in res.budget)
+    np.testing.assert_allclose(shares, [1.0, 1.0], rtol=1e-13)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.floats(0.5, 3.0),
+    st.floats(-1.0, 1.0),
+    st.floats(1e-3, 0.5),
+    st.floats(1e-3, 0.5),
+)
+def test_sensitivities_agree_with_finite_differences(x, y, ux, uy):
+    """Property: for a smooth model the complex-step sensitivities equal high-order
+    finite differences computed independently here."""
+    expr = expression("x * exp(y) + sin(x * y)")
+    res = gum(expr, {"x": Normal(x, ux), "y": Normal(y, uy)})
+
+    def f(xv, yv):
+        return xv * math.exp(yv) + math.sin(xv * yv)
+
+    h = 1e-4
+    dfx = (-f(x + 2 * h, y) + 8 * f(x + h, y) - 8 * f(x - h, y) + f(x - 2 * h, y)) / (12 * h)
+    dfy = (-f(x, y + 2 * h) + 8 * f(x, y + h) - 8 * f(x, y - h) + f(x, y - 2 * h)) / (12 * h)
+    assert res.sensitivities["x"] == pytest.approx(dfx, rel=1e-8, abs=1e-10)
+    assert res.sensitivities["y"] == pytest.approx(dfy, rel=1e-8, abs=1e-10)
+
+
+def test_errors_name_the_field():
+    with pytest.raises(InputError, match="variable\\(s\\) without an input: b") as info:
+        gum(expression("a + b"), {"a": Normal(0, 1)})
+    assert info.value.field == "b"
+    with pytest.raises(InputError, match="input\\(s\\) not in the model: z"):
+        gum(expression("a"), {"a": Normal(0, 1), "z": Normal(0, 1)})
+    with pytest.raises(InputError, match="shape \\(m,\\) or \\(m, d\\)"):
+        gum(lambda a: np.zeros((2, 2, 2)), {"a": Normal(0, 1)})
+    with pytest.raises(InputError, match="finite expectation") as info:
+        gum(lambda a: a, {"a": StudentT(1.0)})
+    assert info.value.field == "a"
+    with pytest.raises(InputError, match="0 < p < 1"):
+        gum(lambda a: a, {"a": Normal(0, 1)}, p=95)
+    with pytest.raises(InputError, match="at least one input"):
+        gum(lambda: 0, {})
+
+
+def test_inputs_as_strings_and_numbers():
+    res = gum(expression("a * b"), {"a": "normal(2, 0.1)", "b": 3})
+    assert res.u == pytest.approx(0.3, rel=1e-14)
