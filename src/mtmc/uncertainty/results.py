@@ -1,3 +1,557 @@
-"""results."""
+"""Summaries of a Monte Carlo run (JCGM 101:2008 §7.5–7.7, JCGM 102:2011 §7.5–7.7).
 
-__all__: list[str] = []
+A :class:`MonteCarloResult` holds the ``M`` model values of a run (``(M,)`` for a scalar
+output, ``(M, d)`` for a vector output) with the seed that reproduces them, and computes
+from them, on demand:
+
+* the estimate ``y`` (the average of the values, JCGM 101 §7.6) and the standard
+  uncertainty ``u(y)`` (their standard deviation with divisor ``M - 1``, JCGM 101 eq. (13);
+  seed 000 eq. (5));
+* the covariance matrix of a vector output (JCGM 102 §7.5, divisor ``M - 1``);
+* probabilistically symmetric and shortest coverage intervals (JCGM 101 §7.7) from the
+  sorted values, with ``q = pM`` if that is an integer and ``q = ⌊pM + ½⌋`` otherwise;
+* an expanded uncertainty (half the length of a coverage interval);
+* the hyperellipsoidal coverage region of a vector output (JCGM 102 §7.7.2);
+* histogram data.
+
+Examples
+--------
+>>> rng = np.random.default_rng(1)
+>>> r = MonteCarloResult.from_samples(rng.normal(10.0, 2.0, 200_000), seed=1)
+>>> round(r.estimate, 1), round(r.u, 1)
+(10.0, 2.0)
+>>> lo, hi = r.coverage_interval(0.95, "symmetric")
+>>> round(lo, 0), round(hi, 0)
+(6.0, 14.0)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+from scipy import stats
+
+from mtmc.errors import InputError
+
+__all__ = [
+    "CoverageEllipsoid",
+    "Histogram",
+    "MonteCarloResult",
+    "coverage_indices",
+]
+
+IntervalKind = Literal["shortest", "symmetric"]
+
+
+def _check_p(p: Any) -> float:
+    try:
+        pf = float(p)
+    except (TypeError, ValueError):
+        raise InputError(
+            f"expected a coverage probability 0 < p < 1, got {p!r}", field="p"
+        ) from None
+    if not 0.0 < pf < 1.0:
+        raise InputError(f"expected a coverage probability 0 < p < 1, got {p!r}", field="p")
+    return pf
+
+
+def coverage_indices(m: int, p: float) -> tuple[int, int]:
+    """The numbers ``q`` and ``r`` of JCGM 101 §7.7.1–7.7.2 for ``M`` sorted values.
+
+    Parameters
+    ----------
+    m : int
+        Number of values ``M``.
+    p : float
+        Coverage probability, ``0 < p < 1``.
+
+    Returns
+    -------
+    q, r : int
+        ``q = pM`` if ``pM`` is an integer, else ``⌊pM + ½⌋``; ``r = (M - q)/2`` if that
+        is an integer, else ``(M - q + 1)/2``. The probabilistically symmetric interval is
+        ``[ỹ_r, ỹ_{r+q}]`` (1-based), any ``[ỹ_j, ỹ_{j+q}]`` is a ``100p %`` interval.
+
+    Raises
+    ------
+    InputError
+        If ``p`` is not in (0, 1) or ``M`` is too small (``q`` must be in ``1..M-1``).
+
+    Examples
+    --------
+    >>> coverage_indices(10**6, 0.95)
+    (950000, 25000)
+    >>> coverage_indices(1001, 0.95)
+    (951, 25)
+    """
+    pf = _check_p(p)
+    # pM is an integer exactly when round(pM) reproduces it (within rounding of p).
+    pm = pf * m
+    q = round(pm) if abs(pm - round(pm)) <= 1e-9 * max(1.0, pm) else math.floor(pm + 0.5)
+    if not 1 <= q <= m - 1:
+        raise InputError(
+            f"{m} values are too few for a {100 * pf:g} % coverage interval "
+            f"(need q = pM between 1 and M - 1, got q = {q})",
+            field="p",
+        )
+    r = (m - q) // 2 if (m - q) % 2 == 0 else (m - q + 1) // 2
+    return int(q), int(max(r, 1))
+
+
+@dataclass(frozen=True)
+class Histogram:
+    """Histogram data of a scalar output: bin edges, counts and density.
+
+    Attributes
+    ----------
+    edges : ndarray, shape (nbins + 1,)
+        Bin edges, in the unit of the output.
+    counts : ndarray of int, shape (nbins,)
+        Values per bin.
+    density : ndarray, shape (nbins,)
+        ``counts / (M · width)``: an estimate of the PDF of the output.
+    """
+
+    edges: NDArray[np.float64]
+    counts: NDArray[np.int64]
+    density: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class CoverageEllipsoid:
+    """Hyperellipsoidal coverage region ``(η - y)ᵀ V⁻¹ (η - y) <= k²`` (JCGM 102 §7.7).
+
+    Attributes
+    ----------
+    centre : ndarray, shape (d,)
+        The estimate ``y``.
+    cov : ndarray, shape (d, d)
+        The covariance matrix ``V`` that shapes the region.
+    k : float
+        The scale (coverage factor) ``k_p``.
+    p : float
+        Coverage probability.
+    method : str
+        ``"mc"``: ``k²`` is the ``q``-th smallest of the ``M`` squared Mahalanobis
+        distances of the values (JCGM 102 §7.7.2, ``q`` as in JCGM 101 §7.7.1);
+        ``"chi2"``: ``k² = χ²_d(p)``, exact when the output is Gaussian (JCGM 102
+        §6.5.2.3).
+    semi_axes : ndarray, shape (d,)
+        ``k sqrt(λ_i)`` for the eigenvalues ``λ_i`` of ``V`` (ascending).
+    axes : ndarray, shape (d, d)
+        Unit eigenvectors of ``V``, as columns in the order of ``semi_axes``.
+    """
+
+    centre: NDArray[np.float64]
+    cov: NDArray[np.float64]
+    k: float
+    p: float
+    method: str
+    semi_axes: NDArray[np.float64] = field(repr=False)
+    axes: NDArray[np.float64] = field(repr=False)
+
+    def mahalanobis2(self, points: npt.ArrayLike) -> NDArray[np.float64]:
+        """Squared Mahalanobis distances ``(η - y)ᵀ V⁻¹ (η - y)`` of ``(n, d)`` points.
+
+        Parameters
+        ----------
+        points : array_like, shape (n, d)
+
+        Returns
+        -------
+        ndarray, shape (n,)
+        """
+        pts = np.asarray(points, dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] != self.centre.size:
+            raise InputError(
+                f"expected points of shape (n, {self.centre.size}), got {pts.shape}",
+                field="points",
+            )
+        return _mahalanobis2(pts, self.centre, self.cov)
+
+    def contains(self, points: npt.ArrayLike) -> NDArray[np.bool_]:
+        """Whether each of ``(n, d)`` points lies in the region; shape ``(n,)``."""
+        return self.mahalanobis2(points) <= self.k**2
+
+    def boundary(self, n: int = 200) -> NDArray[np.float64]:
+        """``n`` points on the boundary of a 2-D region (an ellipse), shape ``(n, 2)``.
+
+        Raises
+        ------
+        InputError
+            If the region is not two-dimensional.
+        """
+        if self.centre.size != 2:
+            raise InputError(
+                f"a boundary curve needs a 2-D region, this one has d = {self.centre.size}",
+                field="d",
+            )
+        t = np.linspace(0.0, 2.0 * np.pi, n)
+        circle = np.stack([np.cos(t), np.sin(t)], axis=1) * self.semi_axes
+        return self.centre + circle @ self.axes.T
+
+
+def _mahalanobis2(
+    pts: NDArray[np.float64], centre: NDArray[np.float64], cov: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    diff = pts - centre
+    # Solve through the Cholesky factor: d² = |L⁻¹ (η - y)|².
+    try:
+        chol = np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError:
+        raise InputError(
+            "the covariance matrix of the output is singular: no coverage ellipsoid "
+            "(a component is constant or components are linearly dependent)",
+            field="cov",
+        ) from None
+    w = np.linalg.solve(chol, diff.T)
+    return np.einsum("ij,ij->j", w, w)
+
+
+@dataclass(frozen=True)
+class MonteCarloResult:
+    """The values of a Monte Carlo run and their summaries (JCGM 101 §7.5–7.7).
+
+    Attributes
+    ----------
+    samples : ndarray, shape (M,) or (M, d)
+        The model values, in trial order (trials whose value was not finite are left out
+        when the run used ``nan_policy="omit"``).
+    trials : int
+        Number of trials run (``M`` plus the omitted ones).
+    seed : int or None
+        The seed that reproduces the run (``None`` if the values came from elsewhere).
+    adaptive : bool
+        Whether the number of trials was chosen by the adaptive procedure (§7.9).
+    blocks : int
+        Number of blocks of ``block_trials`` trials of the adaptive procedure (``1`` for
+        a fixed run).
+    block_trials : int
+        Trials per adaptive block (``trials`` for a fixed run).
+    tolerance : float or None
+        The numerical tolerance ``δ`` the adaptive procedure met (``None`` for a fixed
+        run).
+    omitted : int
+        Trials whose model value was not finite and that were left out.
+    normal_method : str
+        How standard normal numbers were made (``"default"`` or ``"box-muller"``).
+    """
+
+    samples: NDArray[np.float64] = field(repr=False)
+    trials: int
+    seed: int | None
+    adaptive: bool = False
+    blocks: int = 1
+    block_trials: int = 0
+    tolerance: float | None = None
+    omitted: int = 0
+    normal_method: str = "default"
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.samples, dtype=np.float64)
+        if s.ndim not in (1, 2) or s.shape[0] < 2:
+            raise InputError(
+                f"expected at least 2 values, shape (M,) or (M, d), got shape {s.shape}",
+                field="samples",
+            )
+        bad = ~np.isfinite(s) if s.ndim == 1 else ~np.isfinite(s).all(axis=1)
+        nbad = int(np.count_nonzero(bad))
+        if nbad:
+            raise InputError(
+                f"{nbad} of {s.shape[0]} values are not finite (first at index "
+                f"{int(np.argmax(bad))}); expected finite model values",
+                field="samples",
+            )
+        if s is self.samples and s.flags.writeable:
+            s = s.view()
+        s.setflags(write=False)
+        object.__setattr__(self, "samples", s)
+        if self.block_trials == 0:
+            object.__setattr__(self, "block_trials", int(self.trials))
+
+    @classmethod
+    def from_samples(
+        cls, samples: npt.ArrayLike, *, seed: int | None, trials: int | None = None
+    ) -> MonteCarloResult:
+        """A result from given model values.
+
+        Parameters
+        ----------
+        samples : array_like, shape (M,) or (M, d)
+            Finite model values.
+        seed : int or None
+            The seed that produced them, if known.
+        trials : int, optional
+            Number of trials (default ``M``).
+
+        Returns
+        -------
+        MonteCarloResult
+
+        Raises
+        ------
+        InputError
+            If there are fewer than 2 values, the shape is wrong or a value is not finite.
+        """
+        s = np.array(samples, dtype=np.float64)
+        return cls(samples=s, trials=int(s.shape[0] if trials is None else trials), seed=seed)
+
+    # ------------------------------------------------------------------ basic summaries
+    @property
+    def m(self) -> int:
+        """Number of values ``M``."""
+        return int(self.samples.shape[0])
+
+    @property
+    def dim(self) -> int:
+        """0 for a scalar output, ``d`` for a vector output."""
+        return 0 if self.samples.ndim == 1 else int(self.samples.shape[1])
+
+    @cached_property
+    def estimate(self) -> Any:
+        """The estimate ``y``: the average of the values (JCGM 101 eq. (12)); float or (d,)."""
+        mean = self.samples.mean(axis=0)
+        return float(mean) if self.dim == 0 else mean
+
+    @cached_property
+    def u(self) -> Any:
+        """Standard uncertainty ``u(y)``: standard deviation with divisor ``M - 1``.
+
+        JCGM 101 eq. (13), seed 000 eq. (5); float, or ``(d,)`` for a vector output.
+        """
+        sd = self.samples.std(axis=0, ddof=1)
+        return float(sd) if self.dim == 0 else sd
+
+    @cached_property
+    def cov(self) -> NDArray[np.float64]:
+        """Covariance matrix ``U_y`` with divisor ``M - 1`` (JCGM 102 eq. (21)), ``(d, d)``.
+
+        For a scalar output, the ``(1, 1)`` matrix ``[[u²]]``.
+        """
+        x = self.samples.reshape(self.m, -1)
+        c = np.atleast_2d(np.cov(x, rowvar=False, ddof=1))
+        c.setflags(write=False)
+        return c
+
+    @cached_property
+    def _sorted(self) -> NDArray[np.float64]:
+        self._require_scalar("coverage intervals")
+        s = np.sort(self.samples)
+        s.setflags(write=False)
+        return s
+
+    def _require_scalar(self, what: str) -> None:
+        if self.dim != 0:
+            raise InputError(
+                f"{what} need a scalar output; this one has d = {self.dim} "
+                "(use component(i), or coverage_ellipsoid for a region)",
+                field="samples",
+            )
+
+    def component(self, i: int) -> MonteCarloResult:
+        """The scalar result of component ``i`` of a vector output.
+
+        Parameters
+        ----------
+        i : int
+            Index of the component, ``0 <= i < d``.
+
+        Returns
+        -------
+        MonteCarloResult
+            With ``samples`` of shape ``(M,)`` and the same run information.
+        """
+        if self.dim == 0:
+            raise InputError("component() needs a vector output", field="samples")
+        if not -self.dim <= i < self.dim:
+            raise InputError(f"expected 0 <= i < {self.dim}, got {i}", field="i")
+        return MonteCarloResult(
+            samples=self.samples[:, i],
+            trials=self.trials,
+            seed=self.seed,
+            adaptive=self.adaptive,
+            blocks=self.blocks,
+            block_trials=self.block_trials,
+            tolerance=self.tolerance,
+            omitted=self.omitted,
+            normal_method=self.normal_method,
+        )
+
+    # ------------------------------------------------------------------ intervals
+    def coverage_interval(
+        self, p: float = 0.95, kind: IntervalKind = "shortest"
+    ) -> tuple[float, float]:
+        """A coverage interval for the output with coverage probability ``p``.
+
+        Parameters
+        ----------
+        p : float, default 0.95
+            Coverage probability.
+        kind : {"shortest", "symmetric"}
+            ``"symmetric"``: the probabilistically symmetric interval ``[ỹ_r, ỹ_{r+q}]``
+            (JCGM 101 §7.7.2). ``"shortest"``: ``[ỹ_{r*}, ỹ_{r*+q}]`` with ``r*`` the ``r``
+            minimising ``ỹ_{r+q} - ỹ_r`` over ``r = 1..M-q`` (JCGM 101 §7.7.3; the first
+            on ties). ``ỹ`` are the sorted values, indices 1-based, ``q``, ``r`` from
+            :func:`coverage_indices`.
+
+        Returns
+        -------
+        (float, float)
+            ``(y_low, y_high)``.
+
+        Raises
+        ------
+        InputError
+            For a vector output, a bad ``p`` or ``kind``, or too few values.
+
+        Examples
+        --------
+        >>> r = MonteCarloResult.from_samples(np.arange(1.0, 101.0), seed=None)
+        >>> r.coverage_interval(0.9, "symmetric")
+        (5.0, 95.0)
+        """
+        s = self._sorted
+        q, r = coverage_indices(self.m, p)
+        if kind == "symmetric":
+            return float(s[r - 1]), float(s[r - 1 + q])
+        if kind == "shortest":
+            widths = s[q:] - s[: self.m - q]
+            j = int(np.argmin(widths))
+            return float(s[j]), float(s[j + q])
+        raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
+
+    def expanded_uncertainty(self, p: float = 0.95, kind: IntervalKind = "shortest") -> float:
+        """Half the length of the coverage interval: ``U_p = (y_high - y_low)/2``.
+
+        JCGM 101 gives the interval itself; for a symmetric output PDF this half-length
+        is the expanded uncertainty of JCGM 100 §6. Seed 000 (p. 4) calls the whole
+        length ``y_high - y_low`` "U" (4.321 µm for ``[-1.658, 2.663]``); mtmc follows
+        the GUM and takes half of it.
+
+        Parameters
+        ----------
+        p : float, default 0.95
+        kind : {"shortest", "symmetric"}
+
+        Returns
+        -------
+        float
+        """
+        lo, hi = self.coverage_interval(p, kind)
+        return 0.5 * (hi - lo)
+
+    def coverage_factor(self, p: float = 0.95, kind: IntervalKind = "shortest") -> float:
+        """``k_p = U_p / u(y)``: the coverage factor implied by the MC interval."""
+        self._require_scalar("a coverage factor")
+        return self.expanded_uncertainty(p, kind) / float(self.u)
+
+    def histogram(self, bins: int | str = "auto") -> Histogram:
+        """Histogram data of a scalar output (for the plots of seed 000 Fig. 3–4).
+
+        Parameters
+        ----------
+        bins : int or str, default "auto"
+            As ``numpy.histogram``.
+
+        Returns
+        -------
+        Histogram
+        """
+        self._require_scalar("a histogram")
+        counts, edges = np.histogram(self.samples, bins=bins)
+        density = counts / (self.m * np.diff(edges))
+        return Histogram(edges=edges, counts=counts.astype(np.int64), density=density)
+
+    # ------------------------------------------------------------------ vector outputs
+    def coverage_ellipsoid(
+        self, p: float = 0.95, method: Literal["mc", "chi2"] = "mc"
+    ) -> CoverageEllipsoid:
+        """Hyperellipsoidal coverage region of a vector output (JCGM 102 §7.7).
+
+        The region is ``{η : (η - y)ᵀ U_y⁻¹ (η - y) <= k_p²}`` with ``y`` the estimate and
+        ``U_y`` the covariance matrix of the values.
+
+        Parameters
+        ----------
+        p : float, default 0.95
+            Coverage probability.
+        method : {"mc", "chi2"}
+            ``"mc"`` (default, JCGM 102 §7.7.2): ``k_p²`` is the ``q``-th smallest of the
+            ``M`` squared distances ``d_r² = (y_r - y)ᵀ U_y⁻¹ (y_r - y)``, ``q`` as in
+            JCGM 101 §7.7.1, so that a fraction ``p`` of the values lies in the region,
+            whatever the output PDF. ``"chi2"``: ``k_p² = χ²_d(p)``, the quantile of the
+            chi-squared distribution with ``d`` degrees of freedom, valid for a Gaussian
+            output (JCGM 102 §6.5.2.3).
+
+        Returns
+        -------
+        CoverageEllipsoid
+
+        Raises
+        ------
+        InputError
+            For a scalar output, a singular covariance, a bad ``p`` or ``method``.
+        """
+        if self.dim == 0:
+            raise InputError(
+                "a coverage ellipsoid needs a vector output (M, d); use coverage_interval",
+                field="samples",
+            )
+        pf = _check_p(p)
+        centre = np.asarray(self.estimate, dtype=np.float64)
+        cov = np.array(self.cov)
+        if method == "mc":
+            d2 = _mahalanobis2(self.samples, centre, cov)
+            q, _ = coverage_indices(self.m, pf)
+            k2 = float(np.partition(d2, q - 1)[q - 1])
+        elif method == "chi2":
+            k2 = float(stats.chi2.ppf(pf, self.dim))
+        else:
+            raise InputError(f"expected 'mc' or 'chi2', got {method!r}", field="method")
+        lam, vec = np.linalg.eigh(cov)
+        k = math.sqrt(k2)
+        return CoverageEllipsoid(
+            centre=centre,
+            cov=cov,
+            k=k,
+            p=pf,
+            method=method,
+            semi_axes=k * np.sqrt(np.clip(lam, 0.0, None)),
+            axes=vec,
+        )
+
+    def summary(self, p: float = 0.95) -> dict[str, Any]:
+        """The numbers a report shows, as plain Python values.
+
+        Returns
+        -------
+        dict
+            ``estimate``, ``u``, ``trials``, ``seed``, ``adaptive``, ``blocks``,
+            ``tolerance``, ``omitted``; for a scalar output also ``p``,
+            ``interval_shortest``, ``interval_symmetric`` and ``U`` (shortest); for a
+            vector output ``cov``.
+        """
+        out: dict[str, Any] = {
+            "estimate": np.asarray(self.estimate).tolist(),
+            "u": np.asarray(self.u).tolist(),
+            "trials": self.trials,
+            "seed": self.seed,
+            "adaptive": self.adaptive,
+            "blocks": self.blocks,
+            "tolerance": self.tolerance,
+            "omitted": self.omitted,
+        }
+        if self.dim == 0:
+            out["p"] = float(p)
+            out["interval_shortest"] = list(self.coverage_interval(p, "shortest"))
+            out["interval_symmetric"] = list(self.coverage_interval(p, "symmetric"))
+            out["U"] = self.expanded_uncertainty(p)
+        else:
+            out["cov"] = self.cov.tolist()
+        return out

@@ -191,6 +191,8 @@ class _BlockSource:
                 )
                 for name, d in self.dists.items()
             }
+            for arr in self.cached.values():
+                arr.setflags(write=False)  # a model must not change the drawn numbers
             self.k = k
         return self.cached
 
@@ -204,6 +206,8 @@ class _BlockSource:
             n: np.empty((stop - start, *((d.dim,) if d.dim else ()))) for n, d in self.dists.items()
         }
         self.fill(out, start, stop, offset=start)
+        for arr in out.values():
+            arr.setflags(write=False)
         return out
 
     def fill(self, out: dict[str, NDArray[np.float64]], start: int, stop: int, offset: int) -> None:
