@@ -1,3 +1,42 @@
-"""mtmc.graph."""
+"""The measurement graph of seed 000 (Stryczek): places, transitions, arcs and markers.
 
-__all__: list[str] = []
+A directed bipartite graph G = (Π, T, E, M) whose transitions (``meas``, ``point``,
+``middle``, ``plane``, ``axis``, ...) bind their variant by the types of their input
+places, validated before running and evaluated in topological generations over whole
+batches of Monte Carlo trials. Read from TOML (``docs/graph-format.md``) or from the
+seed's assertion database (Table 1), drawn as SVG or DOT, swept over parameter grids with
+a surrogate formula fitted to the sweep (seed 000 eq. 31). This package knows nothing of
+machines.
+
+The names exported to :mod:`mtmc` carry ``graph`` where a bare name would be ambiguous
+(``load_graph``, ``check_graph``); the modules keep the short names.
+"""
+
+from mtmc.graph.model import Graph, Plan, Step
+from mtmc.graph.model import check as check_graph
+from mtmc.graph.ops import rotary_axis
+from mtmc.graph.places import Place, ProbeDefaults, Transition
+from mtmc.graph.run import GraphResult, PlaceSummary, graph_model, run_graph
+from mtmc.graph.toml_format import dump as dump_graph
+from mtmc.graph.toml_format import dumps as dumps_graph
+from mtmc.graph.toml_format import load as load_graph
+from mtmc.graph.toml_format import loads as loads_graph
+
+__all__: list[str] = [
+    "Graph",
+    "Plan",
+    "Step",
+    "Place",
+    "Transition",
+    "ProbeDefaults",
+    "GraphResult",
+    "PlaceSummary",
+    "check_graph",
+    "load_graph",
+    "loads_graph",
+    "dump_graph",
+    "dumps_graph",
+    "run_graph",
+    "graph_model",
+    "rotary_axis",
+]

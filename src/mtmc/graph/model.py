@@ -1,0 +1,335 @@
+"""The measurement graph G = (Π, T, E, M) of seed 000 (eq. 7): validation and firing order.
+
+A :class:`Graph` holds what a graph file says. :func:`check` validates it and returns a
+:class:`Plan`: the type of every place (declared, or implied by the op that produces it),
+the variant each transition binds by the types of its inputs, and the firing order.
+
+Markers (seed 000): the places with a value are marked from the start (the set M0); a
+transition fires once per simulation cycle, when all its input places are marked, and
+marks its output place. The firing order is therefore a topological order of the
+bipartite graph; it is taken by generations (the transitions whose inputs are all marked
+at the start, then those enabled by them, ...), sorted by name within each generation,
+so every run repeats exactly.
+
+Validation errors (:class:`mtmc.errors.GraphError`) name the place or transition, the file
+and the line: a transition arc joining two transitions or a place to a place (not
+bipartite), a cycle, an input never marked nor produced, two producers of one place, a
+marked place that a transition also produces, a type no variant of the op accepts, an
+unknown op or field.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from mtmc.errors import GraphError, MtmcError
+from mtmc.graph import ops
+from mtmc.graph.places import COORDINATE_TYPES, Place, ProbeDefaults, Transition
+
+__all__ = ["Graph", "Plan", "Step", "check", "LENGTH_UNITS"]
+
+#: Length units a graph file may use, and their size in mm.
+LENGTH_UNITS: dict[str, float] = {"mm": 1.0, "um": 1e-3}
+
+
+@dataclass(frozen=True)
+class Graph:
+    """A measurement graph as written in a file (seed 000, eq. 7).
+
+    Parameters
+    ----------
+    places : tuple of Place
+        The declared places (places produced by a transition may be left implicit).
+    transitions : tuple of Transition
+        The transitions, with their arcs.
+    title : str
+        A title.
+    units : str
+        Length unit of the numbers in the graph: ``"mm"`` (default) or ``"um"``.
+    probe : ProbeDefaults
+        Defaults of the touch-probe model for every ``meas``.
+    file : str, optional
+        Source file name, used in error messages (not part of equality).
+    """
+
+    places: tuple[Place, ...] = ()
+    transitions: tuple[Transition, ...] = ()
+    title: str = ""
+    units: str = "mm"
+    probe: ProbeDefaults = field(default_factory=ProbeDefaults)
+    file: str | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "places", tuple(self.places))
+        object.__setattr__(self, "transitions", tuple(self.transitions))
+        if self.units not in LENGTH_UNITS:
+            raise GraphError(
+                f"unknown units {self.units!r}; expected one of {', '.join(LENGTH_UNITS)}",
+                file=self.file,
+                field="units",
+            )
+
+    @property
+    def factor(self) -> float:
+        """The graph's length unit in mm."""
+        return LENGTH_UNITS[self.units]
+
+    def place(self, name: str) -> Place | None:
+        """The declared place ``name``, or None."""
+        for p in self.places:
+            if p.name == name:
+                return p
+        return None
+
+    def transition(self, name: str) -> Transition | None:
+        """The transition ``name``, or None."""
+        for t in self.transitions:
+            if t.name == name:
+                return t
+        return None
+
+
+@dataclass(frozen=True)
+class Step:
+    """One transition in firing order, with the variant it binds.
+
+    Parameters
+    ----------
+    transition : Transition
+        The transition.
+    variant : ops.Variant
+        The bound variant.
+    generation : int
+        Its topological generation (0: fires first).
+    """
+
+    transition: Transition
+    variant: ops.Variant
+    generation: int
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A validated graph, ready to run.
+
+    Parameters
+    ----------
+    graph : Graph
+        The graph.
+    types : dict of str to str
+        The type of every place (declared or implied).
+    steps : tuple of Step
+        The transitions in firing order.
+    producer : dict of str to str
+        The transition producing each produced place.
+    """
+
+    graph: Graph
+    types: dict[str, str]
+    steps: tuple[Step, ...]
+    producer: dict[str, str]
+
+    @property
+    def marked(self) -> tuple[str, ...]:
+        """The places marked from the start (M0)."""
+        return tuple(p.name for p in self.graph.places if p.marked)
+
+    @property
+    def generations(self) -> tuple[tuple[str, ...], ...]:
+        """The transition names by topological generation."""
+        n = max((s.generation for s in self.steps), default=-1) + 1
+        return tuple(
+            tuple(s.transition.name for s in self.steps if s.generation == g) for g in range(n)
+        )
+
+
+def _err(graph: Graph, msg: str, line: int | None, fld: str | None = None) -> GraphError:
+    return GraphError(msg, file=graph.file, line=line, field=fld)
+
+
+def check(graph: Graph) -> Plan:
+    """Validate a graph and compute its types, bound variants and firing order.
+
+    Parameters
+    ----------
+    graph : Graph
+        The graph.
+
+    Returns
+    -------
+    Plan
+        The validated plan.
+
+    Raises
+    ------
+    GraphError
+        On the first problem found, naming the place or transition, the file and line.
+
+    Examples
+    --------
+    >>> g = Graph(
+    ...     places=(Place("a", "real", 1.0), Place("b", "real", 2.0)),
+    ...     transitions=(Transition("t1", "middle", ("a", "b"), "c"),),
+    ... )
+    >>> plan = check(g)
+    >>> plan.types["c"], plan.generations
+    ('real', (('t1',),))
+    """
+    if not graph.transitions:
+        raise _err(graph, "the graph has no transition", None, "transition")
+    places: dict[str, Place] = {}
+    for p in graph.places:
+        if p.name in places:
+            raise _err(graph, f"place {p.name} is declared twice", p.line, "name")
+        places[p.name] = p
+    trans: dict[str, Transition] = {}
+    for t in graph.transitions:
+        if t.name in trans:
+            raise _err(graph, f"transition {t.name} is declared twice", t.line, "name")
+        if t.name in places:
+            raise _err(
+                graph,
+                f"transition {t.name}: the name is also a place; places and transitions "
+                "are separate sets",
+                t.line,
+                "name",
+            )
+        trans[t.name] = t
+    # arcs: bipartite, op known, fields known, single producer
+    producer: dict[str, str] = {}
+    for t in graph.transitions:
+        for q in (*t.inputs, t.out):
+            if q in trans:
+                fld = "out" if q == t.out else "in"
+                raise _err(
+                    graph,
+                    f"transition {t.name}: {q} is a transition; the graph is bipartite, an arc "
+                    "joins a place and a transition",
+                    t.field_line(fld),
+                    fld,
+                )
+        if not ops.variants(t.op):
+            raise _err(
+                graph,
+                f"transition {t.name}: unknown op {t.op!r}; "
+                f"expected one of {', '.join(ops.op_names())}",
+                t.field_line("op"),
+                "op",
+            )
+        allowed = ops.OP_PARAMS.get(t.op, ())
+        for key, _ in t.params:
+            if key not in allowed:
+                hint = (
+                    f"; op {t.op} takes {', '.join(allowed)}"
+                    if allowed
+                    else f"; op {t.op} takes no other field"
+                )
+                raise _err(
+                    graph,
+                    f"transition {t.name}: unknown field {key!r}{hint}",
+                    t.field_line(key),
+                    key,
+                )
+        if t.op == "meas" and t.inputs:
+            raise _err(graph, f"transition {t.name}: meas takes no input", t.field_line("in"), "in")
+        if t.out in t.inputs:
+            raise _err(
+                graph,
+                f"transition {t.name}: {t.out} is both input and output (a cycle)",
+                t.field_line("out"),
+                "out",
+            )
+        if t.out in producer:
+            raise _err(
+                graph,
+                f"transition {t.name}: place {t.out} is already produced by {producer[t.out]}; "
+                "a place has at most one producer",
+                t.field_line("out"),
+                "out",
+            )
+        if t.out in places and places[t.out].marked:
+            raise _err(
+                graph,
+                f"transition {t.name}: place {t.out} is marked from the start (has a value) "
+                "and cannot also be produced",
+                t.field_line("out"),
+                "out",
+            )
+        producer[t.out] = t.name
+    for t in graph.transitions:
+        for q in t.inputs:
+            if q not in producer and not (q in places and places[q].marked):
+                why = "is declared without a value" if q in places else "is not declared"
+                raise _err(
+                    graph,
+                    f"transition {t.name}: input place {q} {why} and no transition produces it "
+                    "(never marked)",
+                    t.field_line("in"),
+                    "in",
+                )
+    used = {q for t in graph.transitions for q in t.inputs}
+    for p in graph.places:
+        if p.name not in producer and p.name not in used and not p.marked:
+            raise _err(
+                graph, f"place {p.name} is neither marked, produced nor used", p.line, "name"
+            )
+    # firing order by generations (Kahn), sorted by name within each
+    marked = {p.name for p in graph.places if p.marked}
+    remaining = dict(trans)
+    order: list[tuple[Transition, int]] = []
+    gen = 0
+    while remaining:
+        ready = sorted(n for n, t in remaining.items() if all(p in marked for p in t.inputs))
+        if not ready:
+            name = sorted(remaining)[0]
+            t = remaining[name]
+            raise _err(
+                graph,
+                f"transition {t.name}: the graph has a cycle through "
+                f"{', '.join(sorted(remaining))}; a measurement graph is a tree (acyclic)",
+                t.line,
+                "in",
+            )
+        for n in ready:
+            order.append((remaining.pop(n), gen))
+        for n in ready:
+            marked.add(trans[n].out)
+        gen += 1
+    # types
+    types = {p.name: p.type for p in graph.places}
+    steps = []
+    for t, g in order:
+        in_types = [types[p] for p in t.inputs]
+        declared = types.get(t.out)
+        want = declared
+        if t.op == "meas":
+            coord = t.param("coordinate")
+            if coord is not None:
+                if coord not in COORDINATE_TYPES:
+                    raise _err(
+                        graph,
+                        f"transition {t.name}: coordinate must be x, y or z, got {coord!r}",
+                        t.field_line("coordinate"),
+                        "coordinate",
+                    )
+                if declared is not None and declared != coord:
+                    raise _err(
+                        graph,
+                        f"transition {t.name}: coordinate = {coord!r} but place {t.out} "
+                        f"is declared {declared}",
+                        t.field_line("coordinate"),
+                        "coordinate",
+                    )
+                want = coord
+            elif declared is None:
+                want = "point"
+        try:
+            v = ops.bind(t.op, in_types, output=want)
+        except MtmcError as exc:
+            fld = exc.field or "in"
+            raise _err(
+                graph, f"transition {t.name}: {exc.message}", t.field_line(fld), fld
+            ) from None
+        types[t.out] = v.output
+        steps.append(Step(t, v, g))
+    return Plan(graph, types, tuple(steps), producer)

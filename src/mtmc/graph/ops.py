@@ -1,0 +1,583 @@
+"""The transition ops of the measurement graph and their variants, bound by input types.
+
+Seed 000 names the transitions ``meas``, ``point``, ``line``, ``aline``, ``vector``,
+``unit_v``, ``circle``, ``middle``, ``plane``, ``frame``, ``displace``, ``ratio``,
+``project``, ``per_proj``: "a transition variant binding in a given node results from
+the context in which it is placed in the model", i.e. from the types of its input
+places. Here each op has one or more :class:`Variant`, each with the input types it
+accepts and the output type it produces; :func:`bind` picks the variant matching the
+types of a transition's inputs, or raises naming what the op accepts.
+
+Every op function works on a whole batch: scalars ``(M,)``, points/vectors ``(M, 3)``,
+lines/planes/circles/spheres as :mod:`mtmc.geometry` primitives, frames ``(M, 4, 4)``;
+a constant input may be a batch of one and broadcasts. All geometry is done by
+:mod:`mtmc.geometry`; this module only adds the rotary-axis construction of seed 000
+(eqs. 8-19), which has no counterpart there.
+
+New ops register with :func:`register` (or the :func:`variant` decorator), which refuses
+a second variant with the same name and input types.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from mtmc.errors import DegenerateGeometryError, GraphError
+from mtmc.geometry import constructions as gc
+from mtmc.geometry import fits
+from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
+
+__all__ = [
+    "Variant",
+    "register",
+    "variant",
+    "variants",
+    "op_names",
+    "bind",
+    "rotary_axis",
+    "OP_PARAMS",
+]
+
+#: Fields (besides ``name``, ``op``, ``in``, ``out``) each op accepts in a graph file.
+OP_PARAMS: dict[str, tuple[str, ...]] = {
+    "meas": ("at", "direction", "u_axis", "u_probe", "u_perp", "dist", "coordinate"),
+}
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One variant of an op: the input types it accepts and the output type it makes.
+
+    Parameters
+    ----------
+    op : str
+        The op name.
+    inputs : tuple of str
+        Types of the leading inputs, in order.
+    output : str
+        Type of the output place.
+    func : callable
+        ``func(*values) -> value``, batched.
+    rest : str, optional
+        Type of a variable number of further inputs (``"point"`` for "four or more points").
+    min_rest : int
+        Least number of ``rest`` inputs.
+    suffix : tuple of str
+        Types of inputs after the ``rest`` ones (the radius of a known-radius sphere).
+    doc : str
+        One line saying what the variant computes.
+    """
+
+    op: str
+    inputs: tuple[str, ...]
+    output: str
+    func: Callable[..., Any]
+    rest: str | None = None
+    min_rest: int = 0
+    suffix: tuple[str, ...] = ()
+    doc: str = ""
+
+    def accepts(self, types: Sequence[str]) -> bool:
+        """Whether this variant accepts inputs of ``types`` (in order)."""
+        n_fixed = len(self.inputs) + len(self.suffix)
+        if self.rest is None:
+            return tuple(types) == self.inputs
+        if len(types) < n_fixed + self.min_rest:
+            return False
+        head = tuple(types[: len(self.inputs)])
+        tail = tuple(types[len(types) - len(self.suffix) :]) if self.suffix else ()
+        middle = types[len(self.inputs) : len(types) - len(self.suffix)]
+        return head == self.inputs and tail == self.suffix and all(t == self.rest for t in middle)
+
+    @property
+    def signature(self) -> str:
+        """The accepted input types in words, e.g. ``(point, point, point)``."""
+        parts = list(self.inputs)
+        if self.rest is not None:
+            parts.append(f"{self.min_rest} or more {self.rest}")
+        parts.extend(self.suffix)
+        return "(" + ", ".join(parts) + ")"
+
+    @property
+    def key(self) -> tuple[Any, ...]:
+        """What makes two variants of one op the same (refused by :func:`register`)."""
+        return (self.op, self.inputs, self.rest, self.min_rest, self.suffix, self.output)
+
+
+_REGISTRY: dict[str, list[Variant]] = {}
+
+
+def register(v: Variant) -> Variant:
+    """Add a variant to the registry.
+
+    Parameters
+    ----------
+    v : Variant
+        The variant.
+
+    Returns
+    -------
+    Variant
+        ``v``.
+
+    Raises
+    ------
+    GraphError
+        If a variant of the same op with the same input types is registered already.
+    """
+    for other in _REGISTRY.get(v.op, []):
+        if other.key == v.key:
+            raise GraphError(
+                f"op {v.op} already has a variant for inputs {v.signature} -> {v.output}",
+                field=v.op,
+            )
+    _REGISTRY.setdefault(v.op, []).append(v)
+    return v
+
+
+def variant(
+    op: str,
+    inputs: tuple[str, ...],
+    output: str,
+    *,
+    rest: str | None = None,
+    min_rest: int = 0,
+    suffix: tuple[str, ...] = (),
+    doc: str = "",
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Register the decorated function as a variant of ``op`` (see :class:`Variant`).
+
+    Parameters
+    ----------
+    op, inputs, output, rest, min_rest, suffix, doc
+        As in :class:`Variant`.
+
+    Returns
+    -------
+    callable
+        A decorator returning the function unchanged.
+    """
+
+    def deco(func: Callable[..., Any]) -> Callable[..., Any]:
+        register(
+            Variant(
+                op,
+                inputs,
+                output,
+                func,
+                rest,
+                min_rest,
+                suffix,
+                doc or (func.__doc__ or "").strip().split("\n")[0],
+            )
+        )
+        return func
+
+    return deco
+
+
+def variants(op: str) -> tuple[Variant, ...]:
+    """The registered variants of ``op`` (empty for an unknown op)."""
+    return tuple(_REGISTRY.get(op, ()))
+
+
+def op_names() -> tuple[str, ...]:
+    """The names of all registered ops, sorted."""
+    return tuple(sorted(_REGISTRY))
+
+
+def bind(op: str, types: Sequence[str], *, output: str | None = None) -> Variant:
+    """Bind the variant of ``op`` accepting inputs of ``types``.
+
+    Parameters
+    ----------
+    op : str
+        The op name.
+    types : sequence of str
+        Types of the input places, in order.
+    output : str, optional
+        The declared type of the output place; when given, only a variant producing it
+        binds (``meas`` has one variant per output type).
+
+    Returns
+    -------
+    Variant
+        The bound variant.
+
+    Raises
+    ------
+    GraphError
+        If the op is unknown, or no variant accepts ``types`` (the message lists the
+        accepted signatures).
+    """
+    if op not in _REGISTRY:
+        raise GraphError(f"unknown op {op!r}; expected one of {', '.join(op_names())}", field="op")
+    cands = [v for v in _REGISTRY[op] if v.accepts(types)]
+    if not cands:
+        sigs = "; ".join(sorted({v.signature for v in _REGISTRY[op]}))
+        got = "(" + ", ".join(types) + ")"
+        raise GraphError(f"op {op} accepts no inputs of types {got}; it accepts {sigs}", field="in")
+    if output is not None:
+        same = [v for v in cands if v.output == output]
+        if not same:
+            outs = ", ".join(sorted({v.output for v in cands}))
+            raise GraphError(
+                f"op {op} on inputs ({', '.join(types)}) makes {outs}, "
+                f"but the output place is declared {output}",
+                field="out",
+            )
+        return same[0]
+    return cands[0]
+
+
+# --------------------------------------------------------------------------------------
+# meas: values come from the probe model (mtmc.graph.probe); registered here for binding.
+
+
+def _meas_placeholder(*_: Any) -> Any:  # pragma: no cover - meas is evaluated by probe
+    raise RuntimeError("meas is evaluated by mtmc.graph.probe")
+
+
+for _t in ("point", "x", "y", "z"):
+    register(Variant("meas", (), _t, _meas_placeholder, doc=f"touch-probe measurement -> {_t}"))
+
+# --------------------------------------------------------------------------------------
+# point
+
+
+@variant("point", ("x", "y", "z"), "point")
+def _point_xyz(x: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.float64]) -> Any:
+    """The point of three coordinates."""
+    x, y, z = np.broadcast_arrays(x, y, z)
+    return np.stack([x, y, z], axis=-1)
+
+
+@variant("point", ("line", "plane"), "point")
+def _point_line_plane(line: Line, plane: Plane) -> Any:
+    """The intersection of a line and a plane."""
+    return gc.intersect_line_plane(line, plane)
+
+
+@variant("point", ("plane", "line"), "point")
+def _point_plane_line(plane: Plane, line: Line) -> Any:
+    """The intersection of a plane and a line."""
+    return gc.intersect_line_plane(line, plane)
+
+
+@variant("point", ("circle",), "point")
+def _point_circle(c: Circle) -> Any:
+    """The centre of a circle."""
+    return c.centre
+
+
+@variant("point", ("line",), "point")
+def _point_line(line: Line) -> Any:
+    """The attachment point of a line (the circle centre of an ``axis``)."""
+    return line.point
+
+
+@variant("point", ("sphere",), "point")
+def _point_sphere(s: Sphere) -> Any:
+    """The centre of a sphere."""
+    return s.centre
+
+
+# --------------------------------------------------------------------------------------
+# middle, vector, unit_v, displace, ratio
+
+
+def _scalar_middle(a: Any, b: Any) -> Any:
+    return 0.5 * (np.asarray(a) + np.asarray(b))
+
+
+for _t in ("x", "y", "z", "real"):
+    register(Variant("middle", (_t, _t), _t, _scalar_middle, doc=f"the mean of two {_t}"))
+
+
+@variant("middle", ("point", "point"), "point")
+def _middle_points(a: Any, b: Any) -> Any:
+    """The middle of two points."""
+    return gc.middle(a, b)
+
+
+@variant("vector", ("point", "point"), "vector")
+def _vector(a: Any, b: Any) -> Any:
+    """The vector b - a."""
+    return gc.vector(a, b)
+
+
+@variant("unit_v", ("vector",), "unit")
+def _unit_v(v: Any) -> Any:
+    """The unit vector of a vector."""
+    return gc.unit(v)
+
+
+@variant("unit_v", ("line",), "unit")
+def _unit_line(line: Line) -> Any:
+    """The direction of a line (of an ``axis``: V_A, V_C of seed 000 Fig. 13)."""
+    return line.direction
+
+
+@variant("unit_v", ("plane",), "unit")
+def _unit_plane(plane: Plane) -> Any:
+    """The normal of a plane."""
+    return plane.normal
+
+
+@variant("displace", ("point", "vector"), "point")
+def _displace_pv(p: Any, v: Any) -> Any:
+    """The point displaced by a vector, p + v."""
+    return gc.displace(p, v)
+
+
+@variant("displace", ("point", "unit", "real"), "point")
+def _displace_pur(p: Any, d: Any, r: Any) -> Any:
+    """The point displaced by r along a unit vector, p + r d."""
+    return gc.displace(p, d, np.atleast_1d(r))
+
+
+def _scalar_sum(a: Any, b: Any) -> Any:
+    return np.asarray(a) + np.asarray(b)
+
+
+for _t in ("x", "y", "z", "real"):
+    register(Variant("displace", (_t, "real"), _t, _scalar_sum, doc=f"the {_t} plus a real"))
+
+
+@variant("ratio", ("vector", "real"), "vector")
+def _ratio_vr(v: Any, r: Any) -> Any:
+    """The vector times a real."""
+    return np.asarray(v) * np.atleast_1d(r)[:, None]
+
+
+@variant("ratio", ("real", "real"), "real")
+def _ratio_rr(a: Any, b: Any) -> Any:
+    """The product of two reals."""
+    return np.asarray(a) * np.asarray(b)
+
+
+# --------------------------------------------------------------------------------------
+# distance, angle
+
+
+@variant("distance", ("point", "point"), "real")
+def _dist_pp(a: Any, b: Any) -> Any:
+    """The distance between two points."""
+    return gc.distance_point_point(a, b)
+
+
+@variant("distance", ("point", "line"), "real")
+def _dist_pl(p: Any, line: Line) -> Any:
+    """The distance of a point from a line."""
+    return gc.distance_point_line(p, line)
+
+
+@variant("distance", ("point", "plane"), "real")
+def _dist_ppl(p: Any, plane: Plane) -> Any:
+    """The signed distance of a point from a plane (along its normal)."""
+    return gc.distance_point_plane(p, plane)
+
+
+def _angle(u: Any, v: Any) -> Any:
+    return gc.angle_between(u, v)
+
+
+for _a in ("vector", "unit"):
+    for _b in ("vector", "unit"):
+        register(
+            Variant("angle", (_a, _b), "real", _angle, doc="the angle between two directions, rad")
+        )
+
+# --------------------------------------------------------------------------------------
+# line, aline, plane, circle, sphere, project, per_proj, frame
+
+
+@variant("line", ("point", "point"), "line")
+def _line_pp(a: Any, b: Any) -> Any:
+    """The line through two points, directed from the first to the second."""
+    return gc.line_from_points(a, b)
+
+
+@variant("line", ("plane", "plane"), "line")
+def _line_planes(p1: Plane, p2: Plane) -> Any:
+    """The intersection line of two planes."""
+    return gc.line_from_planes(p1, p2)
+
+
+@variant("line", ("point", "unit"), "line")
+def _line_pu(p: Any, d: Any) -> Any:
+    """The line through a point along a unit vector."""
+    return gc.line_from_point_direction(p, d)
+
+
+@variant("aline", ("point", "unit"), "line")
+def _aline(p: Any, d: Any) -> Any:
+    """The line through a point along a unit vector (an axis)."""
+    return gc.line_from_point_direction(p, d)
+
+
+@variant("plane", ("point", "point", "point"), "plane")
+def _plane_3(a: Any, b: Any, c: Any) -> Any:
+    """The plane through three points, normal (b - a) x (c - a) (seed 000 eqs. 20-29)."""
+    return gc.plane_from_points(a, b, c)
+
+
+@variant("plane", ("point", "unit"), "plane")
+def _plane_pn(p: Any, n: Any) -> Any:
+    """The plane through a point with a unit normal."""
+    return gc.plane_from_point_normal(p, n)
+
+
+def _stack(points: Sequence[Any]) -> NDArray[np.float64]:
+    arrs = np.broadcast_arrays(*[np.atleast_2d(np.asarray(p, dtype=np.float64)) for p in points])
+    return np.stack(arrs, axis=1)
+
+
+@variant("plane", (), "plane", rest="point", min_rest=4)
+def _plane_lsq(*points: Any) -> Any:
+    """The least-squares (orthogonal distance) plane of four or more points."""
+    return fits.fit_plane(_stack(points)).geometry
+
+
+@variant("circle", ("point", "point", "point"), "circle")
+def _circle_3(a: Any, b: Any, c: Any) -> Any:
+    """The circle through three points."""
+    return gc.circle_from_points(a, b, c)
+
+
+@variant("circle", (), "circle", rest="point", min_rest=4)
+def _circle_lsq(*points: Any) -> Any:
+    """The least-squares circle (in its least-squares plane) of four or more points."""
+    return fits.fit_circle(_stack(points)).geometry
+
+
+@variant("sphere", (), "sphere", rest="point", min_rest=4)
+def _sphere_lsq(*points: Any) -> Any:
+    """The least-squares sphere of four or more points."""
+    return fits.fit_sphere(_stack(points)).geometry
+
+
+@variant("sphere", (), "sphere", rest="point", min_rest=4, suffix=("real",))
+def _sphere_known(*args: Any) -> Any:
+    """The least-squares sphere of known radius (the last input) through four or more points."""
+    *points, r = args
+    return fits.fit_sphere(_stack(points), radius=np.atleast_1d(r)).geometry
+
+
+@variant("project", ("point", "plane"), "point")
+def _project(p: Any, plane: Plane) -> Any:
+    """The orthogonal projection of a point on a plane."""
+    return gc.project_point_plane(p, plane)
+
+
+@variant("per_proj", ("point", "line"), "point")
+def _per_proj(p: Any, line: Line) -> Any:
+    """The foot of the perpendicular from a point to a line."""
+    return gc.foot_on_line(p, line)
+
+
+@variant("frame", ("plane", "line", "point"), "frame")
+def _frame(plane: Plane, line: Line, p: Any) -> Any:
+    """The frame of a plane (z), a line (x) and a point (origin)."""
+    return gc.frame_from_plane_line_point(plane, line, p)
+
+
+# --------------------------------------------------------------------------------------
+# axis: seed 000 eqs. 8-19
+
+
+def rotary_axis(
+    p1: npt.ArrayLike,
+    p2: npt.ArrayLike,
+    p3: npt.ArrayLike,
+    alpha: npt.ArrayLike | None = None,
+) -> Line:
+    r"""Locate a rotary axis from three positions of a ball centre (seed 000 eqs. 8-19).
+
+    A ball fixed on the rotary table is measured at the axis angles 0, +α and −α; its
+    centres ``P1`` (at 0), ``P2`` (at +α) and ``P3`` (at −α) lie on a circle about the
+    axis. The axis is the line through that circle's centre along its normal.
+
+    Direction (seed 000 eqs. 20-27): the unit normal of the plane of the three points,
+
+    .. math:: \mathbf a = \frac{(P_2 - P_1)\times(P_3 - P_1)}{|(P_2 - P_1)\times(P_3 - P_1)|},
+
+    which points along the positive axis of rotation (right-hand rule) when ``P3 → P1 → P2``
+    is the order of increasing angle. Seed 000 prints the y-component of the cross product
+    (its eq. 22) as ``a_x b_z − b_x a_z``; the correct component is ``a_z b_x − a_x b_z``.
+
+    Location with α given (seed 000 eqs. 8-19): ``P4 = (P2 + P3)/2`` (eqs. 8-10) lies on
+    the radius through ``P1`` because ``P2`` and ``P3`` are symmetric about it. The half
+    chord ``|P3 P4|`` (eq. 11) equals ``R sin α``, so ``R = |P3 P4| / sin α`` (eq. 12).
+    With the unit vector from ``P1`` towards ``P4``, ``v = (P4 − P1)/|P4 − P1|`` (eqs.
+    13-16), the circle centre is ``P0 = P1 + R v`` (eqs. 17-19). Seed 000 prints eq. 14
+    as ``I0 = (X4 − X3)/|P1 P4|``; by eqs. 15-16 and the construction it is
+    ``(X4 − X1)/|P1 P4|``. Eq. 11 prints only the right-hand side; it is ``|P3 P4|``.
+
+    Location without α: the centre of the circle through the three points
+    (:func:`mtmc.geometry.circle_from_points`), which needs no assumption on the angles.
+    With exact data both give the same axis; with noisy data the first uses the known
+    angle and the symmetric placement, as the seed does.
+
+    Parameters
+    ----------
+    p1, p2, p3 : array_like, shape (M, 3) or (3,)
+        Ball centres at the angles 0, +α and −α, mm.
+    alpha : array_like, shape (M,) or (), optional
+        The angle α, rad, with 0 < α < π.
+
+    Returns
+    -------
+    Line
+        The axis: ``point`` the circle centre ``P0`` (mm), ``direction`` the unit axis.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        If the three points are collinear, ``P1`` coincides with ``P4``, or ``sin α`` is 0.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.pi / 4
+    >>> p = [[10, 0, 5], [10 * np.cos(a), 10 * np.sin(a), 5], [10 * np.cos(a), -10 * np.sin(a), 5]]
+    >>> ax = rotary_axis(*p, alpha=a)
+    >>> np.round(ax.point, 12) + 0.0, np.round(ax.direction, 12) + 0.0
+    (array([[0., 0., 5.]]), array([[0., 0., 1.]]))
+    """
+    a = np.atleast_2d(np.asarray(p1, dtype=np.float64))
+    b = np.atleast_2d(np.asarray(p2, dtype=np.float64))
+    c = np.atleast_2d(np.asarray(p3, dtype=np.float64))
+    normal = gc.unit(np.cross(b - a, c - a))  # raises on collinear points
+    if alpha is None:
+        circ = gc.circle_from_points(a, b, c)
+        return Line(circ.centre, normal)
+    al = np.atleast_1d(np.asarray(alpha, dtype=np.float64))
+    s = np.sin(al)
+    if np.any(~(np.abs(s) > 1e-12)):
+        raise DegenerateGeometryError(
+            "sin(alpha) is 0: the three positions are not distinct", field="alpha"
+        )
+    p4 = 0.5 * (b + c)  # eqs. 8-10
+    half_chord = np.sqrt(np.einsum("mi,mi->m", c - p4, c - p4))  # eq. 11
+    radius = half_chord / s  # eq. 12
+    centre = gc.displace(a, p4 - a, radius)  # eqs. 13-19 (unit(P4 - P1) scaled by R)
+    return Line(centre, normal)
+
+
+@variant("axis", ("point", "point", "point"), "line")
+def _axis3(a: Any, b: Any, c: Any) -> Any:
+    """The rotary axis through the circle of three ball centres."""
+    return rotary_axis(a, b, c)
+
+
+@variant("axis", ("point", "point", "point", "real"), "line")
+def _axis4(a: Any, b: Any, c: Any, alpha: Any) -> Any:
+    """The rotary axis from ball centres at 0, +alpha, -alpha (seed 000 eqs. 8-19)."""
+    return rotary_axis(a, b, c, alpha)

@@ -1,0 +1,316 @@
+"""Places, transitions and probe defaults: the small frozen objects a graph is made of.
+
+A measurement graph (seed 000, eq. 7) is the ordered four G = (Π, T, E, M): places Π,
+transitions T, arcs E (here: each transition's ``inputs`` and ``out``) and markers M (here:
+the places that carry a value, ``u`` or ``dist`` are marked from the start, the set M0).
+These classes hold what a graph file says, validated field by field in ``__post_init__``;
+the meaning (type binding, firing order) lives in :mod:`mtmc.graph.model`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+from mtmc.errors import GraphError
+
+__all__ = [
+    "PLACE_TYPES",
+    "COORDINATE_TYPES",
+    "VALUE_TYPES",
+    "PLACE_UNITS",
+    "Place",
+    "Transition",
+    "ProbeDefaults",
+]
+
+#: The typed places of the graph. ``x``, ``y``, ``z``: one measured coordinate;
+#: ``real``: a scalar; ``point``, ``vector``, ``unit``: 3-vectors; ``line``, ``plane``,
+#: ``circle``, ``sphere``: derived features; ``frame``: a 4×4 homogeneous transform.
+PLACE_TYPES: tuple[str, ...] = (
+    "x",
+    "y",
+    "z",
+    "real",
+    "point",
+    "vector",
+    "unit",
+    "line",
+    "plane",
+    "circle",
+    "sphere",
+    "frame",
+)
+#: The coordinate types, whose value is one coordinate of a probed point.
+COORDINATE_TYPES: tuple[str, ...] = ("x", "y", "z")
+#: The types a place may carry a value for (the others are built by transitions).
+VALUE_TYPES: tuple[str, ...] = ("x", "y", "z", "real", "point", "vector", "unit")
+#: Units a place may declare: ``None`` (a length in the file's units), ``"1"``
+#: (dimensionless), or an angle (``"rad"``, ``"deg"``).
+PLACE_UNITS: tuple[str, ...] = ("1", "rad", "deg")
+
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def _check_name(name: object, what: str, line: int | None) -> None:
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise GraphError(
+            f"{what} name must be an identifier (letters, digits, _), got {name!r}",
+            line=line,
+            field="name",
+        )
+
+
+def _finite(value: object, what: str, field_name: str, line: int | None) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise GraphError(f"{what}: expected a number, got {value!r}", line=line, field=field_name)
+    x = float(value)
+    if not math.isfinite(x):
+        raise GraphError(
+            f"{what}: expected a finite number, got {value!r}", line=line, field=field_name
+        )
+    return x
+
+
+def _vector3(value: object, what: str, field_name: str, line: int | None) -> tuple[float, ...]:
+    if not isinstance(value, list | tuple) or len(value) != 3:
+        raise GraphError(
+            f"{what}: expected a list of 3 numbers, got {value!r}", line=line, field=field_name
+        )
+    return tuple(_finite(v, what, field_name, line) for v in value)
+
+
+@dataclass(frozen=True)
+class Place:
+    """A place of the graph: a typed quantity, marked from the start if it has a value.
+
+    Parameters
+    ----------
+    name : str
+        Identifier, unique in the graph.
+    type : str
+        One of :data:`PLACE_TYPES`.
+    value : float or tuple of 3 floats, optional
+        Nominal value (scalar for ``x``/``y``/``z``/``real``, 3 numbers for ``point``,
+        ``vector``, ``unit``). In the file's length unit, or in ``unit``.
+    u : float, optional
+        Standard uncertainty: the place is ``value + N(0, u²)`` (each coordinate
+        independently for 3-vectors). Requires ``value``.
+    dist : str, optional
+        A distribution (``"uniform(-1e-3, 1e-3)"``) of the deviation added to ``value``
+        (``value`` defaults to 0, so without it ``dist`` is the quantity itself).
+        Exclusive with ``u``.
+    unit : str, optional
+        ``"1"`` (dimensionless), ``"rad"`` or ``"deg"``; default: a length in the file's unit.
+    pos : tuple of 2 floats, optional
+        Position of the node on a drawing (the assertion database's pixel ``x, y``).
+    line : int, optional
+        Line in the source file (not part of equality).
+
+    Raises
+    ------
+    GraphError
+        On an unknown type, a malformed value, a negative ``u``, or ``u`` with ``dist``.
+    """
+
+    name: str
+    type: str
+    value: float | tuple[float, ...] | None = None
+    u: float | None = None
+    dist: str | None = None
+    unit: str | None = None
+    pos: tuple[float, float] | None = None
+    line: int | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        _check_name(self.name, "place", self.line)
+        what = f"place {self.name}"
+        if self.type not in PLACE_TYPES:
+            raise GraphError(
+                f"{what}: unknown type {self.type!r}; expected one of {', '.join(PLACE_TYPES)}",
+                line=self.line,
+                field="type",
+            )
+        marked = self.value is not None or self.u is not None or self.dist is not None
+        if marked and self.type not in VALUE_TYPES:
+            raise GraphError(
+                f"{what}: a place of type {self.type} cannot carry a value; "
+                "build it with a transition",
+                line=self.line,
+                field="value",
+            )
+        if self.value is not None:
+            if self.type in ("point", "vector", "unit"):
+                vec = _vector3(self.value, what, "value", self.line)
+                if self.type == "unit" and math.hypot(*vec) == 0.0:
+                    raise GraphError(
+                        f"{what}: a unit vector cannot be zero", line=self.line, field="value"
+                    )
+                object.__setattr__(self, "value", vec)
+            else:
+                object.__setattr__(self, "value", _finite(self.value, what, "value", self.line))
+        if self.u is not None:
+            u = _finite(self.u, what, "u", self.line)
+            if u < 0:
+                raise GraphError(f"{what}: u must be >= 0, got {u!r}", line=self.line, field="u")
+            if self.value is None:
+                raise GraphError(
+                    f"{what}: u needs a nominal value (add value = ...)", line=self.line, field="u"
+                )
+            object.__setattr__(self, "u", u)
+        if self.dist is not None:
+            if not isinstance(self.dist, str):
+                raise GraphError(f"{what}: dist must be a string", line=self.line, field="dist")
+            if self.u is not None:
+                raise GraphError(
+                    f"{what}: give either u or dist, not both", line=self.line, field="dist"
+                )
+        if self.unit is not None:
+            if self.unit not in PLACE_UNITS:
+                raise GraphError(
+                    f"{what}: unknown unit {self.unit!r}; expected one of {', '.join(PLACE_UNITS)}"
+                    " (lengths use the file's units)",
+                    line=self.line,
+                    field="unit",
+                )
+            if self.type != "real":
+                raise GraphError(
+                    f"{what}: only a real place may set unit", line=self.line, field="unit"
+                )
+        if self.pos is not None:
+            if not isinstance(self.pos, list | tuple) or len(self.pos) != 2:
+                raise GraphError(f"{what}: pos must be 2 numbers", line=self.line, field="pos")
+            object.__setattr__(
+                self, "pos", tuple(_finite(v, what, "pos", self.line) for v in self.pos)
+            )
+
+    @property
+    def marked(self) -> bool:
+        """Whether the place is marked from the start (carries a value, u or dist)."""
+        return self.value is not None or self.u is not None or self.dist is not None
+
+
+def _freeze(value: Any) -> Any:
+    if isinstance(value, list | tuple):
+        return tuple(_freeze(v) for v in value)
+    return value
+
+
+@dataclass(frozen=True)
+class Transition:
+    """A transition of the graph: an op applied to input places, writing one output place.
+
+    Parameters
+    ----------
+    name : str
+        Identifier, unique in the graph.
+    op : str
+        The op name (``meas``, ``point``, ``middle``, ...); its variant binds later by the
+        types of the inputs (:mod:`mtmc.graph.ops`).
+    inputs : tuple of str
+        Input places, in order (the input arcs ``pt(p, t)``).
+    out : str
+        Output place (the output arc ``tp(t, p)``).
+    params : tuple of (str, value) pairs
+        Op fields other than ``name``/``op``/``in``/``out``, sorted by key (e.g. ``at``,
+        ``direction``, ``u_probe`` of ``meas``). Lists are stored as tuples.
+    pos : tuple of 2 floats, optional
+        Position on a drawing.
+    line : int, optional
+        Line in the source file (not part of equality).
+    param_lines : tuple of (str, int) pairs
+        Line of each field in the source file (not part of equality).
+    """
+
+    name: str
+    op: str
+    inputs: tuple[str, ...]
+    out: str
+    params: tuple[tuple[str, Any], ...] = ()
+    pos: tuple[float, float] | None = None
+    line: int | None = field(default=None, compare=False, repr=False)
+    param_lines: tuple[tuple[str, int], ...] = field(default=(), compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        _check_name(self.name, "transition", self.line)
+        what = f"transition {self.name}"
+        if not isinstance(self.op, str) or not self.op:
+            raise GraphError(f"{what}: op must be a name", line=self.line, field="op")
+        if isinstance(self.inputs, str) or not isinstance(self.inputs, list | tuple):
+            raise GraphError(
+                f"{what}: in must be a list of place names, got {self.inputs!r}",
+                line=self.field_line("in"),
+                field="in",
+            )
+        for p in self.inputs:
+            if not isinstance(p, str) or not _NAME.match(p):
+                raise GraphError(
+                    f"{what}: input {p!r} is not a place name",
+                    line=self.field_line("in"),
+                    field="in",
+                )
+        object.__setattr__(self, "inputs", tuple(self.inputs))
+        if not isinstance(self.out, str) or not _NAME.match(self.out):
+            raise GraphError(
+                f"{what}: out must be one place name, got {self.out!r}",
+                line=self.field_line("out"),
+                field="out",
+            )
+        params = dict(self.params)
+        if len(params) != len(self.params):
+            raise GraphError(f"{what}: a field is given twice", line=self.line)
+        object.__setattr__(
+            self, "params", tuple(sorted((str(k), _freeze(v)) for k, v in params.items()))
+        )
+        if self.pos is not None:
+            object.__setattr__(
+                self, "pos", tuple(_finite(v, what, "pos", self.line) for v in self.pos)
+            )
+
+    def param(self, key: str, default: Any = None) -> Any:
+        """Return the field ``key`` of the transition, or ``default``."""
+        for k, v in self.params:
+            if k == key:
+                return v
+        return default
+
+    def field_line(self, key: str) -> int | None:
+        """Return the source line of field ``key`` (the entry's line if unknown)."""
+        for k, n in self.param_lines:
+            if k == key:
+                return n
+        return self.line
+
+
+@dataclass(frozen=True)
+class ProbeDefaults:
+    """Standard uncertainties of the touch-probe model (seed 000, eq. 1), in the file's units.
+
+    Parameters
+    ----------
+    u_axis : float
+        u1, the axis position uncertainty, on every coordinate of a probed point.
+    u_probe : float
+        u2, the probe's own uncertainty, along the probing direction.
+    u_perp : float
+        u3, from the non-perpendicularity of the probing movement, along the direction.
+
+    Notes
+    -----
+    Along the probing direction the three combine as u = √(u1² + u2² + u3²). Seed 000
+    prints eq. 1 garbled (``m = a·b ∫ ρ θ dh``); its text states this root sum of squares.
+    """
+
+    u_axis: float = 0.0
+    u_probe: float = 0.0
+    u_perp: float = 0.0
+    line: int | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        for key in ("u_axis", "u_probe", "u_perp"):
+            v = _finite(getattr(self, key), "probe", key, self.line)
+            if v < 0:
+                raise GraphError(f"probe: {key} must be >= 0, got {v!r}", line=self.line, field=key)
+            object.__setattr__(self, key, v)

@@ -1,0 +1,591 @@
+"""Monte Carlo over a measurement graph: all trials of a block in one batched pass.
+
+A run (seed 000, "simulation cycles"): draw every random input of the graph — the probe
+errors of each ``meas`` (:mod:`mtmc.graph.probe`) and the marked places carrying ``u`` or
+``dist`` — in blocks through :func:`mtmc.uncertainty.iter_blocks`, then fire every
+transition once, in the firing order of :func:`mtmc.graph.check`, on the whole block.
+There is no loop over trials: a block of ``m`` trials is a handful of array operations
+per transition. The numbers depend only on the seed, not on the block size.
+
+Per place the run keeps running sums (of the deviations from the first block's mean and
+of their outer products), so a run of 10^6 trials needs the memory of one block; the
+samples of the places named in ``keep`` are kept whole.
+
+Units: lengths in mm (a graph in µm is converted on reading its numbers), angles in rad.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mtmc.errors import GraphError, InputError, MtmcError
+from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
+from mtmc.graph import probe as _probe
+from mtmc.graph.model import Graph, Plan, check
+from mtmc.graph.places import Place
+from mtmc.uncertainty.distributions import Distribution, Normal, parse_distribution
+from mtmc.uncertainty.sampling import DEFAULT_BLOCK_SIZE, iter_blocks, resolve_seed
+
+__all__ = [
+    "PlaceSummary",
+    "GraphResult",
+    "random_inputs",
+    "evaluate",
+    "run_graph",
+    "graph_model",
+    "flatten",
+]
+
+#: Parts of each place type in the flat layout used for the running sums: (name, size).
+PARTS: dict[str, tuple[tuple[str, int], ...]] = {
+    "x": (("value", 1),),
+    "y": (("value", 1),),
+    "z": (("value", 1),),
+    "real": (("value", 1),),
+    "point": (("value", 3),),
+    "vector": (("value", 3),),
+    "unit": (("value", 3),),
+    "line": (("point", 3), ("direction", 3)),
+    "plane": (("point", 3), ("normal", 3)),
+    "circle": (("centre", 3), ("normal", 3), ("radius", 1)),
+    "sphere": (("centre", 3), ("radius", 1)),
+    "frame": (("rotation", 9), ("translation", 3)),
+}
+
+
+def flatten(type_: str, value: Any, m: int) -> NDArray[np.float64]:
+    """The components of a place value as an ``(m, k)`` array (layout of :data:`PARTS`).
+
+    Parameters
+    ----------
+    type_ : str
+        The place type.
+    value : ndarray or primitive
+        The batched value (``(m,)``, ``(m, 3)``, a Line/Plane/Circle/Sphere, ``(m, 4, 4)``).
+    m : int
+        Trials in the batch (a batch of one broadcasts).
+
+    Returns
+    -------
+    ndarray, shape (m, k)
+        ``k`` = 1 (scalar), 3 (point, vector, unit), 6 (line: point, direction; plane:
+        point, normal), 7 (circle: centre, normal, radius), 4 (sphere: centre, radius),
+        12 (frame: rotation row by row, translation).
+    """
+    if type_ in ("x", "y", "z", "real"):
+        cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1), (m,))[:, None]]
+    elif type_ in ("point", "vector", "unit"):
+        cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1, 3), (m, 3))]
+    elif isinstance(value, Line):
+        cols = [value.point, value.direction]
+    elif isinstance(value, Plane):
+        cols = [value.point, value.normal]
+    elif isinstance(value, Circle):
+        cols = [value.centre, value.normal, value.radius[:, None]]
+    elif isinstance(value, Sphere):
+        cols = [value.centre, value.radius[:, None]]
+    elif type_ == "frame":
+        t = np.asarray(value, dtype=np.float64).reshape(-1, 4, 4)
+        cols = [t[:, :3, :3].reshape(-1, 9), t[:, :3, 3]]
+    else:  # pragma: no cover - every type is handled above
+        raise TypeError(f"cannot flatten a {type_}")
+    return np.concatenate([np.broadcast_to(c, (m, c.shape[1])) for c in cols], axis=1)
+
+
+@dataclass(frozen=True)
+class PlaceSummary:
+    """Estimate and covariance of one place over a run.
+
+    Parameters
+    ----------
+    name : str
+        The place.
+    type : str
+        Its type.
+    mean : ndarray, shape (k,)
+        Mean of the components (layout of :func:`flatten`), mm / rad.
+    cov : ndarray, shape (k, k)
+        Their covariance (divisor ``M - 1``, seed 000 eq. 5).
+    """
+
+    name: str
+    type: str
+    mean: NDArray[np.float64]
+    cov: NDArray[np.float64]
+
+    def part(self, part: str) -> tuple[Any, Any, NDArray[np.float64]]:
+        """Estimate, standard uncertainty and covariance of one part (e.g. ``"direction"``).
+
+        Parameters
+        ----------
+        part : str
+            A part name of :data:`PARTS` for this type (``"value"`` for scalars/vectors).
+
+        Returns
+        -------
+        estimate : float or ndarray
+            A float for a 1-component part, else an array (3×3 for a rotation).
+        u : float or ndarray
+            The standard uncertainties, same shape.
+        cov : ndarray, shape (k, k)
+            The covariance of the part's components.
+        """
+        i = 0
+        for name, k in PARTS[self.type]:
+            if name == part:
+                est = self.mean[i : i + k]
+                cov = self.cov[i : i + k, i : i + k]
+                u = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+                if k == 1:
+                    return float(est[0]), float(u[0]), cov
+                if k == 9:
+                    return est.reshape(3, 3), u.reshape(3, 3), cov
+                return est, u, cov
+            i += k
+        raise InputError(f"a {self.type} has no part {part!r}", field=part)
+
+    @property
+    def estimate(self) -> Any:
+        """The estimate: a float (scalars), ``(3,)`` (points, vectors), or a dict of parts."""
+        if len(PARTS[self.type]) == 1:
+            return self.part("value")[0]
+        return {p: self.part(p)[0] for p, _ in PARTS[self.type]}
+
+    @property
+    def u(self) -> Any:
+        """The standard uncertainty, shaped like :attr:`estimate`."""
+        if len(PARTS[self.type]) == 1:
+            return self.part("value")[1]
+        return {p: self.part(p)[1] for p, _ in PARTS[self.type]}
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready summary of the place.
+
+        Returns
+        -------
+        dict
+            ``type``, ``estimate``, ``u`` (and ``cov`` for 3-vectors); for line, plane,
+            circle, sphere and frame one ``{estimate, u}`` object per part.
+        """
+        out: dict[str, Any] = {"type": self.type}
+        if len(PARTS[self.type]) == 1:
+            est, u, cov = self.part("value")
+            out["estimate"], out["u"] = est, u
+            if self.type in ("point", "vector", "unit"):
+                out["cov"] = cov
+            return out
+        for p, _ in PARTS[self.type]:
+            est, u, _cov = self.part(p)
+            out[p] = {"estimate": est, "u": u}
+        return out
+
+
+@dataclass(frozen=True)
+class GraphResult:
+    """The result of a Monte Carlo run over a graph.
+
+    Parameters
+    ----------
+    trials : int
+        Number of trials M.
+    seed : int
+        The seed that reproduces the run.
+    places : dict of str to PlaceSummary
+        Estimate and covariance of each summarised place.
+    samples : dict of str to value
+        All M samples of each kept place (``(M,)``, ``(M, 3)``, a primitive or ``(M, 4, 4)``).
+    types : dict of str to str
+        The type of every place of the graph.
+    """
+
+    trials: int
+    seed: int
+    places: dict[str, PlaceSummary]
+    samples: dict[str, Any] = field(default_factory=dict)
+    types: dict[str, str] = field(default_factory=dict)
+
+    def result(self, name: str) -> Any:
+        """The JCGM 101 result of a kept place (its samples, flattened as :func:`flatten`).
+
+        Parameters
+        ----------
+        name : str
+            A place named in ``keep`` of :func:`run_graph`.
+
+        Returns
+        -------
+        MonteCarloResult
+            Samples ``(M,)`` for scalars, ``(M, k)`` otherwise.
+
+        Raises
+        ------
+        InputError
+            If the place's samples were not kept.
+        """
+        if name not in self.samples:
+            raise InputError(
+                f"the samples of place {name} were not kept (run with keep=[...])", field=name
+            )
+        from mtmc.uncertainty.results import MonteCarloResult
+
+        flat = flatten(self.types[name], self.samples[name], self.trials)
+        arr = flat[:, 0] if flat.shape[1] == 1 else flat
+        return MonteCarloResult.from_samples(
+            np.ascontiguousarray(arr), seed=self.seed, trials=self.trials
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"trials", "seed", "places": {name: summary}}``, JSON-ready apart from arrays."""
+        return {
+            "trials": self.trials,
+            "seed": self.seed,
+            "places": {n: s.to_dict() for n, s in self.places.items()},
+        }
+
+
+def _place_factor(p: Place, factor: float) -> float:
+    if p.type == "unit" or p.unit == "1" or p.unit == "rad":
+        return 1.0
+    if p.unit == "deg":
+        return math.pi / 180.0
+    return factor
+
+
+def _place_dist(p: Place, file: str | None) -> Distribution:
+    assert p.dist is not None
+    try:
+        return parse_distribution(p.dist, file=file, line=p.line, field="dist")
+    except GraphError:
+        raise
+    except InputError as exc:
+        raise GraphError(
+            f"place {p.name}: {exc.message}", file=file, line=p.line, field="dist"
+        ) from None
+
+
+def random_inputs(plan: Plan) -> dict[str, Distribution]:
+    """All random inputs of a graph, by name (what one trial draws).
+
+    Parameters
+    ----------
+    plan : Plan
+        A checked graph (:func:`mtmc.graph.check`).
+
+    Returns
+    -------
+    dict of str to Distribution
+        The probe errors of each ``meas`` (names ``<transition>.<part>``) and the marked
+        places with ``u`` (``Normal``; ``<place>.x|y|z`` for 3-vectors) or ``dist``
+        (``<place>``; ``<place>.x|y|z``), in a fixed order. Their values are in mm / rad.
+
+    Raises
+    ------
+    GraphError
+        If a ``dist`` or a ``meas`` field is not valid.
+    """
+    g = plan.graph
+    out: dict[str, Distribution] = {}
+    for p in g.places:
+        f = _place_factor(p, g.factor)
+        vec = p.type in ("point", "vector", "unit")
+        if p.u is not None and p.u > 0:
+            assert p.value is not None
+            if vec:
+                assert isinstance(p.value, tuple)
+                for c, v in zip("xyz", p.value, strict=True):
+                    out[f"{p.name}.{c}"] = Normal(v * f, p.u * f)
+            else:
+                assert isinstance(p.value, float)
+                out[p.name] = Normal(p.value * f, p.u * f)
+        elif p.dist is not None:
+            d = _place_dist(p, g.file)
+            for c in "xyz" if vec else ("",):
+                out[f"{p.name}.{c}" if c else p.name] = d
+    for s in plan.steps:
+        t = s.transition
+        if t.op == "meas":
+            out.update(
+                _probe.meas_inputs(t.name, _probe.meas_spec(t, g.probe, g.factor), s.variant.output)
+            )
+    return out
+
+
+def _marked_value(p: Place, factor: float, samples: Mapping[str, Any], m: int) -> Any:
+    f = _place_factor(p, factor)
+    vec = p.type in ("point", "vector", "unit")
+    if vec:
+        base = np.asarray(p.value if p.value is not None else (0.0, 0.0, 0.0)) * f
+        if p.name + ".x" not in samples:
+            return np.broadcast_to(base, (m, 3))
+        cols = [np.asarray(samples[f"{p.name}.{c}"], dtype=np.float64) for c in "xyz"]
+        val = np.stack(cols, axis=1)
+        if p.dist is not None:
+            val = base + f * val
+        if p.type == "unit":
+            val = val / np.linalg.norm(val, axis=1)[:, None]
+        return val
+    base_s = (p.value if isinstance(p.value, float) else 0.0) * f
+    if p.name not in samples:
+        return np.full(m, base_s)
+    if p.dist is not None:
+        return base_s + f * np.asarray(samples[p.name])
+    return np.asarray(samples[p.name])
+
+
+def evaluate(
+    plan: Plan,
+    samples: Mapping[str, Any],
+    m: int,
+    outputs: Iterable[str] | None = None,
+    *,
+    specs: Mapping[str, _probe.MeasSpec] | None = None,
+) -> dict[str, Any]:
+    """Fire every transition once on a batch of trials.
+
+    Parameters
+    ----------
+    plan : Plan
+        A checked graph.
+    samples : mapping of str to ndarray
+        Draws of :func:`random_inputs` for ``m`` trials (leading axis the trial).
+    m : int
+        Number of trials in the batch.
+    outputs : iterable of str, optional
+        Places whose values to return (default: all). Other intermediate values are
+        released as soon as no later transition needs them.
+    specs : mapping, optional
+        Pre-resolved ``meas`` parameters (internal; resolved here when missing).
+
+    Returns
+    -------
+    dict of str to value
+        The value of each requested place: ``(m,)`` scalars, ``(m, 3)`` points/vectors,
+        geometry primitives, ``(m, 4, 4)`` frames.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        If a construction is degenerate in some trial (naming the transition).
+    """
+    g = plan.graph
+    want = set(plan.types) if outputs is None else set(outputs)
+    for name in want:
+        if name not in plan.types:
+            raise InputError(f"the graph has no place {name}", file=g.file, field=name)
+    last_use: dict[str, int] = {}
+    for i, s in enumerate(plan.steps):
+        for p in s.transition.inputs:
+            last_use[p] = i
+    values: dict[str, Any] = {}
+    for pl in g.places:
+        if pl.marked:
+            values[pl.name] = _marked_value(pl, g.factor, samples, m)
+    for i, s in enumerate(plan.steps):
+        t = s.transition
+        if t.op == "meas":
+            spec = specs[t.name] if specs is not None else _probe.meas_spec(t, g.probe, g.factor)
+            val = _probe.meas_value(t.name, spec, s.variant.output, samples, m)
+        else:
+            try:
+                val = s.variant.func(*[values[p] for p in t.inputs])
+            except MtmcError as exc:
+                raise type(exc)(
+                    f"transition {t.name} ({t.op}): {exc.message}",
+                    file=g.file,
+                    line=t.line,
+                    field=exc.field,
+                ) from None
+        values[t.out] = val
+        for p in t.inputs:
+            if last_use.get(p) == i and p not in want:
+                del values[p]
+    return {k: v for k, v in values.items() if k in want}
+
+
+class _Accumulator:
+    """Running sums of deviations from a shift and of their outer products."""
+
+    def __init__(self) -> None:
+        self.n = 0
+        self.shift: NDArray[np.float64] | None = None
+        self.s1: NDArray[np.float64] | None = None
+        self.s2: NDArray[np.float64] | None = None
+
+    def add(self, x: NDArray[np.float64]) -> None:
+        if self.shift is None:
+            self.shift = x.mean(axis=0)
+            self.s1 = np.zeros(x.shape[1])
+            self.s2 = np.zeros((x.shape[1], x.shape[1]))
+        assert self.s1 is not None and self.s2 is not None
+        d = x - self.shift
+        self.s1 += d.sum(axis=0)
+        self.s2 += d.T @ d
+        self.n += x.shape[0]
+
+    def result(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        assert self.shift is not None and self.s1 is not None and self.s2 is not None
+        mean = self.shift + self.s1 / self.n
+        if self.n < 2:
+            return mean, np.zeros_like(self.s2)
+        cov = (self.s2 - np.outer(self.s1, self.s1) / self.n) / (self.n - 1)
+        return mean, 0.5 * (cov + cov.T)
+
+
+def _as_plan(graph: Graph | Plan) -> Plan:
+    return graph if isinstance(graph, Plan) else check(graph)
+
+
+def run_graph(
+    graph: Graph | Plan,
+    trials: int = 100_000,
+    seed: int | None | np.random.SeedSequence = None,
+    *,
+    outputs: Iterable[str] | None = None,
+    keep: Iterable[str] = (),
+    block_size: int = DEFAULT_BLOCK_SIZE,
+    normal_method: str = "default",
+) -> GraphResult:
+    """Monte Carlo over a measurement graph (JCGM 101 with seed 000's graph as the model).
+
+    Parameters
+    ----------
+    graph : Graph or Plan
+        The graph (checked here if a Graph).
+    trials : int
+        Number of trials M.
+    seed : int, SeedSequence or None
+        The seed; None draws fresh entropy, recorded in the result.
+    outputs : iterable of str, optional
+        Places to summarise (default: all places).
+    keep : iterable of str
+        Places whose samples to keep whole (for coverage intervals, histograms).
+    block_size : int
+        Trials per block; it changes the memory used, not the numbers.
+    normal_method : {"default", "box-muller"}
+        How normal numbers are made (Box-Muller as in seed 000 eq. 6).
+
+    Returns
+    -------
+    GraphResult
+        Per-place summaries and the kept samples.
+
+    Raises
+    ------
+    GraphError
+        If the graph is not valid.
+    DegenerateGeometryError
+        If a construction is degenerate in some trial.
+
+    Examples
+    --------
+    >>> from mtmc.graph.places import Place, Transition
+    >>> g = Graph(
+    ...     places=(Place("a", "real", 1.0, u=0.1), Place("b", "real", 3.0)),
+    ...     transitions=(Transition("t1", "middle", ("a", "b"), "c"),),
+    ... )
+    >>> r = run_graph(g, trials=20000, seed=1)
+    >>> round(r.places["c"].u, 2)
+    0.05
+    """
+    plan = _as_plan(graph)
+    g = plan.graph
+    seed_i = resolve_seed(seed)
+    keep_s = list(dict.fromkeys(keep))
+    summ = list(plan.types) if outputs is None else list(dict.fromkeys(outputs))
+    for name in (*keep_s, *summ):
+        if name not in plan.types:
+            raise InputError(f"the graph has no place {name}", file=g.file, field=name)
+    inputs = random_inputs(plan)
+    specs = {
+        s.transition.name: _probe.meas_spec(s.transition, g.probe, g.factor)
+        for s in plan.steps
+        if s.transition.op == "meas"
+    }
+    want = set(summ) | set(keep_s)
+    acc = {n: _Accumulator() for n in summ}
+    kept: dict[str, list[Any]] = {n: [] for n in keep_s}
+    blocks = iter_blocks(inputs, trials, seed_i, block_size, normal_method=normal_method)  # type: ignore[arg-type]
+    if not inputs:
+        blocks = ((a, min(a + block_size, trials), {}) for a in range(0, trials, block_size))
+    for a, b, samples in blocks:
+        m = b - a
+        vals = evaluate(plan, samples, m, want, specs=specs)
+        for n in summ:
+            acc[n].add(flatten(plan.types[n], vals[n], m))
+        for n in keep_s:
+            kept[n].append(vals[n])
+    places = {}
+    for n in summ:
+        mean, cov = acc[n].result()
+        places[n] = PlaceSummary(n, plan.types[n], mean, cov)
+    samples_out = {n: _concat(plan.types[n], v, trials) for n, v in kept.items()}
+    return GraphResult(trials, seed_i, places, samples_out, dict(plan.types))
+
+
+def _concat(type_: str, parts: list[Any], m: int) -> Any:
+    first = parts[0]
+    if isinstance(first, Line):
+        return Line(*_cat([(p.point, p.direction) for p in parts]))
+    if isinstance(first, Plane):
+        return Plane(*_cat([(p.point, p.normal) for p in parts]))
+    if isinstance(first, Circle):
+        return Circle(*_cat([(p.centre, p.normal, p.radius) for p in parts]))
+    if isinstance(first, Sphere):
+        return Sphere(*_cat([(p.centre, p.radius) for p in parts]))
+    return np.concatenate([np.array(p, dtype=np.float64) for p in parts], axis=0)
+
+
+def _cat(cols: list[tuple[Any, ...]]) -> list[NDArray[np.float64]]:
+    return [np.concatenate([c[i] for c in cols], axis=0) for i in range(len(cols[0]))]
+
+
+def graph_model(
+    graph: Graph | Plan, output: str
+) -> tuple[Callable[..., NDArray[np.float64]], dict[str, Distribution]]:
+    """The graph as a plain model function and its inputs, for ``monte_carlo`` and ``gum``.
+
+    Parameters
+    ----------
+    graph : Graph or Plan
+        The graph.
+    output : str
+        The output place.
+
+    Returns
+    -------
+    model : callable
+        ``model(**arrays)`` → the output place flattened (:func:`flatten`): ``(m,)`` for a
+        scalar place, ``(m, k)`` otherwise.
+    inputs : dict of str to Distribution
+        :func:`random_inputs` of the graph.
+
+    Examples
+    --------
+    >>> from mtmc.graph.places import Place, Transition
+    >>> g = Graph(
+    ...     places=(Place("a", "real", 1.0, u=0.1), Place("b", "real", 3.0)),
+    ...     transitions=(Transition("t1", "middle", ("a", "b"), "c"),),
+    ... )
+    >>> model, inputs = graph_model(g, "c")
+    >>> model(a=np.array([1.0, 2.0]))
+    array([2. , 2.5])
+    """
+    plan = _as_plan(graph)
+    if output not in plan.types:
+        raise InputError(f"the graph has no place {output}", file=plan.graph.file, field=output)
+    inputs = random_inputs(plan)
+    type_ = plan.types[output]
+
+    def model(**arrays: Any) -> NDArray[np.float64]:
+        m = max((np.shape(v)[0] for v in arrays.values() if np.ndim(v) > 0), default=1)
+        vals = evaluate(plan, arrays, m, [output])
+        flat = flatten(type_, vals[output], m)
+        return flat[:, 0] if flat.shape[1] == 1 else flat
+
+    return model, inputs

@@ -1,0 +1,322 @@
+"""The TOML graph file: reading (with file and line in every error) and writing.
+
+The format is documented in ``docs/graph-format.md``. Reading is in two steps kept apart:
+:mod:`tomllib` parses the text, then :func:`loads` turns the tables into :class:`Place`,
+:class:`Transition` and :class:`Graph` objects, checking every key; nothing is skipped
+silently. TOML does not report lines, so the text is scanned for the ``[[place]]`` /
+``[[transition]]`` headers and ``key =`` lines, and each entry and field keeps its line for
+the messages (``ball_centre.toml:23: field op: transition t5: ...``).
+
+:func:`dumps` writes a graph back; ``loads(dumps(g)) == g`` for every valid graph.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from mtmc.errors import GraphError, MtmcError, ParseError
+from mtmc.graph.model import Graph, check
+from mtmc.graph.places import Place, ProbeDefaults, Transition
+
+__all__ = ["load", "loads", "dump", "dumps"]
+
+_TOP_KEYS = ("title", "units", "probe", "place", "transition")
+_PLACE_KEYS = ("name", "type", "value", "u", "dist", "unit", "pos")
+_PROBE_KEYS = ("u_axis", "u_probe", "u_perp")
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z_][A-Za-z0-9_]*)\s*\]\]?\s*(#.*)?$")
+_KEY = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_\-]*|\"[^\"]*\")\s*=")
+
+
+class _Lines:
+    """Lines of the headers and keys of a TOML text, by table."""
+
+    def __init__(self, text: str) -> None:
+        self.top: dict[str, int] = {}
+        self.probe: dict[str, int] = {}
+        self.probe_line: int | None = None
+        self.entries: dict[str, list[tuple[int, dict[str, int]]]] = {"place": [], "transition": []}
+        current: dict[str, int] = self.top
+        depth = 0
+        for n, raw in enumerate(text.splitlines(), start=1):
+            stripped = raw.strip()
+            if depth > 0:  # inside a multi-line array
+                depth += stripped.count("[") - stripped.count("]")
+                continue
+            h = _HEADER.match(raw)
+            if h:
+                name = h.group(2)
+                if h.group(1) == "[[" and name in self.entries:
+                    keys: dict[str, int] = {}
+                    self.entries[name].append((n, keys))
+                    current = keys
+                elif name == "probe":
+                    self.probe_line = n
+                    current = self.probe
+                else:
+                    current = {}
+                continue
+            k = _KEY.match(raw)
+            if k:
+                current.setdefault(k.group(1).strip('"'), n)
+                rest = raw[k.end() :].split("#", 1)[0]
+                depth = max(0, rest.count("[") - rest.count("]"))
+
+
+def _where(e: tomllib.TOMLDecodeError) -> tuple[int | None, int | None]:
+    m = re.search(r"line (\d+), column (\d+)", str(e))
+    return (int(m.group(1)), int(m.group(2))) if m else (None, None)
+
+
+def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
+    """Read a graph from TOML text.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text (format: ``docs/graph-format.md``).
+    file : str, optional
+        File name for the error messages.
+    validate : bool
+        Also run :func:`mtmc.graph.check` (default), so a returned graph is runnable.
+
+    Returns
+    -------
+    Graph
+        The graph.
+
+    Raises
+    ------
+    ParseError
+        If the text is not TOML (with line and column).
+    GraphError
+        On an unknown key, a missing or malformed field, or an invalid graph, naming the
+        file, line and field.
+
+    Examples
+    --------
+    >>> g = loads('''
+    ... [[place]]
+    ... name = "a"
+    ... type = "real"
+    ... value = 1.0
+    ... [[transition]]
+    ... name = "t1"
+    ... op = "displace"
+    ... in = ["a", "a"]
+    ... out = "b"
+    ... ''')
+    >>> g.transitions[0].inputs
+    ('a', 'a')
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        line, col = _where(exc)
+        msg = str(exc).split(" (at line")[0]
+        raise ParseError(f"not valid TOML: {msg}", file=file, line=line, column=col) from None
+    lines = _Lines(text)
+
+    def err(msg: str, line: int | None, fld: str | None) -> GraphError:
+        return GraphError(msg, file=file, line=line, field=fld)
+
+    for key in data:
+        if key not in _TOP_KEYS:
+            raise err(
+                f"unknown key {key!r}; expected one of {', '.join(_TOP_KEYS)}",
+                lines.top.get(key),
+                key,
+            )
+    title = data.get("title", "")
+    if not isinstance(title, str):
+        raise err("title must be a string", lines.top.get("title"), "title")
+    units = data.get("units", "mm")
+    if units == "µm":
+        units = "um"
+    if units not in ("mm", "um"):
+        raise err(f'units must be "mm" or "um", got {units!r}', lines.top.get("units"), "units")
+    probe_data = data.get("probe", {})
+    if not isinstance(probe_data, dict):
+        raise err("probe must be a table [probe]", lines.top.get("probe"), "probe")
+    for key in probe_data:
+        if key not in _PROBE_KEYS:
+            raise err(
+                f"probe: unknown key {key!r}; expected one of {', '.join(_PROBE_KEYS)}",
+                lines.probe.get(key, lines.probe_line),
+                key,
+            )
+    try:
+        probe = ProbeDefaults(**probe_data, line=lines.probe_line)
+    except MtmcError as exc:
+        raise err(
+            exc.message, lines.probe.get(exc.field or "", lines.probe_line), exc.field
+        ) from None
+
+    places = []
+    raw_places = data.get("place", [])
+    if not isinstance(raw_places, list):
+        raise err("place must be an array of tables [[place]]", lines.top.get("place"), "place")
+    for i, entry in enumerate(raw_places):
+        line, keys = lines.entries["place"][i] if i < len(lines.entries["place"]) else (None, {})
+        for key in entry:
+            if key not in _PLACE_KEYS:
+                raise err(
+                    f"place {entry.get('name', i + 1)}: unknown key {key!r}; expected one of "
+                    f"{', '.join(_PLACE_KEYS)}",
+                    keys.get(key, line),
+                    key,
+                )
+        for key in ("name", "type"):
+            if key not in entry:
+                raise err(f"place {entry.get('name', '#' + str(i + 1))}: missing {key}", line, key)
+        try:
+            places.append(Place(**entry, line=line))
+        except MtmcError as exc:
+            raise err(exc.message, keys.get(exc.field or "", line), exc.field) from None
+
+    transitions = []
+    raw_trans = data.get("transition", [])
+    if not isinstance(raw_trans, list):
+        raise err(
+            "transition must be an array of tables [[transition]]",
+            lines.top.get("transition"),
+            "transition",
+        )
+    for i, entry in enumerate(raw_trans):
+        line, keys = (
+            lines.entries["transition"][i] if i < len(lines.entries["transition"]) else (None, {})
+        )
+        label = entry.get("name", f"#{i + 1}")
+        for key in ("name", "op", "out"):
+            if key not in entry:
+                raise err(f"transition {label}: missing {key}", line, key)
+        params = {k: v for k, v in entry.items() if k not in ("name", "op", "in", "out", "pos")}
+        try:
+            transitions.append(
+                Transition(
+                    entry["name"],
+                    entry["op"],
+                    entry.get("in", ()),
+                    entry["out"],
+                    tuple(params.items()),
+                    pos=entry.get("pos"),
+                    line=line,
+                    param_lines=tuple(keys.items()),
+                )
+            )
+        except MtmcError as exc:
+            raise err(exc.message, keys.get(exc.field or "", line), exc.field) from None
+    graph = Graph(tuple(places), tuple(transitions), title, units, probe, file=file)
+    if validate:
+        check(graph)
+    return graph
+
+
+def load(path: str | Path, *, validate: bool = True) -> Graph:
+    """Read a graph file (see :func:`loads`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
+    validate : bool
+        Also validate the graph.
+
+    Returns
+    -------
+    Graph
+        The graph, its ``file`` set to the file's name.
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read.
+    ParseError, GraphError
+        As :func:`loads`.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise GraphError(f"cannot read the graph file: {exc.strerror}", file=str(path)) from None
+    return loads(text, file=p.name, validate=validate)
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    raise TypeError(f"cannot write {v!r} to TOML")
+
+
+def dumps(graph: Graph) -> str:
+    """Write a graph as TOML text (``loads(dumps(g)) == g``).
+
+    Parameters
+    ----------
+    graph : Graph
+        The graph.
+
+    Returns
+    -------
+    str
+        The TOML text.
+    """
+    out = []
+    if graph.title:
+        out.append(f"title = {_fmt(graph.title)}")
+    out.append(f"units = {_fmt(graph.units)}")
+    out.append("")
+    out.append("[probe]")
+    for key in _PROBE_KEYS:
+        out.append(f"{key} = {_fmt(getattr(graph.probe, key))}")
+    for p in graph.places:
+        out.append("")
+        out.append("[[place]]")
+        out.append(f"name = {_fmt(p.name)}")
+        out.append(f"type = {_fmt(p.type)}")
+        for key in ("value", "u", "dist", "unit", "pos"):
+            v = getattr(p, key)
+            if v is not None:
+                out.append(f"{key} = {_fmt(v)}")
+    for t in graph.transitions:
+        out.append("")
+        out.append("[[transition]]")
+        out.append(f"name = {_fmt(t.name)}")
+        out.append(f"op = {_fmt(t.op)}")
+        if t.inputs:
+            out.append(f"in = {_fmt(t.inputs)}")
+        out.append(f"out = {_fmt(t.out)}")
+        for key, v in t.params:
+            out.append(f"{key} = {_fmt(v)}")
+        if t.pos is not None:
+            out.append(f"pos = {_fmt(t.pos)}")
+    return "\n".join(out) + "\n"
+
+
+def dump(graph: Graph, path: str | Path) -> None:
+    """Write a graph to a TOML file (see :func:`dumps`).
+
+    Parameters
+    ----------
+    graph : Graph
+        The graph.
+    path : str or Path
+        The file to write.
+    """
+    Path(path).write_text(dumps(graph), encoding="utf-8")
