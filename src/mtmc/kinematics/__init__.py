@@ -1,3 +1,22 @@
-"""mtmc.kinematics."""
+"""Machine kinematics with ISO 230 geometric errors.
 
-__all__: list[str] = []
+Topology strings (``wCBXfYZt``, ``XFYZ``), ISO 230-1 / 230-7 error names, error generation
+functions (seed 004 §4.3), batched forward kinematics with errors and its Jacobian, the
+equation of motion written out with SymPy, a library of common configurations, and a
+drawing of the kinematic chain. This package knows nothing of instruments or files.
+"""
+
+from mtmc.kinematics import error_terms, functions, library, machine, topology
+from mtmc.kinematics.error_terms import *  # noqa: F403
+from mtmc.kinematics.functions import *  # noqa: F403
+from mtmc.kinematics.library import *  # noqa: F403
+from mtmc.kinematics.machine import *  # noqa: F403
+from mtmc.kinematics.topology import *  # noqa: F403
+
+__all__: list[str] = [
+    *error_terms.__all__,
+    *functions.__all__,
+    *library.__all__,
+    *machine.__all__,
+    *topology.__all__,
+]
