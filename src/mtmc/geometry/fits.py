@@ -662,7 +662,8 @@ def fit_sphere(
         R = check_scalars(radius, "radius")
         batch_size(points=P, radius=R)
         if not (R > 0.0).all():
-            raise InputError(f"expected a radius > 0 mm, got {R[~(R > 0.0)][0]!r}", field="radius")
+            bad = float(R[~(R > 0.0)][0])
+            raise InputError(f"expected a radius > 0 mm, got {bad!r}", field="radius")
     guess = None
     if centre_guess is not None:
         guess = check_vectors(centre_guess, "centre_guess")

@@ -49,7 +49,9 @@ Index = int | slice | npt.NDArray[np.intp] | npt.NDArray[np.bool_] | list[int]
 def _normalised(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.float64]:
     norm = np.sqrt(np.einsum("mi,mi->m", v, v))
     degenerate(~(norm > 0.0), f"the {what} has zero length", f"a non-zero {what}", name)
-    return v / norm[:, None]
+    # Vectors already of unit length (to 1e-15) are kept as they are, so that a
+    # primitive rebuilt from another's arrays (a sub-batch) holds the same numbers.
+    return v / np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)[:, None]
 
 
 def _index(arr: NDArray[np.float64], idx: Any) -> NDArray[np.float64]:
@@ -72,7 +74,7 @@ def _check_radius(r: NDArray[np.float64], name: str) -> None:
     if bad.any():
         first = int(np.flatnonzero(bad)[0])
         raise InputError(
-            f"expected a radius >= 0 mm, got {r[first]!r} in {int(bad.sum())} of "
+            f"expected a radius >= 0 mm, got {float(r[first])!r} in {int(bad.sum())} of "
             f"{r.shape[0]} trials (first: trial {first})",
             field=name,
         )

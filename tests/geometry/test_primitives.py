@@ -1,0 +1,142 @@
+"""Tests of the batched primitives: shapes, coercion, broadcasting, indexing, errors."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose, assert_array_equal
+
+from mtmc.errors import DegenerateGeometryError, InputError
+from mtmc.geometry import Circle, Line, Plane, Sphere
+from mtmc.geometry._checks import check_frames, check_point_sets, check_scalars
+
+
+def test_single_point_is_a_batch_of_one_and_direction_is_normalised() -> None:
+    line = Line([1, 2, 3], [0, 0, 2])
+    assert len(line) == 1
+    assert line.point.dtype == np.float64
+    assert_array_equal(line.point, [[1.0, 2.0, 3.0]])
+    assert_array_equal(line.direction, [[0.0, 0.0, 1.0]])
+
+
+def test_batch_of_one_broadcasts_against_batch_of_m() -> None:
+    d = np.array([[1.0, 0, 0], [0, 3, 0], [0, 0, -2]])
+    line = Line([5, 5, 5], d)
+    assert len(line) == 3
+    assert_array_equal(line.point, np.tile([5.0, 5, 5], (3, 1)))
+    assert_array_equal(line.direction, [[1, 0, 0], [0, 1, 0], [0, 0, -1]])
+    circ = Circle(np.zeros((4, 3)), [0, 0, 1], 2.0)
+    assert len(circ) == 4 and circ.radius.shape == (4,) and circ.normal.shape == (4, 3)
+
+
+def test_plane_offset_is_eq_29() -> None:
+    # D = -I x1 - J y1 - K z1 (seed 000 eq. 29) for the plane x + y + z = 1.
+    plane = Plane([1, 0, 0], [1, 1, 1])
+    assert_allclose(plane.offset, [-1 / math.sqrt(3)], rtol=1e-15)
+    assert_allclose(plane.normal, [[1 / math.sqrt(3)] * 3], rtol=1e-15)
+
+
+def test_line_at_and_circle_plane() -> None:
+    line = Line([[0, 0, 0], [1, 1, 1]], [[1, 0, 0], [0, 0, 1]])
+    assert_array_equal(line.at([2.0, -1.0]), [[2, 0, 0], [1, 1, 0]])
+    circ = Circle([1, 2, 3], [0, 2, 0], 4.0)
+    assert_array_equal(circ.plane.point, [[1, 2, 3]])
+    assert_array_equal(circ.plane.normal, [[0, 1, 0]])
+
+
+def test_indexing_gives_sub_batches() -> None:
+    rng = np.random.default_rng(np.random.SeedSequence(11))
+    s = Sphere(rng.normal(size=(6, 3)), rng.uniform(1, 2, size=6))
+    one = s[2]
+    assert len(one) == 1
+    assert_array_equal(one.centre, s.centre[2:3])
+    assert_array_equal(s[-1].radius, s.radius[5:6])
+    assert len(s[1:4]) == 3
+    mask = np.array([True, False, True, False, False, True])
+    assert_array_equal(s[mask].centre, s.centre[mask])
+    assert_array_equal(s[[0, 0]].radius, s.radius[[0, 0]])
+    with pytest.raises(IndexError, match="trial index 6 out of range for a batch of 6"):
+        s[6]
+
+
+def test_frozen() -> None:
+    plane = Plane([0, 0, 0], [0, 0, 1])
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        plane.normal = np.zeros((1, 3))  # type: ignore[misc]
+
+
+def test_bad_shape_names_field_and_shapes() -> None:
+    with pytest.raises(
+        InputError, match=r"field point: expected shape \(M, 3\) or \(3,\), got \(2, 2\)"
+    ):
+        Line(np.zeros((2, 2)), [0, 0, 1])
+    with pytest.raises(InputError, match=r"field radius: expected shape \(M,\) or a number, got"):
+        Sphere([0, 0, 0], np.ones((2, 2)))
+    with pytest.raises(InputError, match="field normal: expected an array of real numbers"):
+        Plane([0, 0, 0], "up")  # type: ignore[arg-type]
+
+
+def test_batch_mismatch() -> None:
+    with pytest.raises(
+        InputError, match=r"field direction: expected 4 trials \(as in point\) or 1, got 3"
+    ):
+        Line(np.zeros((4, 3)), np.ones((3, 3)))
+
+
+def test_zero_direction_is_degenerate_with_count() -> None:
+    d = np.array([[1.0, 0, 0], [0, 0, 0], [0, 0, 0]])
+    with pytest.raises(
+        DegenerateGeometryError,
+        match=r"field direction: the line direction has zero length in 2 of 3 trials "
+        r"\(first: trial 1\); expected a non-zero line direction",
+    ):
+        Line(np.zeros((3, 3)), d)
+    with pytest.raises(DegenerateGeometryError, match="the plane normal has zero length"):
+        Plane([0, 0, 0], [0, 0, 0])
+
+
+def test_negative_or_nan_radius() -> None:
+    with pytest.raises(
+        InputError, match=r"field radius: expected a radius >= 0 mm, got -1.0 in 1 of 2"
+    ):
+        Sphere(np.zeros((2, 3)), [1.0, -1.0])
+    with pytest.raises(InputError, match="field radius: expected a radius >= 0 mm, got nan"):
+        Circle([0, 0, 0], [0, 0, 1], math.nan)
+
+
+def test_checkers() -> None:
+    assert check_scalars(3).shape == (1,)
+    assert check_frames(np.eye(4)).shape == (1, 4, 4)
+    with pytest.raises(
+        InputError, match=r"field frames: expected shape \(M, 4, 4\) or \(4, 4\), got \(3, 3\)"
+    ):
+        check_frames(np.eye(3))
+    assert check_point_sets(np.zeros((5, 3))).shape == (1, 5, 3)
+    with pytest.raises(
+        InputError, match=r"expected shape \(M, n, 3\) or \(n, 3\), got \(2, 5, 2\)"
+    ):
+        check_point_sets(np.zeros((2, 5, 2)))
+    bad = np.zeros((3, 4, 3))
+    bad[2, 1, 0] = np.nan
+    with pytest.raises(
+        InputError, match=r"got NaN or infinity in 1 of 3 trials \(first: trial 2\)"
+    ):
+        check_point_sets(bad)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), m=st.integers(1, 12))
+def test_getitem_matches_array_indexing(seed: int, m: int) -> None:
+    rng = np.random.default_rng(np.random.SeedSequence(seed))
+    c = Circle(rng.normal(size=(m, 3)), rng.normal(size=(m, 3)), rng.uniform(0, 5, size=m))
+    idx = rng.permutation(m)[: max(1, m // 2)]
+    sub = c[idx]
+    assert_array_equal(sub.centre, c.centre[idx])
+    assert_array_equal(sub.normal, c.normal[idx])
+    assert_array_equal(sub.radius, c.radius[idx])
+    assert_allclose(np.linalg.norm(c.normal, axis=1), 1.0, rtol=1e-15)
