@@ -1,0 +1,95 @@
+"""JCGM 101 §8.2 validation: d_low, d_high, δ and the verdict, checked by hand on
+Monte Carlo results whose coverage intervals are known exactly, then on real runs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from mtmc import InputError, MonteCarloResult, Normal, Uniform, expression, monte_carlo
+from mtmc.uncertainty.gum import Validation, gum, validate
+
+
+def _normal_quantile_samples(mu, sigma, m):
+    """M values at the (i - 1/2)/M quantiles of N(mu, sigma²), shuffled deterministically."""
+    i = np.arange(1, m + 1)
+    values = mu + sigma * stats.norm.ppf((i - 0.5) / m)
+    return values[np.random.default_rng(np.random.SeedSequence(7)).permutation(m)]
+
+
+def test_validation_by_hand_normal_output_passes():
+    mu, sigma, m = 10.0, 2.0, 40_000
+    mc = MonteCarloResult.from_samples(_normal_quantile_samples(mu, sigma, m), seed=None)
+    g = gum(expression("x"), {"x": Normal(mu, sigma)})
+    v = validate(g, mc)
+    # JCGM 101 §7.7.2: q = pM = 38000, r = (M - q)/2 = 1000, interval [ỹ_r, ỹ_{r+q}]
+    sorted_values = np.sort(mc.samples)
+    y_low, y_high = sorted_values[999], sorted_values[38_999]
+    big_u = stats.norm.ppf(0.975) * sigma
+    assert v.d_low == pytest.approx(abs(mu - big_u - y_low), rel=1e-12)
+    assert v.d_high == pytest.approx(abs(mu + big_u - y_high), rel=1e-12)
+    assert v.delta == 0.05  # u = 2.0 = 20 × 10⁻¹ -> δ = ½ × 10⁻¹
+    assert v.passed
+    assert isinstance(v, Validation) and v.kind == "symmetric" and v.p == 0.95
+
+
+def test_validation_by_hand_rectangular_output_fails():
+    # values 1..1000 (a rectangular output), GUM for Uniform(0.5, 1000.5):
+    # y = 500.5, u = 1000/√12, U = 1.95996 u = 565.79; MC symmetric 95 %: [25, 975]
+    mc = MonteCarloResult.from_samples(np.arange(1.0, 1001.0), seed=None)
+    g = gum(expression("x"), {"x": Uniform(0.5, 1000.5)})
+    v = validate(g, mc)
+    big_u = stats.norm.ppf(0.975) * 1000 / math.sqrt(12)
+    assert v.d_low == pytest.approx(abs(500.5 - big_u - 25.0), rel=1e-12)
+    assert v.d_high == pytest.approx(abs(500.5 + big_u - 975.0), rel=1e-12)
+    assert v.delta == 5.0  # u = 288.7 -> 29 × 10¹ -> δ = 5
+    assert not v.passed
+    # ndig = 1: u -> 3 × 10² -> δ = 50; still not validated (d ≈ 66)
+    v1 = validate(g, mc, ndig=1)
+    assert v1.delta == 50.0 and not v1.passed
+
+
+def test_other_p_recomputes_k_and_shortest_kind():
+    mu, sigma, m = 0.0, 1.0, 100_000
+    mc = MonteCarloResult.from_samples(_normal_quantile_samples(mu, sigma, m), seed=None)
+    g = gum(expression("x"), {"x": Normal(mu, sigma)})
+    v = validate(g, mc, p=0.99, kind="shortest")
+    lo, hi = mc.coverage_interval(0.99, kind="shortest")
+    k99 = stats.norm.ppf(0.995)
+    assert v.d_low == pytest.approx(abs(-k99 - lo), rel=1e-12)
+    assert v.d_high == pytest.approx(abs(k99 - hi), rel=1e-12)
+    assert v.kind == "shortest" and v.passed
+
+
+def test_zero_gum_uncertainty_has_zero_tolerance():
+    # y = x² at x = 0: first-order u(y) = 0 (JCGM 101 §9.4, x1 = 0): never validated
+    rng = np.random.default_rng(np.random.SeedSequence(3))
+    mc = MonteCarloResult.from_samples(rng.normal(0, 1, 1000) ** 2, seed=None)
+    g = gum(expression("x**2"), {"x": Normal(0.0, 1.0)})
+    assert g.u == 0.0
+    v = validate(g, mc)
+    assert v.delta == 0.0 and not v.passed
+
+
+def test_real_monte_carlo_linear_model_validates():
+    inputs = {"a": Normal(1.0, 0.3), "b": Normal(-2.0, 0.4)}
+    expr = expression("a + b")
+    mc = monte_carlo(expr, inputs, trials=200_000, seed=11)
+    v = validate(gum(expr, inputs), mc)
+    assert v.delta == 0.005  # u = 0.50 -> δ = 0.005
+    assert v.passed
+
+
+def test_bad_arguments():
+    mc = MonteCarloResult.from_samples(np.arange(10.0), seed=None)
+    g = gum(expression("x"), {"x": Normal(0, 1)})
+    with pytest.raises(InputError, match="expected kind 'symmetric' or 'shortest'"):
+        validate(g, mc, kind="widest")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="0 < p < 1"):
+        validate(g, mc, p=0)
+    gv = gum(lambda x: np.stack([x, x], axis=1), {"x": Normal(0, 1)})
+    with pytest.raises(InputError, match="scalar output"):
+        validate(gv, mc)
