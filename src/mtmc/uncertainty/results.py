@@ -202,7 +202,10 @@ def _mahalanobis2(
 ) -> NDArray[np.float64]:
     diff = pts - centre
     # Solve through the Cholesky factor: d² = |L⁻¹ (η - y)|².
+    lam = np.linalg.eigvalsh(cov)
     try:
+        if lam[0] <= 1e-12 * max(lam[-1], 0.0):
+            raise np.linalg.LinAlgError
         chol = np.linalg.cholesky(cov)
     except np.linalg.LinAlgError:
         raise InputError(
