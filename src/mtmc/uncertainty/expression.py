@@ -310,7 +310,9 @@ def expression(text: str) -> Expression:
         tree = ast.parse(stripped, mode="eval")
     except SyntaxError as exc:
         raise ExpressionError(
-            f"syntax error in {stripped!r}: {exc.msg}", line=exc.lineno, column=exc.offset
+            f"syntax error in {stripped!r}: {exc.msg}",
+            line=exc.lineno,
+            column=max(1, exc.offset or 1),
         ) from None
     except (ValueError, RecursionError, MemoryError) as exc:
         raise ExpressionError(f"cannot parse {stripped!r}: {exc}") from None
