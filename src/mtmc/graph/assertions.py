@@ -1,0 +1,506 @@
+"""The assertion database of seed 000 (Table 1): reading and writing.
+
+Seed 000 stores a graph as Prolog-like facts, one per element:
+
+==================================  ==================================================
+assertion                           reading here
+==================================  ==================================================
+``p(n, x, y, "p", X, Y, Z)``        place ``n`` (a number gives the name ``p<n>``, an
+                                    identifier is the name) drawn at pixel ``(x, y)``,
+                                    of type code ``"p"``; ``X, Y, Z`` its values
+``t(n, x, y, op)``                  transition ``n`` (name ``t<n>``) at ``(x, y)``
+``pt(p, t)``                        input arc: place ``p`` is an input of ``t``; the
+                                    inputs keep the order of these facts
+``tp(t, p)``                        output arc: ``t`` produces ``p`` (exactly one)
+``m(p)``                            marker: ``p`` is marked from the start (M0)
+==================================  ==================================================
+
+Type codes: ``"p"`` point, ``"v"`` unit (a directional versor ``I, J, K``), ``"d"``
+vector (the components of a section, ``d2``... of seed 000 Fig. 10), ``"x"``, ``"y"``,
+``"z"`` one coordinate, ``"r"`` real (``R`` the first number). Types the table does not
+list are written by their name (``"line"``, ``"plane"``, ``"circle"``, ``"sphere"``,
+``"frame"``). The quotes may be ``"``, ``'`` or the typographic „ ” of the print.
+
+The numbers ``X, Y, Z``:
+
+- of a marked place (``m(p)``): its value (one number for ``x``/``y``/``z``/``r``: the
+  coordinate's own, ``X``, ``Y`` or ``Z``, and ``R`` for a real; three for the others);
+- of a place produced by ``meas``: the nominal probed point, the transition's ``at``;
+- of any other place: the expected values the seed's tool shows; they are results, not
+  inputs, and are not read (write 0).
+
+The table has no field for the uncertainties or the probing direction. These extensions
+carry them (written by :func:`dumps_assertions`, optional on reading):
+``title("...")``, ``units(mm)``, ``probe(u1, u2, u3)`` (the ``[probe]`` defaults),
+``u(p, u)``, ``dist(p, "uniform(-1, 1)")``, ``unit(p, deg)``, ``dir(t, I, J, K)``,
+``par(t, key, value)`` (any other field of a transition, e.g. ``u_probe``). Without
+``dir``, a ``meas`` probes along +X, +Y or +Z for an ``x``, ``y`` or ``z`` output and
+along −Z for a point. ``%`` starts a comment; a fact may end with ``.``.
+
+Nothing is skipped silently: an unknown fact, a wrong number of arguments or a stray
+character raises :class:`mtmc.errors.ParseError` with its line and column.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mtmc.errors import GraphError, MtmcError, ParseError
+from mtmc.graph.model import Graph, check
+from mtmc.graph.places import Place, ProbeDefaults, Transition
+
+__all__ = ["loads_assertions", "load_assertions", "dumps_assertions", "TYPE_CODES"]
+
+#: Type codes of Table 1 and the place types they stand for.
+TYPE_CODES: dict[str, str] = {
+    "p": "point",
+    "v": "unit",
+    "d": "vector",
+    "x": "x",
+    "y": "y",
+    "z": "z",
+    "r": "real",
+}
+_CODE_OF = {v: k for k, v in TYPE_CODES.items()}
+_ARITY = {
+    "p": 7,
+    "t": 4,
+    "pt": 2,
+    "tp": 2,
+    "m": 1,
+    "title": 1,
+    "units": 1,
+    "probe": 3,
+    "u": 2,
+    "dist": 2,
+    "unit": 2,
+    "dir": 4,
+    "par": 3,
+}
+_TOKEN = re.compile(
+    r"""(?P<ws>[ \t\r]+)|(?P<nl>\n)|(?P<comment>%[^\n]*)
+    |(?P<num>[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)
+    |(?P<ident>[A-Za-z_][A-Za-z0-9_]*)
+    |(?P<str>"[^"\n]*"|'[^'\n]*'|„[^”"\n]*[”"])
+    |(?P<punct>[(),.\[\]])""",
+    re.VERBOSE,
+)
+
+
+@dataclass(frozen=True)
+class _Tok:
+    kind: str
+    text: str
+    line: int
+    col: int
+
+
+def _tokens(text: str, file: str | None) -> list[_Tok]:
+    out = []
+    pos, line, line_start = 0, 1, 0
+    while pos < len(text):
+        mt = _TOKEN.match(text, pos)
+        if mt is None:
+            raise ParseError(
+                f"unexpected character {text[pos]!r}",
+                file=file,
+                line=line,
+                column=pos - line_start + 1,
+            )
+        kind = mt.lastgroup or ""
+        if kind == "nl":
+            line, line_start = line + 1, mt.end()
+        elif kind not in ("ws", "comment"):
+            out.append(_Tok(kind, mt.group(), line, pos - line_start + 1))
+        pos = mt.end()
+    return out
+
+
+def _value(tok: _Tok) -> Any:
+    if tok.kind == "num":
+        v = float(tok.text)
+        return int(v) if re.fullmatch(r"[-+]?\d+", tok.text) else v
+    if tok.kind == "str":
+        return tok.text[1:-1]
+    return tok.text  # identifier
+
+
+def _facts(text: str, file: str | None) -> list[tuple[str, list[Any], int]]:
+    toks = _tokens(text, file)
+    facts = []
+    i = 0
+
+    def expect(kind: str, what: str) -> _Tok:
+        nonlocal i
+        if i >= len(toks):
+            last = toks[-1] if toks else _Tok("", "", 1, 1)
+            raise ParseError(f"expected {what} at the end of the text", file=file, line=last.line)
+        t = toks[i]
+        if (kind == "punct" and t.text != what) or (kind != "punct" and t.kind != kind):
+            raise ParseError(
+                f"expected {what}, got {t.text!r}", file=file, line=t.line, column=t.col
+            )
+        i += 1
+        return t
+
+    while i < len(toks):
+        head = expect("ident", "an assertion name")
+        if head.text not in _ARITY:
+            raise ParseError(
+                f"unknown assertion {head.text!r}; expected one of {', '.join(_ARITY)}",
+                file=file,
+                line=head.line,
+                column=head.col,
+            )
+        expect("punct", "(")
+        args: list[Any] = []
+        while True:
+            if i >= len(toks):
+                raise ParseError(
+                    f"unclosed {head.text}(", file=file, line=head.line, column=head.col
+                )
+            t = toks[i]
+            if t.kind in ("num", "ident", "str"):
+                args.append(_value(t))
+                i += 1
+            else:
+                raise ParseError(
+                    f"{head.text}: expected a number, name or quoted text, got {t.text!r}",
+                    file=file,
+                    line=t.line,
+                    column=t.col,
+                )
+            if i < len(toks) and toks[i].text == ",":
+                i += 1
+                continue
+            expect("punct", ")")
+            break
+        if len(args) != _ARITY[head.text]:
+            raise ParseError(
+                f"{head.text}(...) takes {_ARITY[head.text]} arguments, got {len(args)}",
+                file=file,
+                line=head.line,
+                column=head.col,
+            )
+        if i < len(toks) and toks[i].text == ".":
+            i += 1
+        facts.append((head.text, args, head.line))
+    return facts
+
+
+def _name(n: Any, prefix: str, file: str | None, line: int) -> str:
+    if isinstance(n, int):
+        return f"{prefix}{n}"
+    if isinstance(n, str) and re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", n):
+        return n
+    raise ParseError(f"expected a number or a name, got {n!r}", file=file, line=line)
+
+
+def _num(v: Any, what: str, file: str | None, line: int) -> float:
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise ParseError(f"{what}: expected a number, got {v!r}", file=file, line=line)
+    return float(v)
+
+
+def _pos(x: Any, y: Any, file: str | None, line: int) -> tuple[float, float] | None:
+    if x == "_" and y == "_":
+        return None
+    return (_num(x, "x", file, line), _num(y, "y", file, line))
+
+
+def loads_assertions(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
+    """Read a graph from the assertion database of seed 000 (Table 1).
+
+    Parameters
+    ----------
+    text : str
+        The facts (see the module docstring for the reading of each field).
+    file : str, optional
+        File name for the error messages.
+    validate : bool
+        Also run :func:`mtmc.graph.check` (default).
+
+    Returns
+    -------
+    Graph
+        The graph; every place is declared.
+
+    Raises
+    ------
+    ParseError
+        On a syntax error, an unknown assertion or a wrong number of arguments.
+    GraphError
+        On an arc to an unknown element, a transition without exactly one output, an
+        unknown type code, or an invalid graph.
+
+    Examples
+    --------
+    >>> g = loads_assertions('''
+    ... p(1, 10, 10, "r", 2.0, 0, 0). p(2, 10, 50, "r", 4.0, 0, 0). p(3, 90, 30, "r", 0, 0, 0).
+    ... t(1, 50, 30, middle). pt(1, 1). pt(2, 1). tp(1, 3). m(1). m(2).
+    ... ''')
+    >>> [p.name for p in g.places], g.transitions[0].inputs, g.transitions[0].out
+    (['p1', 'p2', 'p3'], ('p1', 'p2'), 'p3')
+    """
+    facts = _facts(text, file)
+    title, units = "", "mm"
+    probe = ProbeDefaults()
+    praw: dict[str, tuple[list[Any], int]] = {}
+    traw: dict[str, tuple[list[Any], int]] = {}
+    inputs: dict[str, list[str]] = {}
+    outs: dict[str, list[str]] = {}
+    marked: set[str] = set()
+    extra_p: dict[str, dict[str, Any]] = {}
+    extra_t: dict[str, dict[str, Any]] = {}
+    arc_lines: dict[str, int] = {}
+
+    def err(msg: str, line: int, fld: str | None = None) -> GraphError:
+        return GraphError(msg, file=file, line=line, field=fld)
+
+    for head, a, line in facts:
+        if head == "p":
+            name = _name(a[0], "p", file, line)
+            if name in praw:
+                raise err(f"place {name} is asserted twice", line, name)
+            praw[name] = (a, line)
+        elif head == "t":
+            name = _name(a[0], "t", file, line)
+            if name in traw:
+                raise err(f"transition {name} is asserted twice", line, name)
+            traw[name] = (a, line)
+        elif head == "pt":
+            t = _name(a[1], "t", file, line)
+            inputs.setdefault(t, []).append(_name(a[0], "p", file, line))
+            arc_lines.setdefault(t, line)
+        elif head == "tp":
+            t = _name(a[0], "t", file, line)
+            outs.setdefault(t, []).append(_name(a[1], "p", file, line))
+            arc_lines.setdefault(t, line)
+        elif head == "m":
+            marked.add(_name(a[0], "p", file, line))
+        elif head == "title":
+            title = str(a[0])
+        elif head == "units":
+            units = str(a[0])
+        elif head == "probe":
+            try:
+                u1, u2, u3 = (_num(v, "probe", file, line) for v in a)
+                probe = ProbeDefaults(u1, u2, u3, line=line)
+            except MtmcError as exc:
+                raise err(exc.message, line, exc.field) from None
+        elif head in ("u", "dist", "unit"):
+            name = _name(a[0], "p", file, line)
+            val = _num(a[1], head, file, line) if head == "u" else str(a[1])
+            extra_p.setdefault(name, {})[head] = val
+        elif head == "dir":
+            name = _name(a[0], "t", file, line)
+            extra_t.setdefault(name, {})["direction"] = tuple(
+                _num(v, "dir", file, line) for v in a[1:]
+            )
+        else:  # par
+            name = _name(a[0], "t", file, line)
+            extra_t.setdefault(name, {})[str(a[1])] = a[2]
+    for name in (*inputs, *outs, *extra_t):
+        if name not in traw:
+            raise err(
+                f"an assertion names transition {name}, which has no t(...)",
+                arc_lines.get(name, 1),
+                name,
+            )
+    for name in (
+        *[p for ps in inputs.values() for p in ps],
+        *[p for ps in outs.values() for p in ps],
+        *marked,
+        *extra_p,
+    ):
+        if name not in praw:
+            raise err(f"an assertion names place {name}, which has no p(...)", 1, name)
+    producer = {}
+    for t, (a, line) in traw.items():
+        o = outs.get(t, [])
+        if len(o) != 1:
+            raise err(
+                f"transition {t} has {len(o)} output arcs tp({t}, ...); expected exactly one",
+                line,
+                t,
+            )
+        producer[o[0]] = (t, str(a[3]))
+    places = []
+    meas_at: dict[str, tuple[float, float, float]] = {}
+    for name, (a, line) in praw.items():
+        code = str(a[3])
+        type_ = TYPE_CODES.get(code, code)
+        vals = [_num(v, f"place {name}", file, line) for v in a[4:7]]
+        ex = extra_p.get(name, {})
+        value: Any = None
+        if name in marked:
+            if type_ in ("x", "y", "z"):
+                value = vals["xyz".index(type_)]
+            elif type_ == "real":
+                value = vals[0]
+            else:
+                value = tuple(vals)
+        elif name in producer and producer[name][1] == "meas":
+            meas_at[producer[name][0]] = (vals[0], vals[1], vals[2])
+        try:
+            places.append(
+                Place(
+                    name,
+                    type_,
+                    value,
+                    u=ex.get("u"),
+                    dist=ex.get("dist"),
+                    unit=ex.get("unit"),
+                    pos=_pos(a[1], a[2], file, line),
+                    line=line,
+                )
+            )
+        except MtmcError as exc:
+            raise err(exc.message, line, exc.field) from None
+    types = {p.name: p.type for p in places}
+    transitions = []
+    for name, (a, line) in traw.items():
+        op = str(a[3])
+        params = dict(extra_t.get(name, {}))
+        out = outs[name][0]
+        if op == "meas":
+            params.setdefault("at", meas_at.get(name, (0.0, 0.0, 0.0)))
+            if "direction" not in params:
+                params["direction"] = {
+                    "x": (1.0, 0.0, 0.0),
+                    "y": (0.0, 1.0, 0.0),
+                    "z": (0.0, 0.0, 1.0),
+                }.get(types[out], (0.0, 0.0, -1.0))
+        try:
+            transitions.append(
+                Transition(
+                    name,
+                    op,
+                    tuple(inputs.get(name, ())),
+                    out,
+                    tuple(params.items()),
+                    pos=_pos(a[1], a[2], file, line),
+                    line=line,
+                )
+            )
+        except MtmcError as exc:
+            raise err(exc.message, line, exc.field) from None
+    graph = Graph(tuple(places), tuple(transitions), title, units, probe, file=file)
+    if validate:
+        check(graph)
+    return graph
+
+
+def load_assertions(path: str | Path, *, validate: bool = True) -> Graph:
+    """Read an assertion-database file (see :func:`loads_assertions`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    validate : bool
+        Also validate the graph.
+
+    Returns
+    -------
+    Graph
+        The graph.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise GraphError(
+            f"cannot read the assertion file: {exc.strerror}", file=str(path)
+        ) from None
+    return loads_assertions(text, file=p.name, validate=validate)
+
+
+def _ref(name: str, prefix: str) -> str:
+    m = re.fullmatch(prefix + r"(\d+)", name)
+    return m.group(1) if m else name
+
+
+def _f(v: Any) -> str:
+    if isinstance(v, str):
+        return '"' + v.replace('"', "'") + '"'
+    if isinstance(v, tuple):
+        raise GraphError(f"a list field cannot be written as par(...): {v!r}")
+    return repr(float(v)) if isinstance(v, float) else str(v)
+
+
+def dumps_assertions(graph: Graph) -> str:
+    """Write a graph as the assertion database of seed 000 (with the extensions).
+
+    Every place is written, the implicit ones too, so reading the text back gives the
+    same plan (types, arcs, fields) with all places declared, and writing that again
+    gives the same text.
+
+    Parameters
+    ----------
+    graph : Graph
+        A valid graph.
+
+    Returns
+    -------
+    str
+        One fact per line.
+    """
+    plan = check(graph)
+    at_of = {}
+    for s in plan.steps:
+        if s.transition.op == "meas":
+            at_of[s.transition.out] = s.transition.param("at")
+    lines = ["% measurement graph, assertion database (seed 000 Table 1)"]
+    if graph.title:
+        lines.append(f"title({_f(graph.title)}).")
+    lines.append(f"units({graph.units}).")
+    pr = graph.probe
+    lines.append(f"probe({_f(pr.u_axis)}, {_f(pr.u_probe)}, {_f(pr.u_perp)}).")
+
+    def xy(pos: tuple[float, ...] | None) -> str:
+        return "_, _" if pos is None else f"{_f(pos[0])}, {_f(pos[1])}"
+
+    for name, type_ in plan.types.items():
+        p = graph.place(name)
+        code = _CODE_OF.get(type_, type_)
+        vals: list[float] = [0.0, 0.0, 0.0]
+        if p is not None and p.value is not None:
+            if isinstance(p.value, tuple):
+                vals = list(p.value)
+            elif type_ in ("x", "y", "z"):
+                vals["xyz".index(type_)] = p.value
+            else:
+                vals[0] = p.value
+        elif name in at_of:
+            vals = [float(v) for v in at_of[name]]
+        pos = p.pos if p is not None else None
+        lines.append(
+            f'p({_ref(name, "p")}, {xy(pos)}, "{code}", {", ".join(_f(v) for v in vals)}).'
+        )
+        if p is not None:
+            if p.marked:
+                lines.append(f"m({_ref(name, 'p')}).")
+            if p.u is not None:
+                lines.append(f"u({_ref(name, 'p')}, {_f(p.u)}).")
+            if p.dist is not None:
+                lines.append(f"dist({_ref(name, 'p')}, {_f(p.dist)}).")
+            if p.unit is not None:
+                lines.append(f"unit({_ref(name, 'p')}, {p.unit}).")
+    for t in graph.transitions:
+        tn = _ref(t.name, "t")
+        lines.append(f"t({tn}, {xy(t.pos)}, {t.op}).")
+        for q in t.inputs:
+            lines.append(f"pt({_ref(q, 'p')}, {tn}).")
+        lines.append(f"tp({tn}, {_ref(t.out, 'p')}).")
+        for key, v in t.params:
+            if key == "at":
+                continue
+            if key == "direction":
+                lines.append(f"dir({tn}, {', '.join(_f(float(c)) for c in v)}).")
+            else:
+                lines.append(f"par({tn}, {key}, {_f(v)}).")
+    return "\n".join(lines) + "\n"

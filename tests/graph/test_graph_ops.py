@@ -1,0 +1,95 @@
+"""Ops registry, type binding and the rotary-axis construction (seed 000 eqs. 8-19)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mtmc.errors import DegenerateGeometryError, GraphError
+from mtmc.graph import ops
+
+
+def rodrigues(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix about a unit axis (written here, independent of mtmc.geometry)."""
+    k = axis / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def test_register_refuses_duplicates():
+    v = ops.variants("middle")[0]
+    with pytest.raises(GraphError, match="already has a variant"):
+        ops.register(v)
+
+
+def test_bind_by_input_types():
+    assert ops.bind("point", ["x", "y", "z"]).output == "point"
+    assert ops.bind("point", ["line", "plane"]).output == "point"
+    assert ops.bind("middle", ["x", "x"]).output == "x"
+    assert ops.bind("plane", ["point"] * 3).func is not ops.bind("plane", ["point"] * 5).func
+    assert ops.bind("sphere", ["point"] * 5 + ["real"]).rest == "point"
+    assert ops.bind("meas", [], output="z").output == "z"
+
+
+def test_bind_errors_name_what_is_accepted():
+    with pytest.raises(GraphError, match=r"op middle accepts no inputs of types \(x, y\)"):
+        ops.bind("middle", ["x", "y"])
+    with pytest.raises(GraphError, match="unknown op 'bogus'"):
+        ops.bind("bogus", [])
+    with pytest.raises(GraphError, match="4 or more point"):
+        ops.bind("plane", ["point", "point"])
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    axis=st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda a: np.linalg.norm(a) > 0.2),
+    centre=st.tuples(*[st.floats(-500, 500)] * 3),
+    start=st.tuples(*[st.floats(-200, 200)] * 3),
+    alpha=st.floats(0.2, 2.8),
+)
+def test_rotary_axis_recovers_a_known_axis(axis, centre, start, alpha):
+    """Rotate a point about a known axis by 0, +alpha, -alpha; recover the axis exactly."""
+    a = np.asarray(axis) / np.linalg.norm(axis)
+    c = np.asarray(centre)
+    r0 = np.asarray(start) - np.dot(start, a) * a  # radial offset, perpendicular to a
+    if np.linalg.norm(r0) < 10:
+        r0 = np.cross(a, [1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.cross(a, [0.0, 1.0, 0.0])
+        r0 *= 50 / np.linalg.norm(r0)
+    p1 = c + r0
+    p2 = c + rodrigues(a, alpha) @ r0
+    p3 = c + rodrigues(a, -alpha) @ r0
+    for line in (ops.rotary_axis(p1, p2, p3, alpha), ops.rotary_axis(p1, p2, p3)):
+        np.testing.assert_allclose(line.direction[0], a, atol=1e-9)
+        # the located point is the circle centre: the point of the axis in the ball's plane
+        np.testing.assert_allclose(line.point[0], c, atol=1e-7 * (1 + np.abs(c).max()))
+
+
+def test_rotary_axis_batch_equals_one_at_a_time():
+    rng = np.random.default_rng(5)
+    m = 50
+    p = [rng.normal(size=(m, 3)) * 0.01 + q for q in ([100, 0, 0], [0, 100, 0], [0, -100, 0])]
+    alpha = np.full(m, np.pi / 2)
+    batch = ops.rotary_axis(*p, alpha)
+    for i in range(0, m, 7):
+        one = ops.rotary_axis(p[0][i], p[1][i], p[2][i], alpha[i])
+        np.testing.assert_array_equal(one.point[0], batch.point[i])
+        np.testing.assert_array_equal(one.direction[0], batch.direction[i])
+
+
+def test_rotary_axis_paper_steps():
+    """Eqs. 8-19 on numbers: P1 at 0, P2 at +60 deg, P3 at -60 deg about z, R = 150."""
+    al = np.pi / 3
+    p1, p2, p3 = (150, 0, 40), (75, 150 * np.sin(al), 40), (75, -150 * np.sin(al), 40)
+    line = ops.rotary_axis(p1, p2, p3, al)
+    # eqs. 8-12: P4 = (75, 0, 40), |P3 P4| = 150 sin 60, R = 150; eqs. 13-19: P0 = P1 - 150 x
+    np.testing.assert_allclose(line.point[0], [0, 0, 40], atol=1e-12)
+    np.testing.assert_allclose(line.direction[0], [0, 0, 1], atol=1e-15)
+
+
+def test_rotary_axis_degenerate():
+    with pytest.raises(DegenerateGeometryError):
+        ops.rotary_axis([0, 0, 0], [1, 0, 0], [2, 0, 0])
+    with pytest.raises(DegenerateGeometryError, match="alpha"):
+        ops.rotary_axis([1, 0, 0], [0, 1, 0], [0, -1, 0], 0.0)
