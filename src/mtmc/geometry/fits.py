@@ -345,15 +345,19 @@ def _gauss_newton(
     """Gauss-Newton for circles (``Xc`` of shape (2, B, n)) and spheres ((3, B, n)).
 
     Each iteration solves ``(J^T J) delta = -J^T r`` (see :func:`_normal_equations`)
-    for every active trial; a trial stops, and is dropped from the following
-    iterations, once ``max|delta| <= tol``. Returns the parameters, the iterations taken
-    and the mask of the trials that did not converge.
+    for every active trial and applies it. A trial stops, and is dropped from the
+    following iterations, once ``max|delta| <= tol``; or once a step below ``10^6 tol``
+    is no smaller than the one before (the steps of a converging Gauss-Newton shrink
+    geometrically until they reach the rounding floor of ill-conditioned data; that
+    last step is then not applied). Returns the parameters, the iterations taken and
+    the mask of the trials that did not converge.
     """
     theta = theta.copy()
     b = Xc.shape[1]
     iterations = np.zeros(b, dtype=np.int64)
     active = np.arange(b)
     Xa, ta, ra = Xc, tol, radius
+    prev_step = np.full(b, np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
         for it in range(1, max_iterations + 1):
             th = theta[active]
@@ -362,12 +366,15 @@ def _gauss_newton(
                 delta = -np.linalg.solve(A, g[:, :, None])[:, :, 0]
             except np.linalg.LinAlgError:
                 delta = np.full_like(th, np.nan)
-            theta[active] = th + delta
+            step = np.abs(delta).max(axis=1)
+            stalled = (step >= prev_step) & (step <= 1e6 * ta)
+            theta[active] = np.where(stalled[:, None], th, th + delta)
             iterations[active] = it
-            keep = ~(np.abs(delta).max(axis=1) <= ta)
+            keep = ~((step <= ta) | stalled)
             active = active[keep]
             if active.size == 0:
                 break
+            prev_step = step[keep]
             if not keep.all():
                 Xa, ta = Xa[:, keep], ta[keep]
                 if ra is not None and ra.shape[0] > 1:
