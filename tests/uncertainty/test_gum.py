@@ -272,3 +272,20 @@ def test_errors_name_the_field():
 def test_inputs_as_strings_and_numbers():
     res = gum(expression("a * b"), {"a": "normal(2, 0.1)", "b": 3})
     assert res.u == pytest.approx(0.3, rel=1e-14)
+
+
+def test_estimate_at_the_edge_of_the_domain_uses_complex_step():
+    # sqrt(x) at x = 1e-4 with u = 1: x - h leaves the domain for the central difference
+    # (NaN, no warning); the complex step stays exact: c = 1 / (2 sqrt(x)) = 50.
+    res = gum(expression("sqrt(x)"), {"x": Normal(1e-4, 1.0)})
+    assert res.method == "complex-step"
+    assert res.sensitivities["x"] == pytest.approx(50.0, rel=1e-12)
+
+
+def test_not_differentiable_or_not_finite_is_an_error_naming_the_input():
+    # not complex-safe (abs): central differences, and x - h leaves the domain of x**0.5
+    with pytest.raises(InputError, match="not differentiable .* x") as info:
+        gum(expression("x**0.5 * abs(y)"), {"x": Normal(0.0, 1.0), "y": Normal(1, 1)})
+    assert info.value.field == "x"
+    with pytest.raises(InputError, match="not finite at the input estimates"):
+        gum(expression("log(x)"), {"x": Normal(0.0, 1.0)})

@@ -332,7 +332,11 @@ def gum(
     ``(f(x + h e_j) - f(x - h e_j)) / 2h`` (``h = 10⁻³ u_j``) evaluated in the same call.
     If the model refuses complex input, or the two disagree by more than 10⁻⁵ u(y)
     (``abs``, ``hypot``, ``arctan2``, a cast to real), the central differences are used
-    and ``method`` says so.
+    and ``method`` says so. An :class:`~mtmc.uncertainty.expression.Expression` states
+    whether it is complex-safe, and is not checked: its complex step is used as is, or
+    it is evaluated once with the central differences only. (The check can reject a
+    correct complex step where a callable is strongly non-linear on the scale of
+    10⁻³ u; the central differences used then are what ``method`` reports.)
 
     Parameters
     ----------
@@ -392,6 +396,8 @@ def gum(
 
     method = "complex-step"
     out: NDArray[Any] | None = None
+    # An Expression knows whether it is complex-safe; any other callable is checked.
+    known_safe = getattr(model, "complex_safe", None) is True
     if getattr(model, "complex_safe", True):
         rows = np.concatenate(
             [
@@ -402,20 +408,25 @@ def gum(
             ]
         )
         try:
-            with warnings.catch_warnings():
+            # Perturbed points may leave the model's domain (sqrt at 0, say): such rows
+            # give NaN, judged below, rather than a floating-point warning.
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
                 warnings.simplefilter("error", np.exceptions.ComplexWarning)
                 out = _evaluate(model, items, rows, offsets)
-        except (TypeError, np.exceptions.ComplexWarning):
+        except (TypeError, ValueError, ArithmeticError, np.exceptions.ComplexWarning):
             out = None
     if out is not None:
         out2 = out.reshape(out.shape[0], -1)
         y0 = np.real(out2[0])
         c_cs = (np.imag(out2[1 : n + 1]) / h_cs[:, None]).T
         c_cd = (np.real(out2[n + 1 : 2 * n + 1] - out2[2 * n + 1 :]) / (2 * h_cd[:, None])).T
-        u_ref = np.sqrt(np.einsum("dn,nm,dm->d", c_cd, ux, c_cd))
-        gap = np.max(np.abs(c_cs - c_cd) * scale, axis=1)
-        tol = _AGREEMENT * np.maximum(u_ref, 1e-300) + 1e-13 * np.abs(y0)
-        if np.all(np.isfinite(c_cs)) and np.all(gap <= tol):
+        cs_ok = bool(np.all(np.isfinite(c_cs))) and np.iscomplexobj(out)
+        if cs_ok and not known_safe and np.all(np.isfinite(c_cd)):
+            u_ref = np.sqrt(np.einsum("dn,nm,dm->d", c_cd, ux, c_cd))
+            gap = np.max(np.abs(c_cs - c_cd) * scale, axis=1)
+            tol = _AGREEMENT * np.maximum(u_ref, 1e-300) + 1e-13 * np.abs(y0)
+            cs_ok = bool(np.all(gap <= tol))
+        if cs_ok:
             sens = c_cs
         else:
             sens = c_cd
@@ -423,10 +434,24 @@ def gum(
     else:
         method = "central-difference"
         rows_r = np.concatenate([x0[None, :], x0 + h_cd[:, None] * eye, x0 - h_cd[:, None] * eye])
-        out = _evaluate(model, items, rows_r, offsets)
+        with np.errstate(all="ignore"):
+            out = _evaluate(model, items, rows_r, offsets)
         out2 = np.asarray(out, dtype=np.float64).reshape(out.shape[0], -1)
         y0 = out2[0]
         sens = ((out2[1 : n + 1] - out2[n + 1 :]) / (2 * h_cd[:, None])).T
+    if not np.all(np.isfinite(y0)):
+        raise InputError(
+            f"the model is not finite at the input estimates (value {y0.tolist()})",
+            field="model",
+        )
+    bad = ~np.all(np.isfinite(sens), axis=0)
+    if np.any(bad):
+        names = [_component_name(items, offsets, int(j)) for j in np.flatnonzero(bad)]
+        raise InputError(
+            "the model is not differentiable at the estimates with respect to "
+            f"{', '.join(names)} (a sensitivity is not finite)",
+            field=names[0],
+        )
     vector_out = out.ndim == 2
 
     cov_y = sens @ ux @ sens.T
@@ -483,6 +508,13 @@ def gum(
         budget=tuple(budget),
         method=method,
     )
+
+
+def _component_name(items: list[_Input], offsets: list[int], j: int) -> str:
+    for inp, start in zip(items, offsets, strict=True):
+        if start <= j < start + inp.estimate.size:
+            return inp.name if inp.scalar else f"{inp.name}[{j - start}]"
+    return str(j)  # pragma: no cover
 
 
 def _out(values: NDArray[np.float64], vector: bool) -> Any:
