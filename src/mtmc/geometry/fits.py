@@ -142,7 +142,7 @@ def _scatter(
     Returns the centroid ``(B, 3)``, the centred points ``(B, n, 3)``, the eigenvalues
     ``(B, 3)`` ascending and the eigenvectors ``(B, 3, 3)`` (columns).
     """
-    c = points.mean(axis=1)
+    c = np.einsum("bni->bi", points) / points.shape[1]
     X = points - c[:, None, :]
     S = np.matmul(X.transpose(0, 2, 1), X)
     w, V = np.linalg.eigh(S)
@@ -163,7 +163,7 @@ def _newell(X: NDArray[np.float64]) -> NDArray[np.float64]:
     ``sum_i x_i × x_{i+1}`` (indices cyclic), twice the vector area of the polygon; for
     three points it is ``(b - a) × (c - a)``.
     """
-    return _cross(X, np.roll(X, -1, axis=1)).sum(axis=1)
+    return np.einsum("bni->bi", _cross(X, np.roll(X, -1, axis=1)))
 
 
 def _orient(v: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -346,7 +346,9 @@ def _gauss_newton(
 
     Each iteration solves ``(J^T J) delta = -J^T r`` (see :func:`_normal_equations`)
     for every active trial and applies it. A trial stops, and is dropped from the
-    following iterations, once ``max|delta| <= tol``; or once a step below ``10^6 tol``
+    following iterations, once ``max|delta| <= tol`` or the next step, extrapolated
+    from the last two (``|delta_k|^2 / |delta_{k-1}|``), would be; or once a step below
+    ``10^6 tol``
     is no smaller than the one before (the steps of a converging Gauss-Newton shrink
     geometrically until they reach the rounding floor of ill-conditioned data; that
     last step is then not applied). Returns the parameters, the iterations taken and
@@ -370,7 +372,10 @@ def _gauss_newton(
             stalled = (step >= prev_step) & (step <= 1e6 * ta)
             theta[active] = np.where(stalled[:, None], th, th + delta)
             iterations[active] = it
-            keep = ~((step <= ta) | stalled)
+            # the next step, extrapolated from the contraction of the last two
+            contracting = (step < prev_step) & (prev_step < np.inf)
+            small = (step <= ta) | (contracting & (step * step <= ta * prev_step))
+            keep = ~(small | stalled)
             active = active[keep]
             if active.size == 0:
                 break
@@ -562,7 +567,7 @@ def _sphere_block(
     max_iterations: int,
 ) -> Block:
     b, n = P.shape[:2]
-    c = P.mean(axis=1)
+    c = np.einsum("bni->bi", P) / n
     X = P - c[:, None, :]
     z = np.einsum("bni,bni->bn", X, X)
     bad = np.zeros(b, dtype=np.bool_)
