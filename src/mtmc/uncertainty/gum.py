@@ -57,7 +57,7 @@ _AGREEMENT = 1e-5
 
 @dataclass(frozen=True)
 class BudgetEntry:
-    """One line of the uncertainty budget (JCGM 100 §5.1.3, Table H.1 layout).
+    """One line of the uncertainty budget (as JCGM 100 Table H.1 lays it out).
 
     Attributes
     ----------
@@ -102,7 +102,7 @@ class GumResult:
     u : float or ndarray, shape (d,)
         Standard uncertainty ``u(y)`` (JCGM 100 eq. (10), (13)).
     cov : ndarray, shape (d, d)
-        Covariance ``U_y = C U_x Cᵀ`` (JCGM 102 §6.2.1.3); ``(1, 1)`` for a scalar output.
+        Covariance ``U_y = C U_x Cᵀ`` (JCGM 102 §6.2); ``(1, 1)`` for a scalar output.
     dof : float or ndarray
         Effective degrees of freedom by Welch–Satterthwaite (JCGM 100 eq. (G.2b)),
         not rounded.
@@ -145,7 +145,7 @@ class Validation:
     Attributes
     ----------
     d_low, d_high : float
-        ``|y - U_p - y_low|`` and ``|y + U_p - y_high|`` (JCGM 101 eq. (21)).
+        ``|y - U_p - y_low|`` and ``|y + U_p - y_high|`` (JCGM 101 §8.2).
     delta : float
         Numerical tolerance δ of ``u(y)`` at ``ndig`` significant digits (§7.9.2).
     passed : bool
@@ -177,7 +177,7 @@ def coverage_factor(p: float, dof: float) -> float:
     dof : float
         Effective degrees of freedom ν_eff (``inf`` for a normal output). A finite ν_eff
         is truncated to the next lower integer (at least 1) before ``t`` is looked up,
-        as JCGM 100 G.4.1 note 1 and the worked example H.1 do.
+        as JCGM 100 G.4.1 allows and the worked example H.1 does.
 
     Returns
     -------
@@ -317,7 +317,7 @@ def gum(
 ) -> GumResult:
     """Propagate standard uncertainties through ``model`` by the GUM (first order).
 
-    The law of propagation of uncertainty (JCGM 100 eq. (10), (13); JCGM 102 eq. (3)):
+    The law of propagation of uncertainty (JCGM 100 eq. (10), (13); JCGM 102 §6.2):
     ``U_y = C U_x Cᵀ`` with ``C = ∂f/∂x`` the ``(d, N)`` sensitivity matrix at the input
     estimates and ``U_x`` the ``(N, N)`` input covariance (block diagonal: ``u²(x_i)``
     for a scalar input, the covariance matrix of a multivariate normal input). The
@@ -533,7 +533,7 @@ def validate(
     With ``U_p = k_p u(y)`` the GUM expanded uncertainty for coverage probability
     ``p``, and ``[y_low, y_high]`` the Monte Carlo 100p % coverage interval,
 
-    ``d_low = |y - U_p - y_low|``, ``d_high = |y + U_p - y_high|`` (JCGM 101 eq. (21)).
+    ``d_low = |y - U_p - y_low|``, ``d_high = |y + U_p - y_high|`` (JCGM 101 §8.2).
 
     The GUM is validated iff both are at most δ, the numerical tolerance of ``u(y)``
     written with ``ndig`` significant digits (§7.9.2: ``u = c × 10^l``, ``δ = ½ × 10^l``).
