@@ -7,16 +7,31 @@ line (``mtmc: error: FILE:LINE: field F: ...``) and exit with status 2.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NoReturn
 
 import typer
 
-from mtmc.cli.common import fail, print_json
+from mtmc.cli.common import fail as _common_fail
+from mtmc.cli.common import print_json
 from mtmc.errors import MtmcError
 from mtmc.graph.model import Graph
 
 app = typer.Typer(
     help="Measurement graphs (seed 000): check, draw, run, sweep.", no_args_is_help=True
 )
+
+
+def fail(exc: BaseException | str) -> NoReturn:
+    """Print one error line and exit with status 2 (as ``SystemExit``).
+
+    ``mtmc.cli.main.main`` runs the app with ``standalone_mode=False``, where click turns a
+    ``typer.Exit`` into a return value that ``main`` drops; ``SystemExit`` reaches it.
+    """
+    try:
+        _common_fail(exc)
+    except typer.Exit as stop:
+        raise SystemExit(stop.exit_code) from None
+
 
 FILE = typer.Argument(..., help="Graph file: .toml, or the assertion database (.pl, .db, .facts).")
 

@@ -256,6 +256,7 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
     extra_p: dict[str, dict[str, Any]] = {}
     extra_t: dict[str, dict[str, Any]] = {}
     arc_lines: dict[str, int] = {}
+    p_refs: list[tuple[str, int]] = []
 
     def err(msg: str, line: int, fld: str | None = None) -> GraphError:
         return GraphError(msg, file=file, line=line, field=fld)
@@ -274,13 +275,16 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
         elif head == "pt":
             t = _name(a[1], "t", file, line)
             inputs.setdefault(t, []).append(_name(a[0], "p", file, line))
+            p_refs.append((inputs[t][-1], line))
             arc_lines.setdefault(t, line)
         elif head == "tp":
             t = _name(a[0], "t", file, line)
             outs.setdefault(t, []).append(_name(a[1], "p", file, line))
+            p_refs.append((outs[t][-1], line))
             arc_lines.setdefault(t, line)
         elif head == "m":
             marked.add(_name(a[0], "p", file, line))
+            p_refs.append((_name(a[0], "p", file, line), line))
         elif head == "title":
             title = str(a[0])
         elif head == "units":
@@ -293,6 +297,7 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
                 raise err(exc.message, line, exc.field) from None
         elif head in ("u", "dist", "unit"):
             name = _name(a[0], "p", file, line)
+            p_refs.append((name, line))
             val = _num(a[1], head, file, line) if head == "u" else str(a[1])
             extra_p.setdefault(name, {})[head] = val
         elif head == "dir":
@@ -310,14 +315,9 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
                 arc_lines.get(name, 1),
                 name,
             )
-    for name in (
-        *[p for ps in inputs.values() for p in ps],
-        *[p for ps in outs.values() for p in ps],
-        *marked,
-        *extra_p,
-    ):
+    for name, line in p_refs:
         if name not in praw:
-            raise err(f"an assertion names place {name}, which has no p(...)", 1, name)
+            raise err(f"an assertion names place {name}, which has no p(...)", line, name)
     producer = {}
     for t, (a, line) in traw.items():
         o = outs.get(t, [])

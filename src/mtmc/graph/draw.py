@@ -152,4 +152,7 @@ def draw(graph: Graph | Plan, path: str | Path) -> None:
             Rectangle((x - 6.0, y - 14.0), 12.0, 28.0, fill=True, fc="white", ec="black", lw=0.8)
         )
         ax.text(x, y - 18.0, f"{t.name}\n{t.op}", ha="center", va="bottom", fontsize=5)
-    fig.savefig(str(path))
+    import matplotlib
+
+    with matplotlib.rc_context({"svg.fonttype": "none"}):  # names stay text in the SVG
+        fig.savefig(str(path))

@@ -15,7 +15,8 @@ Validation errors (:class:`mtmc.errors.GraphError`) name the place or transition
 and the line: a transition arc joining two transitions or a place to a place (not
 bipartite), a cycle, an input never marked nor produced, two producers of one place, a
 marked place that a transition also produces, a type no variant of the op accepts, an
-unknown op or field.
+unknown op or field, a ``meas`` without a valid ``at``/``direction``/``u``/``dist``, a
+``dist`` that does not parse.
 """
 
 from __future__ import annotations
@@ -273,6 +274,14 @@ def check(graph: Graph) -> Plan:
             raise _err(
                 graph, f"place {p.name} is neither marked, produced nor used", p.line, "name"
             )
+    for p in graph.places:
+        if p.dist is not None:
+            from mtmc.uncertainty.distributions import parse_distribution
+
+            try:
+                parse_distribution(p.dist)
+            except MtmcError as exc:
+                raise _err(graph, f"place {p.name}: {exc.message}", p.line, "dist") from None
     # firing order by generations (Kahn), sorted by name within each
     marked = {p.name for p in graph.places if p.marked}
     remaining = dict(trans)
@@ -331,5 +340,12 @@ def check(graph: Graph) -> Plan:
                 graph, f"transition {t.name}: {exc.message}", t.field_line(fld), fld
             ) from None
         types[t.out] = v.output
+        if t.op == "meas":
+            from mtmc.graph.probe import meas_spec
+
+            try:
+                meas_spec(t, graph.probe, graph.factor)
+            except MtmcError as exc:
+                raise _err(graph, exc.message, exc.line, exc.field) from None
         steps.append(Step(t, v, g))
     return Plan(graph, types, tuple(steps), producer)

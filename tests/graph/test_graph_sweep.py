@@ -1,0 +1,93 @@
+"""Sweeps over a graph and the surrogate of seed 000 eq. 31 (general form)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtmc.errors import GraphError, InputError
+from mtmc.graph import load_graph, run_graph
+from mtmc.graph.sweep import apply_setting, fit_surrogate, parse_range, sweep
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
+
+
+def test_fit_surrogate_recovers_exact_coefficients():
+    s1, s2 = np.meshgrid(np.linspace(1, 5, 5), np.linspace(0.5, 3, 4))
+    sig = np.column_stack([s1.ravel(), s2.ravel()])
+    u = np.sqrt(0.25 + 0.7 * sig[:, 0] ** 2 + 2.5 * sig[:, 1] ** 2)
+    fit = fit_surrogate(sig, u, names=["a", "b"])
+    np.testing.assert_allclose(fit.coefficients, [0.7, 2.5], rtol=1e-10)
+    np.testing.assert_allclose(fit.c0, 0.25, rtol=1e-9)
+    assert fit.max_rel_error < 1e-12
+    np.testing.assert_allclose(fit.predict(sig), u, rtol=1e-12)
+    # the seed's eq. 31 is this form with c_i = 0.05999^2 / 845 and 0.05999^2 / 868, no c0
+    paper = np.sqrt(0.05999**2 * (sig[:, 0] ** 2 / 845 + sig[:, 1] ** 2 / 868))
+    fit31 = fit_surrogate(sig, paper, intercept=False)
+    np.testing.assert_allclose(fit31.coefficients, [0.05999**2 / 845, 0.05999**2 / 868], rtol=1e-10)
+
+
+def test_fit_surrogate_errors():
+    with pytest.raises(InputError, match="every u must be > 0"):
+        fit_surrogate([[1.0], [2.0]], [1.0, 0.0])
+    with pytest.raises(InputError, match="cannot fit 3 coefficients"):
+        fit_surrogate([[1.0, 2.0], [2.0, 1.0]], [1.0, 2.0])
+
+
+def test_parse_range():
+    np.testing.assert_allclose(parse_range("1:3:3"), [1, 2, 3])
+    np.testing.assert_allclose(parse_range("1,4"), [1, 4])
+    with pytest.raises(InputError, match="LOW:HIGH:N"):
+        parse_range("1:2", field="probe.u_axis")
+
+
+def test_fig14_grid_and_surrogate():
+    """Seed 000 Fig. 14: 25 points x 1000 trials of the A-C distance; eq. 31 form within 5 %."""
+    g = load_graph(EXAMPLES / "bcs_origin.toml")
+    grid = {
+        "probe.u_probe": np.linspace(0.001, 0.005, 5),
+        "probe.u_axis": np.linspace(0.001, 0.005, 5),
+    }
+    res = sweep(g, grid, "d_ac", trials=1000, seed=14)
+    assert res.grid.shape == (25, 2) and res.u.shape == (25,)
+    fit = res.fit()
+    assert fit.max_rel_error <= 0.05
+    # each grid point is an ordinary run with the same seed
+    one = apply_setting(apply_setting(g, "probe.u_probe", 0.003), "probe.u_axis", 0.005)
+    r = run_graph(one, 1000, seed=14, outputs=["d_ac"])
+    np.testing.assert_allclose(res.u[2 * 5 + 4], r.places["d_ac"].u, rtol=1e-12)
+    # u grows with both sigmas
+    assert np.all(np.diff(res.u.reshape(5, 5), axis=0) > 0)
+    assert np.all(np.diff(res.u.reshape(5, 5), axis=1) > 0)
+    csv = res.to_csv(fit).splitlines()
+    assert csv[0] == "probe.u_probe,probe.u_axis,d_ac_estimate,d_ac_u,u_surrogate,rel_error"
+    assert len(csv) == 26
+
+
+def test_surrogate_coefficient_matches_the_closed_form():
+    """Ball centre: u(cx)^2 = (u1^2 + u2^2 + u3^2) / 2, so c(u_probe) = c(u_axis) = 1/2."""
+    g = load_graph(EXAMPLES / "ball_centre.toml")
+    res = sweep(
+        g,
+        {"probe.u_probe": [0.001, 0.003, 0.005], "probe.u_axis": [0.001, 0.004]},
+        "cx",
+        trials=20_000,
+        seed=3,
+    )
+    fit = res.fit()
+    np.testing.assert_allclose(fit.coefficients, [0.5, 0.5], rtol=0.03)
+    np.testing.assert_allclose(fit.c0, 0.0005**2 / 2, rtol=0.3)
+
+
+def test_apply_setting_and_sweep_errors():
+    g = load_graph(EXAMPLES / "ball_centre.toml")
+    assert apply_setting(g, "neg_r1.u", 0.1).place("neg_r1").u == 0.1
+    assert apply_setting(g, "m1.u_probe", 0.1).transition("m1").param("u_probe") == 0.1
+    with pytest.raises(InputError, match="neither probe, a place nor a transition"):
+        apply_setting(g, "zz.u", 1.0)
+    with pytest.raises(InputError, match="probe has no field 'u_x'"):
+        apply_setting(g, "probe.u_x", 1.0)
+    with pytest.raises(GraphError, match="needs a scalar output place"):
+        sweep(g, {"probe.u_axis": [0.001]}, "p", trials=10, seed=1)
