@@ -232,6 +232,15 @@ def test_frame_with_line_perpendicular_to_plane() -> None:
         )
 
 
+def test_nan_propagates_without_a_degenerate_error() -> None:
+    a = np.array([[0.0, 0, 0], [np.nan, 0, 0]])
+    plane = plane_from_points(a, [1, 0, 0], [0, 1, 0])
+    assert_array_equal(plane.normal[0], [0, 0, 1])
+    assert np.isnan(plane.normal[1]).all()
+    assert np.isnan(unit(a[1])).all()
+    assert np.isnan(intersect_line_plane(Line(a, [0, 0, 1]), plane)[1]).all()
+
+
 # --- properties ---------------------------------------------------------------------------
 
 

@@ -100,13 +100,14 @@ def test_zero_direction_is_degenerate_with_count() -> None:
         Plane([0, 0, 0], [0, 0, 0])
 
 
-def test_negative_or_nan_radius() -> None:
+def test_negative_radius_refused_nan_propagates() -> None:
     with pytest.raises(
         InputError, match=r"field radius: expected a radius >= 0 mm, got -1.0 in 1 of 2"
     ):
         Sphere(np.zeros((2, 3)), [1.0, -1.0])
-    with pytest.raises(InputError, match="field radius: expected a radius >= 0 mm, got nan"):
-        Circle([0, 0, 0], [0, 0, 1], math.nan)
+    # NaN propagates (it is not a negative radius)
+    assert np.isnan(Circle([0, 0, 0], [0, 0, 1], math.nan).radius).all()
+    assert np.isnan(Line([0, 0, 0], [math.nan, 0, 1]).direction).all()
 
 
 def test_checkers() -> None:

@@ -161,7 +161,7 @@ def unit(v: npt.ArrayLike) -> NDArray[np.float64]:
     """
     vv = check_vectors(v, "v")
     n = _norm(vv)
-    degenerate(~(n > 0.0), "the vector has zero length", "a non-zero vector", "v")
+    degenerate(n <= 0.0, "the vector has zero length", "a non-zero vector", "v")
     return vv / n[:, None]
 
 
@@ -235,7 +235,7 @@ def line_from_points(a: npt.ArrayLike, b: npt.ArrayLike) -> Line:
     d = bb - aa
     dn = _norm(d)
     scale = np.maximum(_norm(aa), _norm(bb))
-    degenerate(~(dn > RTOL * scale), "the two points coincide", "two distinct points", "b")
+    degenerate(dn <= RTOL * scale, "the two points coincide", "two distinct points", "b")
     return Line(aa, d / dn[:, None])
 
 
@@ -297,7 +297,7 @@ def line_from_planes(p1: Plane, p2: Plane) -> Line:
     n1, n2 = p1.normal, p2.normal
     d = _cross(n1, n2)
     dd = _dot(d, d)
-    degenerate(~(dd > RTOL**2), "the two planes are parallel", "two non-parallel planes", "p2")
+    degenerate(dd <= RTOL**2, "the two planes are parallel", "two non-parallel planes", "p2")
     x0 = 0.5 * (p1.point + p2.point)
     h1 = _dot(n1, p1.point - x0)
     h2 = _dot(n2, p2.point - x0)
@@ -343,7 +343,7 @@ def plane_from_points(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> P
     n = _cross(u, v)
     nn = _norm(n)
     degenerate(
-        ~(nn > RTOL * _norm(u) * _norm(v)),
+        nn <= RTOL * _norm(u) * _norm(v),
         "the three points are collinear",
         "three non-collinear points",
         "c",
@@ -406,7 +406,7 @@ def intersect_line_plane(line: Line, plane: Plane) -> NDArray[np.float64]:
     batch_size(line=line.point, plane=plane.point)
     nd = _dot(plane.normal, line.direction)
     degenerate(
-        ~(np.abs(nd) > RTOL),
+        np.abs(nd) <= RTOL,
         "the line is parallel to the plane",
         "a line not parallel to the plane",
         "line",
@@ -573,8 +573,8 @@ def angle_between(u: npt.ArrayLike, v: npt.ArrayLike) -> NDArray[np.float64]:
     array([ 45., 180.])
     """
     uu, vv = _pair(u, v, "u", "v")
-    degenerate(~(_norm(uu) > 0.0), "the vector has zero length", "a non-zero vector", "u")
-    degenerate(~(_norm(vv) > 0.0), "the vector has zero length", "a non-zero vector", "v")
+    degenerate(_norm(uu) <= 0.0, "the vector has zero length", "a non-zero vector", "u")
+    degenerate(_norm(vv) <= 0.0, "the vector has zero length", "a non-zero vector", "v")
     return np.arctan2(_norm(_cross(uu, vv)), _dot(uu, vv))
 
 
@@ -618,7 +618,7 @@ def circle_from_points(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> 
     uu = _dot(u, u)
     vv = _dot(v, v)
     degenerate(
-        ~(ww > RTOL**2 * uu * vv),
+        ww <= RTOL**2 * uu * vv,
         "the three points are collinear",
         "three non-collinear points",
         "c",
@@ -682,7 +682,7 @@ def frame_from_plane_line_point(
     xd = d - _dot(d, z)[:, None] * z
     xn = _norm(xd)
     degenerate(
-        ~(xn > RTOL),
+        xn <= RTOL,
         "the line is perpendicular to the plane",
         "a line not perpendicular to the plane",
         "line",

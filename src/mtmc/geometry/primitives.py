@@ -8,7 +8,8 @@ of one). Shapes are checked and values coerced to float64 on construction; a sin
 against a batch of ``M`` (e.g. one fixed line point with ``M`` sampled directions).
 
 Directions and normals are normalised to unit length on construction; a zero-length
-one raises :class:`mtmc.errors.DegenerateGeometryError`.
+one raises :class:`mtmc.errors.DegenerateGeometryError`. NaN values are not refused: they
+propagate (a Monte Carlo trial that went wrong upstream stays visible as NaN).
 
 Units: lengths in mm.
 
@@ -48,7 +49,7 @@ Index = int | slice | npt.NDArray[np.intp] | npt.NDArray[np.bool_] | list[int]
 
 def _normalised(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.float64]:
     norm = np.sqrt(np.einsum("mi,mi->m", v, v))
-    degenerate(~(norm > 0.0), f"the {what} has zero length", f"a non-zero {what}", name)
+    degenerate(norm <= 0.0, f"the {what} has zero length", f"a non-zero {what}", name)
     # Vectors already of unit length (to 1e-15) are kept as they are, so that a
     # primitive rebuilt from another's arrays (a sub-batch) holds the same numbers.
     return v / np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)[:, None]
@@ -70,7 +71,7 @@ def _set(obj: object, **values: NDArray[np.float64]) -> None:
 
 
 def _check_radius(r: NDArray[np.float64], name: str) -> None:
-    bad = ~(r >= 0.0)
+    bad = r < 0.0
     if bad.any():
         first = int(np.flatnonzero(bad)[0])
         raise InputError(
@@ -198,7 +199,7 @@ class Circle:
     Raises
     ------
     InputError
-        If a shape is wrong, the batch sizes differ, or a radius is negative or NaN.
+        If a shape is wrong, the batch sizes differ, or a radius is negative.
     DegenerateGeometryError
         If a normal has zero length.
     """
@@ -246,7 +247,7 @@ class Sphere:
     Raises
     ------
     InputError
-        If a shape is wrong, the batch sizes differ, or a radius is negative or NaN.
+        If a shape is wrong, the batch sizes differ, or a radius is negative.
     """
 
     centre: NDArray[np.float64]
