@@ -404,3 +404,11 @@ def test_no_convergence_and_bad_input() -> None:
         InputError, match=r"field orientation: expected 3 trials \(as in points\) or 1, got 2"
     ):
         fit_plane(np.tile(pts, (3, 1, 1)), orientation=np.ones((2, 3)))
+    with pytest.raises(
+        InputError, match=r"field xtol: expected a relative step tolerance 0 < xtol < 1, got 0"
+    ):
+        fit_circle(pts, xtol=0)
+    with pytest.raises(
+        InputError, match=r"field max_iterations: expected an integer max_iterations >= 1, got 0"
+    ):
+        fit_sphere(pts, max_iterations=0)

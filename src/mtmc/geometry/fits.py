@@ -21,6 +21,11 @@ the feature:
   (free radius) or on ``|p_i - c| - R`` with the radius ``R`` known (centre only: the
   ball-centre measurement with a calibrated ball of seed 000 and seed 003).
 
+The Gauss-Newton iterations of a trial stop when the step is below ``xtol`` times the
+size of its point set, or when the steps stop shrinking at the rounding floor
+(ill-conditioned data). Trials are processed in internal blocks of a few thousand, so
+that the temporaries stay in the CPU cache; the results do not depend on the blocks.
+
 Each :class:`FitResult` holds the fitted geometry, the residuals, their RMS, the degrees
 of freedom and, for the iterative fits, the number of iterations and the covariance of
 the fitted parameters ``s^2 (J^T J)^{-1}`` from the Jacobian ``J`` at the solution and
@@ -472,6 +477,18 @@ def _circle_block(
     }
 
 
+def _check_iteration_args(xtol: float, max_iterations: int) -> None:
+    if not (isinstance(xtol, int | float) and 0.0 < xtol < 1.0):
+        raise InputError(
+            f"expected a relative step tolerance 0 < xtol < 1, got {xtol!r}", field="xtol"
+        )
+    if not (isinstance(max_iterations, int | np.integer) and max_iterations >= 1):
+        raise InputError(
+            f"expected an integer max_iterations >= 1, got {max_iterations!r}",
+            field="max_iterations",
+        )
+
+
 def _converged(failed: NDArray[np.bool_], what: str, max_iterations: int) -> None:
     if failed.any():
         bad = np.flatnonzero(failed)
@@ -511,8 +528,9 @@ def fit_circle(
         A direction the circle's normal is made to point along; by default right-handed
         with respect to the order of the points (see :func:`fit_plane`).
     xtol : float
-        Each trial stops when no parameter moves by more than ``xtol`` times the RMS
-        distance of its points from their centroid.
+        Each trial stops when no parameter moves (or would move, extrapolating the
+        last two steps) by more than ``xtol`` times the RMS distance of its points from
+        their centroid; ``0 < xtol < 1``.
     max_iterations : int
         Largest number of Gauss-Newton iterations.
 
@@ -543,6 +561,7 @@ def fit_circle(
     [[4.7398 2.9835 0.    ]] [4.7142]
     """
     P = check_point_sets(points, min_points=3, what="a circle fit")
+    _check_iteration_args(xtol, max_iterations)
     m, n = P.shape[:2]
     o = _run(
         _circle_block,
@@ -635,8 +654,9 @@ def fit_sphere(
         A start for the centre (e.g. the nominal one) instead of the algebraic sphere;
         with a known radius it also picks the side of the points the centre lies on.
     xtol : float
-        Each trial stops when no parameter moves by more than ``xtol`` times the RMS
-        distance of its points from their centroid.
+        Each trial stops when no parameter moves (or would move, extrapolating the
+        last two steps) by more than ``xtol`` times the RMS distance of its points from
+        their centroid; ``0 < xtol < 1``.
     max_iterations : int
         Largest number of Gauss-Newton iterations.
 
@@ -668,6 +688,7 @@ def fit_sphere(
     """
     need = 3 if (radius is not None and centre_guess is not None) else 4
     P = check_point_sets(points, min_points=need, what="a sphere fit")
+    _check_iteration_args(xtol, max_iterations)
     m, n = P.shape[:2]
     R = None
     if radius is not None:
