@@ -112,8 +112,11 @@ class ExpressionError(ParseError):
 
 
 class DegenerateGeometryError(MtmcError, ValueError):
-    """A geometric construction is undefined for the given input (collinear points for a
-    plane, a line parallel to a plane, too few points for a fit, a zero-length vector)."""
+    """A geometric construction is undefined for the given input.
+
+    Collinear points for a plane, a line parallel to a plane, too few points for a fit,
+    a zero-length vector.
+    """
 
 
 class GraphError(InputError):

@@ -37,7 +37,8 @@ def _root(
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI with ``argv`` (default: ``sys.argv[1:]``) and return the exit code."""
     try:
-        app(args=argv, prog_name="mtmc", standalone_mode=False)
+        # With standalone_mode=False click returns the exit code of typer.Exit/click.Exit.
+        rv = app(args=argv, prog_name="mtmc", standalone_mode=False)
     except SystemExit as exc:  # pragma: no cover - typer/click exit paths
         return int(exc.code or 0)
     except typer.Exit as exc:
@@ -51,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(exc, click.exceptions.Abort):
             return 1
         raise
-    return 0
+    return rv if isinstance(rv, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover
