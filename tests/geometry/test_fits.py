@@ -272,6 +272,8 @@ def test_batch_equals_one_at_a_time_for_noisy_points() -> None:
     for fn, pts, kwargs in fits.values():
         batch = fn(pts, **kwargs)
         assert len(batch) == m
+        _assert_same(batch, batch[7], 7)
+        assert len(batch[3:9]) == 6
         for i in range(m):
             _assert_same(batch, fn(pts[i], **kwargs), i)
 

@@ -56,7 +56,7 @@ from mtmc.geometry._checks import (
     check_vectors,
     degenerate,
 )
-from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
+from mtmc.geometry.primitives import Circle, Index, Line, Plane, Sphere, _index
 
 __all__ = ["FitResult", "fit_circle", "fit_line", "fit_plane", "fit_sphere"]
 
@@ -103,6 +103,17 @@ class FitResult:
 
     def __len__(self) -> int:
         return int(self.residuals.shape[0])
+
+    def __getitem__(self, idx: Index) -> FitResult:
+        """The results of a sub-batch of trials (an integer keeps a batch of one)."""
+        return FitResult(
+            self.geometry[idx],
+            _index(self.residuals, idx),
+            _index(self.rms, idx),
+            self.dof,
+            None if self.covariance is None else _index(self.covariance, idx),
+            None if self.iterations is None else _index(self.iterations, idx),
+        )
 
 
 Block = dict[str, NDArray[Any]]
@@ -495,7 +506,8 @@ def _converged(failed: NDArray[np.bool_], what: str, max_iterations: int) -> Non
         raise ConvergenceError(
             f"{what} did not converge in {max_iterations} Gauss-Newton iterations in "
             f"{bad.size} of {failed.shape[0]} trials (first: trial {bad[0]}); expected "
-            "points close to the feature, or a larger max_iterations",
+            "points that determine the feature (a patch too small for its noise leaves "
+            "the radius undetermined), or a larger max_iterations",
             field="points",
         )
 

@@ -55,7 +55,7 @@ def _normalised(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.floa
     return v / np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)[:, None]
 
 
-def _index(arr: NDArray[np.float64], idx: Any) -> NDArray[np.float64]:
+def _index(arr: NDArray[Any], idx: Any) -> NDArray[Any]:
     if isinstance(idx, int | np.integer):
         m = arr.shape[0]
         if not -m <= int(idx) < m:
