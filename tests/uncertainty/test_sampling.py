@@ -134,5 +134,7 @@ def test_argument_errors():
         draw(INPUTS, 10, 1, normal_method="polar")  # type: ignore[arg-type]
     with pytest.raises(DistributionError, match="field q: .*unknown distribution 'foo'"):
         draw({"q": "foo(1)"}, 10, 1)
+    with pytest.raises(InputError, match="field seed: expected the integer seed"):
+        draw(INPUTS, 10, None)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="mapping"):
         draw([Normal(0, 1)], 10, 1)  # type: ignore[arg-type]

@@ -750,8 +750,8 @@ class Gamma(Distribution):
     """Gamma PDF with shape ``k`` and scale ``θ`` (JCGM 101 §6.4.11).
 
     JCGM 101 writes G(α, β) with rate β; here ``shape = α`` and ``scale = 1/β``. For a
-    count ``q`` in §6.4.11 the expectation of the rate is ``(q + 1)/…``: give ``shape =
-    q + 1`` and the appropriate scale.
+    quantity estimated from an observed count ``q`` (§6.4.11.1), JCGM 101 assigns
+    G(q + 1, 1): ``Gamma(q + 1, 1)``, expectation and variance ``q + 1``.
 
     Parameters
     ----------

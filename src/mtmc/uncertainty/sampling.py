@@ -148,6 +148,16 @@ def input_generator(seed: int, block: int, name: str) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(ss))
 
 
+def _check_seed(seed: Any) -> int:
+    if seed is None:
+        raise InputError(
+            "expected the integer seed of the run (see resolve_seed), got None: numbers drawn "
+            "from fresh entropy that is not recorded could not be drawn again",
+            field="seed",
+        )
+    return resolve_seed(seed)
+
+
 def _check_int(value: Any, field: str, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise InputError(f"expected an integer >= {minimum}, got {value!r}", field=field)
@@ -265,7 +275,7 @@ def iter_blocks(
     trials = _check_int(trials, "trials", 1)
     block_size = _check_int(block_size, "block_size", 1)
     start = _check_int(start, "start", 0)
-    seed = resolve_seed(seed)
+    seed = _check_seed(seed)
     dists, method = _prepare(inputs, normal_method)
     source = _BlockSource(dists, seed, method)
     for a in range(start, trials, block_size):
@@ -315,7 +325,7 @@ def draw(
     """
     trials = _check_int(trials, "trials", 1)
     _check_int(block_size, "block_size", 1)
-    seed = resolve_seed(seed)
+    seed = _check_seed(seed)
     dists, method = _prepare(inputs, normal_method)
     out = {n: np.empty((trials, *((d.dim,) if d.dim else ()))) for n, d in dists.items()}
     _BlockSource(dists, seed, method).fill(out, 0, trials, offset=0)
