@@ -227,3 +227,17 @@ def test_jcgm101_9_3_mass_calibration():
     assert abs(lo - 1.0834) <= 0.003 and abs(hi - 1.3825) <= 0.003
     # two significant digits of u agree with the published value: the §7.9.2 tolerance
     assert abs(r.u - u_pub) <= numerical_tolerance(u_pub)
+
+
+def test_given_executor_gives_identical_numbers():
+    import concurrent.futures as cf
+
+    from mtmc.parallel import map_blocks
+
+    ref = monte_carlo(additive, ADD_INPUTS, 50_001, seed=8, block_size=7_000)
+    with cf.ThreadPoolExecutor(max_workers=3) as pool:
+        got = monte_carlo(additive, ADD_INPUTS, 50_001, seed=8, block_size=7_000, executor=pool)
+        assert list(map_blocks(abs, [-3, 2, -1], executor=pool)) == [3, 2, 1]
+    _same(ref, got)
+    with pytest.raises(InputError, match="field executor"):
+        list(map_blocks(abs, [1], workers=2, executor="cluster"))  # type: ignore[arg-type]
