@@ -173,13 +173,42 @@ def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64
     return out
 
 
-def _newell(X: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Newell's vector of the closed polygon through the points in their order, ``(B, 3)``.
+def _plane_axes(
+    X: NDArray[np.float64], V: NDArray[np.float64], orientation: NDArray[np.float64] | None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Oriented normal, in-plane axes and in-plane coordinates of a fitted plane.
 
-    ``sum_i x_i × x_{i+1}`` (indices cyclic), twice the vector area of the polygon; for
-    three points it is ``(b - a) × (c - a)``.
+    Returns the normal ``(B, 3)``, the axes ``E = [e1 e2]`` ``(B, 3, 2)`` and the
+    coordinates ``(2, B, n)`` of the centred points ``X`` in them, from the scatter
+    matrix's eigenvectors ``V``.
+    ``e1`` is the direction of largest spread and ``(e1, e2, normal)`` is right-handed.
+    Without an ``orientation``, the normal points along Newell's vector
+    ``sum_i x_i × x_{i+1}`` (indices cyclic) of the closed polygon through the points in
+    their order; its component along the normal is, exactly, the in-plane sum
+    ``sum_i (u_i v_{i+1} - v_i u_{i+1})`` (twice the signed area), which is what is
+    computed. Where that reference vanishes, the normal's largest component is made
+    positive.
     """
-    return np.einsum("bni->bi", _cross(X, np.roll(X, -1, axis=1)))
+    n0 = V[:, :, 0]
+    e1 = V[:, :, 2]
+    E = np.stack([e1, _cross(n0, e1)], axis=2)
+    U = np.matmul(X, E).transpose(2, 0, 1).copy()
+    if orientation is None:
+        u, v = U[0], U[1]
+        area = np.einsum("bn,bn->b", u[:, :-1], v[:, 1:]) - np.einsum(
+            "bn,bn->b", v[:, :-1], u[:, 1:]
+        )
+        area += u[:, -1] * v[:, 0] - v[:, -1] * u[:, 0]
+        s = area
+        scale = np.einsum("kbn,kbn->b", U, U)
+    else:
+        s = np.einsum("bi,bi->b", n0, orientation)
+        scale = np.sqrt(np.einsum("bi,bi->b", orientation, orientation))
+    big = np.take_along_axis(n0, np.abs(n0).argmax(axis=1)[:, None], axis=1)[:, 0]
+    sign = np.where(np.abs(s) > RTOL * scale, np.sign(s), np.sign(big))
+    E[:, :, 1] *= sign[:, None]
+    U[1] *= sign[:, None]
+    return n0 * sign[:, None], E, U
 
 
 def _orient(v: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -209,8 +238,7 @@ def _rms(r: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _plane_block(P: NDArray[np.float64], orientation: NDArray[np.float64] | None) -> Block:
     c, X, w, V = _scatter(P)
-    ref = _newell(X) if orientation is None else orientation
-    n = _orient(V[:, :, 0], ref)
+    n = _plane_axes(X, V, orientation)[0]
     r = np.matmul(X, n[:, :, None])[:, :, 0]
     return {"c": c, "n": n, "r": r, "rms": _rms(r), "bad": ~(w[:, 1] > RTOL * w[:, 2])}
 
@@ -449,23 +477,26 @@ def _circle_block(
     c, X, w, V = _scatter(P)
     b, n = P.shape[:2]
     bad = ~(w[:, 1] > RTOL * w[:, 2])
-    nrm = _orient(V[:, :, 0], _newell(X) if orientation is None else orientation)
-    e1 = V[:, :, 2]
-    e2 = _cross(nrm, e1)
-    E = np.stack([e1, e2], axis=2)  # (B, 3, 2)
-    U = np.matmul(X, E)  # (B, n, 2) in-plane coordinates
+    nrm, E, Uc = _plane_axes(X, V, orientation)  # Uc: (2, B, n) in-plane coordinates
     if bad.any():
-        U[bad] = _regular_polygon(n, 2)
-    # Kåsa: rows [u, v, 1], right-hand side -(u^2 + v^2).
-    z = np.einsum("bnk,bnk->bn", U, U)
-    A = np.concatenate([U, np.ones((b, n, 1))], axis=2)
-    At = A.transpose(0, 2, 1)
-    sol = np.linalg.solve(np.matmul(At, A), np.matmul(At, z[:, :, None]))[:, :, 0]
-    ab = 0.5 * sol[:, :2]
-    D0 = U - ab[:, None, :]
-    r0 = np.sqrt(np.einsum("bnk,bnk->bn", D0, D0)).mean(axis=1)
+        Uc[:, bad] = _regular_polygon(n, 2).T[:, None, :]
+    u, v = Uc[0], Uc[1]
+    # Kåsa: least squares of [u v 1] (2a, 2b, r^2 - a^2 - b^2) = u^2 + v^2, by its
+    # normal equations (the coordinates are centred, so they are well conditioned).
+    z = u * u + v * v
+    A = np.empty((b, 3, 3))
+    A[:, 0, 0] = np.einsum("bn,bn->b", u, u)
+    A[:, 1, 1] = np.einsum("bn,bn->b", v, v)
+    A[:, 0, 1] = A[:, 1, 0] = np.einsum("bn,bn->b", u, v)
+    A[:, 0, 2] = A[:, 2, 0] = u.sum(axis=1)
+    A[:, 1, 2] = A[:, 2, 1] = v.sum(axis=1)
+    A[:, 2, 2] = n
+    rhs = np.stack(
+        [np.einsum("bn,bn->b", u, z), np.einsum("bn,bn->b", v, z), z.sum(axis=1)], axis=1
+    )
+    ab = 0.5 * np.linalg.solve(A, rhs[:, :, None])[:, :2, 0]
+    r0 = np.sqrt((u - ab[:, 0, None]) ** 2 + (v - ab[:, 1, None]) ** 2).mean(axis=1)
     tol = xtol * np.sqrt(z.mean(axis=1))
-    Uc = np.ascontiguousarray(U.transpose(2, 0, 1))
     theta0 = np.concatenate([ab, r0[:, None]], axis=1)
     theta, its, failed = _gauss_newton(Uc, theta0, None, tol, max_iterations)
     r, cov2 = _solution(Uc, theta, None, n - 3)
