@@ -31,6 +31,10 @@ of freedom and, for the iterative fits, the number of iterations and the covaria
 the fitted parameters ``s^2 (J^T J)^{-1}`` from the Jacobian ``J`` at the solution and
 the residual variance ``s^2 = sum r_i^2 / dof``.
 
+NaN policy: unlike the constructions, which let NaN propagate, the fits refuse
+non-finite coordinates with an :class:`~mtmc.errors.InputError` naming the trials (an
+iteration cannot converge on them, and one NaN would otherwise stall the whole batch).
+
 Tolerances: degeneracy is tested on the eigenvalues ``l1 <= l2 <= l3`` of the scatter
 matrix, relative, with :data:`mtmc.geometry._checks.RTOL` (``1e-10``): the eigenvalues
 are only accurate to about ``eps * l3``, so the test is on eigenvalue ratios (e.g.
