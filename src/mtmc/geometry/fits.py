@@ -33,7 +33,7 @@ the residual variance ``s^2 = sum r_i^2 / dof``.
 
 NaN policy: unlike the constructions, which let NaN propagate, the fits refuse
 non-finite coordinates with an :class:`~mtmc.errors.InputError` naming the trials (an
-iteration cannot converge on them, and one NaN would otherwise stall the whole batch).
+iteration cannot converge on them).
 
 Tolerances: degeneracy is tested on the eigenvalues ``l1 <= l2 <= l3`` of the scatter
 matrix, relative, with :data:`mtmc.geometry._checks.RTOL` (``1e-10``): the eigenvalues
