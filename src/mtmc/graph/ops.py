@@ -254,8 +254,10 @@ for _t in ("point", "x", "y", "z"):
 @variant("point", ("x", "y", "z"), "point")
 def _point_xyz(x: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.float64]) -> Any:
     """The point of three coordinates."""
-    x, y, z = np.broadcast_arrays(x, y, z)
-    return np.stack([x, y, z], axis=-1)
+    m = max(np.size(x), np.size(y), np.size(z))
+    out = np.empty((m, 3))
+    out[:, 0], out[:, 1], out[:, 2] = x, y, z
+    return out
 
 
 @variant("point", ("line", "plane"), "point")
@@ -293,7 +295,9 @@ def _point_sphere(s: Sphere) -> Any:
 
 
 def _scalar_middle(a: Any, b: Any) -> Any:
-    return 0.5 * (np.asarray(a) + np.asarray(b))
+    out = np.add(a, b)
+    out *= 0.5
+    return out
 
 
 for _t in ("x", "y", "z", "real"):
@@ -339,7 +343,7 @@ def _displace_pv(p: Any, v: Any) -> Any:
 @variant("displace", ("point", "unit", "real"), "point")
 def _displace_pur(p: Any, d: Any, r: Any) -> Any:
     """The point displaced by r along a unit vector, p + r d."""
-    return gc.displace(p, d, np.atleast_1d(r))
+    return gc.displace(p, np.atleast_1d(r)[:, None] * d)  # d is a unit place: no rescaling
 
 
 def _scalar_sum(a: Any, b: Any) -> Any:
@@ -492,6 +496,21 @@ def _frame(plane: Plane, line: Line, p: Any) -> Any:
 # axis: seed 000 eqs. 8-19
 
 
+def _cross(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``u × v`` row by row (faster than ``np.cross`` on ``(M, 3)``)."""
+    u, v = np.broadcast_arrays(u, v)
+    n = np.empty(u.shape)
+    n[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+    n[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+    n[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    return n
+
+
+def _sq(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``|v|²`` row by row (column arithmetic: faster than ``einsum`` on ``(M, 3)``)."""
+    return v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]
+
+
 def rotary_axis(
     p1: npt.ArrayLike,
     p2: npt.ArrayLike,
@@ -554,21 +573,27 @@ def rotary_axis(
     a = np.atleast_2d(np.asarray(p1, dtype=np.float64))
     b = np.atleast_2d(np.asarray(p2, dtype=np.float64))
     c = np.atleast_2d(np.asarray(p3, dtype=np.float64))
-    normal = gc.unit(np.cross(b - a, c - a))  # raises on collinear points
+    n = _cross(b - a, c - a)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
+    if np.any(~(_sq(n) > 0.0)):
+        raise DegenerateGeometryError("the three ball centres are collinear", field="axis")
     if alpha is None:
         circ = gc.circle_from_points(a, b, c)
-        return Line(circ.centre, normal)
+        return Line(circ.centre, n)
     al = np.atleast_1d(np.asarray(alpha, dtype=np.float64))
     s = np.sin(al)
     if np.any(~(np.abs(s) > 1e-12)):
         raise DegenerateGeometryError(
             "sin(alpha) is 0: the three positions are not distinct", field="alpha"
         )
-    p4 = 0.5 * (b + c)  # eqs. 8-10
-    half_chord = np.sqrt(np.einsum("mi,mi->m", c - p4, c - p4))  # eq. 11
-    radius = half_chord / s  # eq. 12
-    centre = gc.displace(a, p4 - a, radius)  # eqs. 13-19 (unit(P4 - P1) scaled by R)
-    return Line(centre, normal)
+    w = 0.5 * (b + c) - a  # P4 - P1, eqs. 8-10 and 13
+    cb = c - b  # |P3 P4| = |P3 - P2| / 2, eq. 11
+    half_chord = 0.5 * np.sqrt(_sq(cb))
+    length = np.sqrt(_sq(w))  # |P1 P4|, eq. 13
+    if np.any(~(length > 0.0)):
+        raise DegenerateGeometryError("P1 coincides with P4, the middle of P2 and P3", field="axis")
+    # eq. 12: R = |P3 P4| / sin(alpha); eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
+    centre = a + w * (half_chord / (s * length))[:, None]
+    return Line(centre, n)
 
 
 @variant("axis", ("point", "point", "point"), "line")

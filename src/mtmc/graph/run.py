@@ -30,9 +30,10 @@ from mtmc.graph import probe as _probe
 from mtmc.graph.model import Graph, Plan, check
 from mtmc.graph.places import Place
 from mtmc.uncertainty.distributions import Distribution, Normal, parse_distribution
-from mtmc.uncertainty.sampling import DEFAULT_BLOCK_SIZE, iter_blocks, resolve_seed
+from mtmc.uncertainty.sampling import iter_blocks, resolve_seed
 
 __all__ = [
+    "GRAPH_BLOCK_SIZE",
     "PlaceSummary",
     "GraphResult",
     "random_inputs",
@@ -41,6 +42,10 @@ __all__ = [
     "graph_model",
     "flatten",
 ]
+
+#: Trials per evaluation block of :func:`run_graph`: small enough that the temporaries of
+#: the transitions stay in the processor cache. The numbers do not depend on it.
+GRAPH_BLOCK_SIZE: int = 16384
 
 #: Parts of each place type in the flat layout used for the running sums: (name, size).
 PARTS: dict[str, tuple[tuple[str, int], ...]] = {
@@ -74,9 +79,11 @@ def flatten(type_: str, value: Any, m: int) -> NDArray[np.float64]:
     Returns
     -------
     ndarray, shape (m, k)
-        ``k`` = 1 (scalar), 3 (point, vector, unit), 6 (line: point, direction; plane:
-        point, normal), 7 (circle: centre, normal, radius), 4 (sphere: centre, radius),
-        12 (frame: rotation row by row, translation).
+        A new array (never a view of ``value``; stored component by component, so it
+        is the transpose of a C-contiguous ``(k, m)`` array). ``k`` = 1 (scalar), 3
+        (point, vector, unit), 6 (line: point, direction; plane: point, normal), 7
+        (circle: centre, normal, radius), 4 (sphere: centre, radius), 12 (frame:
+        rotation row by row, translation).
     """
     if type_ in ("x", "y", "z", "real"):
         cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1), (m,))[:, None]]
@@ -95,7 +102,17 @@ def flatten(type_: str, value: Any, m: int) -> NDArray[np.float64]:
         cols = [t[:, :3, :3].reshape(-1, 9), t[:, :3, 3]]
     else:  # pragma: no cover - every type is handled above
         raise TypeError(f"cannot flatten a {type_}")
-    return np.concatenate([np.broadcast_to(c, (m, c.shape[1])) for c in cols], axis=1)
+    return _rows(cols, m).T
+
+
+def _rows(cols: list[Any], m: int) -> NDArray[np.float64]:
+    """The columns ``cols`` (each ``(m, j)`` or a batch of one) as a new ``(k, m)`` array."""
+    out = np.empty((sum(c.shape[1] for c in cols), m))
+    i = 0
+    for c in cols:
+        out[i : i + c.shape[1]] = np.asarray(c).T
+        i += c.shape[1]
+    return out
 
 
 @dataclass(frozen=True)
@@ -317,12 +334,13 @@ def random_inputs(plan: Plan) -> dict[str, Distribution]:
 
 
 def _marked_value(p: Place, factor: float, samples: Mapping[str, Any], m: int) -> Any:
+    """The value of a marked place: ``(m,)``/``(m, 3)`` if random, a batch of one if constant."""
     f = _place_factor(p, factor)
     vec = p.type in ("point", "vector", "unit")
     if vec:
         base = np.asarray(p.value if p.value is not None else (0.0, 0.0, 0.0)) * f
         if p.name + ".x" not in samples:
-            return np.broadcast_to(base, (m, 3))
+            return base.reshape(1, 3)
         cols = [np.asarray(samples[f"{p.name}.{c}"], dtype=np.float64) for c in "xyz"]
         val = np.stack(cols, axis=1)
         if p.dist is not None:
@@ -332,10 +350,30 @@ def _marked_value(p: Place, factor: float, samples: Mapping[str, Any], m: int) -
         return val
     base_s = (p.value if isinstance(p.value, float) else 0.0) * f
     if p.name not in samples:
-        return np.full(m, base_s)
+        return np.full(1, base_s)
     if p.dist is not None:
         return base_s + f * np.asarray(samples[p.name])
     return np.asarray(samples[p.name])
+
+
+def _full(value: Any, m: int) -> Any:
+    """A value with its batch of one (a constant) repeated to ``m`` trials."""
+    if isinstance(value, Line):
+        return Line(
+            *(np.broadcast_to(x, (m, *x.shape[1:])) for x in (value.point, value.direction))
+        )
+    if isinstance(value, Plane):
+        return Plane(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in (value.point, value.normal)))
+    if isinstance(value, Circle):
+        parts = (value.centre, value.normal, value.radius)
+        return Circle(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts))
+    if isinstance(value, Sphere):
+        parts2 = (value.centre, value.radius)
+        return Sphere(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts2))
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim == 0:
+        arr = arr.reshape(1)
+    return np.broadcast_to(arr, (m, *arr.shape[1:]))
 
 
 def evaluate(
@@ -366,7 +404,8 @@ def evaluate(
     -------
     dict of str to value
         The value of each requested place: ``(m,)`` scalars, ``(m, 3)`` points/vectors,
-        geometry primitives, ``(m, 4, 4)`` frames.
+        geometry primitives, ``(m, 4, 4)`` frames (constants repeated to ``m``, as
+        read-only views).
 
     Raises
     ------
@@ -405,7 +444,7 @@ def evaluate(
         for p in t.inputs:
             if last_use.get(p) == i and p not in want:
                 del values[p]
-    return {k: v for k, v in values.items() if k in want}
+    return {k: _full(v, m) for k, v in values.items() if k in want}
 
 
 class _Accumulator:
@@ -418,23 +457,33 @@ class _Accumulator:
         self.s2: NDArray[np.float64] | None = None
 
     def add(self, x: NDArray[np.float64]) -> None:
+        """Add a block ``x`` of shape ``(m, k)``, overwriting it (it is a fresh copy).
+
+        The sums run over the rows of ``x.T`` (C-contiguous by :func:`flatten`), which
+        NumPy reduces much faster than the columns of an ``(m, k)`` array with small k.
+        """
+        rows = x.T
         if self.shift is None:
-            self.shift = x.mean(axis=0)
-            self.s1 = np.zeros(x.shape[1])
-            self.s2 = np.zeros((x.shape[1], x.shape[1]))
+            self.shift = rows.mean(axis=1)
+            self.s1 = np.zeros(rows.shape[0])
+            self.s2 = np.zeros((rows.shape[0], rows.shape[0]))
         assert self.s1 is not None and self.s2 is not None
-        d = x - self.shift
-        self.s1 += d.sum(axis=0)
-        self.s2 += d.T @ d
-        self.n += x.shape[0]
+        rows -= self.shift[:, None]
+        self.s1 += rows.sum(axis=1)
+        k = rows.shape[0]
+        for i in range(k):  # dot products, not a BLAS matrix product: no thread start-up
+            for j in range(i, k):
+                self.s2[i, j] += np.einsum("m,m->", rows[i], rows[j])
+        self.n += rows.shape[1]
 
     def result(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         assert self.shift is not None and self.s1 is not None and self.s2 is not None
         mean = self.shift + self.s1 / self.n
         if self.n < 2:
             return mean, np.zeros_like(self.s2)
-        cov = (self.s2 - np.outer(self.s1, self.s1) / self.n) / (self.n - 1)
-        return mean, 0.5 * (cov + cov.T)
+        s2 = np.triu(self.s2) + np.triu(self.s2, 1).T
+        cov = (s2 - np.outer(self.s1, self.s1) / self.n) / (self.n - 1)
+        return mean, cov
 
 
 def _as_plan(graph: Graph | Plan) -> Plan:
@@ -448,7 +497,7 @@ def run_graph(
     *,
     outputs: Iterable[str] | None = None,
     keep: Iterable[str] = (),
-    block_size: int = DEFAULT_BLOCK_SIZE,
+    block_size: int = GRAPH_BLOCK_SIZE,
     normal_method: str = "default",
 ) -> GraphResult:
     """Monte Carlo over a measurement graph (JCGM 101 with seed 000's graph as the model).
@@ -466,7 +515,8 @@ def run_graph(
     keep : iterable of str
         Places whose samples to keep whole (for coverage intervals, histograms).
     block_size : int
-        Trials per block; it changes the memory used, not the numbers.
+        Trials per block (default :data:`GRAPH_BLOCK_SIZE`); it changes the memory used
+        and the speed, not the numbers.
     normal_method : {"default", "box-muller"}
         How normal numbers are made (Box-Muller as in seed 000 eq. 6).
 
