@@ -85,6 +85,11 @@ def flatten(type_: str, value: Any, m: int) -> NDArray[np.float64]:
         (circle: centre, normal, radius), 4 (sphere: centre, radius), 12 (frame:
         rotation row by row, translation).
     """
+    return _rows(_cols(type_, value, m), m).T
+
+
+def _cols(type_: str, value: Any, m: int) -> list[Any]:
+    """The parts of a place value as ``(m, j)`` arrays (or batches of one)."""
     if type_ in ("x", "y", "z", "real"):
         cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1), (m,))[:, None]]
     elif type_ in ("point", "vector", "unit"):
@@ -102,7 +107,7 @@ def flatten(type_: str, value: Any, m: int) -> NDArray[np.float64]:
         cols = [t[:, :3, :3].reshape(-1, 9), t[:, :3, 3]]
     else:  # pragma: no cover - every type is handled above
         raise TypeError(f"cannot flatten a {type_}")
-    return _rows(cols, m).T
+    return cols
 
 
 def _rows(cols: list[Any], m: int) -> NDArray[np.float64]:
@@ -456,25 +461,31 @@ class _Accumulator:
         self.s1: NDArray[np.float64] | None = None
         self.s2: NDArray[np.float64] | None = None
 
-    def add(self, x: NDArray[np.float64]) -> None:
-        """Add a block ``x`` of shape ``(m, k)``, overwriting it (it is a fresh copy).
+    def add(self, cols: list[Any], m: int) -> None:
+        """Add a block of ``m`` trials given as parts (:func:`_cols`), each ``(m, j)``.
 
-        The sums run over the rows of ``x.T`` (C-contiguous by :func:`flatten`), which
-        NumPy reduces much faster than the columns of an ``(m, k)`` array with small k.
+        The deviations are written component by component into a ``(k, m)`` array, whose
+        rows NumPy reduces much faster than the columns of an ``(m, k)`` one; the
+        products are dot products, not a BLAS matrix product (no thread start-up).
         """
-        rows = x.T
         if self.shift is None:
-            self.shift = rows.mean(axis=1)
-            self.s1 = np.zeros(rows.shape[0])
-            self.s2 = np.zeros((rows.shape[0], rows.shape[0]))
+            self.shift = np.concatenate([np.asarray(c).mean(axis=0) for c in cols])
+            k0 = self.shift.shape[0]
+            self.s1 = np.zeros(k0)
+            self.s2 = np.zeros((k0, k0))
         assert self.s1 is not None and self.s2 is not None
-        rows -= self.shift[:, None]
+        k = self.shift.shape[0]
+        rows = np.empty((k, m))
+        i = 0
+        for c in cols:
+            j = c.shape[1]
+            np.subtract(np.asarray(c).T, self.shift[i : i + j, None], out=rows[i : i + j])
+            i += j
         self.s1 += rows.sum(axis=1)
-        k = rows.shape[0]
-        for i in range(k):  # dot products, not a BLAS matrix product: no thread start-up
+        for i in range(k):
             for j in range(i, k):
                 self.s2[i, j] += np.einsum("m,m->", rows[i], rows[j])
-        self.n += rows.shape[1]
+        self.n += m
 
     def result(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         assert self.shift is not None and self.s1 is not None and self.s2 is not None
@@ -567,7 +578,7 @@ def run_graph(
         m = b - a
         vals = evaluate(plan, samples, m, want, specs=specs)
         for n in summ:
-            acc[n].add(flatten(plan.types[n], vals[n], m))
+            acc[n].add(_cols(plan.types[n], vals[n], m), m)
         for n in keep_s:
             kept[n].append(vals[n])
     places = {}
