@@ -6,11 +6,12 @@ equation of motion written out with SymPy, a library of common configurations, a
 drawing of the kinematic chain. This package knows nothing of instruments or files.
 """
 
-from mtmc.kinematics import error_terms, functions, library, machine, topology
+from mtmc.kinematics import error_terms, functions, library, machine, symbolic, topology
 from mtmc.kinematics.error_terms import *  # noqa: F403
 from mtmc.kinematics.functions import *  # noqa: F403
 from mtmc.kinematics.library import *  # noqa: F403
 from mtmc.kinematics.machine import *  # noqa: F403
+from mtmc.kinematics.symbolic import *  # noqa: F403
 from mtmc.kinematics.topology import *  # noqa: F403
 
 __all__: list[str] = [
@@ -18,5 +19,6 @@ __all__: list[str] = [
     *functions.__all__,
     *library.__all__,
     *machine.__all__,
+    *symbolic.__all__,
     *topology.__all__,
 ]
