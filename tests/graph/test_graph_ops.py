@@ -93,3 +93,16 @@ def test_rotary_axis_degenerate():
         ops.rotary_axis([0, 0, 0], [1, 0, 0], [2, 0, 0])
     with pytest.raises(DegenerateGeometryError, match="alpha"):
         ops.rotary_axis([1, 0, 0], [0, 1, 0], [0, -1, 0], 0.0)
+
+
+def test_rotary_axis_broadcasts_constants_against_a_batch():
+    """Constant ball centres (a batch of one) with a random angle, and the reverse."""
+    al = np.pi / 3
+    p = [(150, 0, 40), (75, 150 * np.sin(al), 40), (75, -150 * np.sin(al), 40)]
+    alphas = np.full(4, al)
+    line = ops.rotary_axis(*p, alphas)
+    assert line.point.shape == (4, 3)
+    np.testing.assert_allclose(line.point, [[0, 0, 40]] * 4, atol=1e-12)
+    batch = np.repeat(np.asarray(p[0], dtype=float)[None], 4, axis=0)
+    line2 = ops.rotary_axis(batch, p[1], p[2], al)
+    np.testing.assert_allclose(line2.point, line.point, atol=1e-12)

@@ -573,6 +573,7 @@ def rotary_axis(
     a = np.atleast_2d(np.asarray(p1, dtype=np.float64))
     b = np.atleast_2d(np.asarray(p2, dtype=np.float64))
     c = np.atleast_2d(np.asarray(p3, dtype=np.float64))
+    a, b, c = np.broadcast_arrays(a, b, c)  # so the in-place steps below keep shapes
     n = _cross(b - a, c - a)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
     if np.any(~(_sq(n) > 0.0)):
         raise DegenerateGeometryError("the three ball centres are collinear", field="axis")
@@ -585,14 +586,19 @@ def rotary_axis(
         raise DegenerateGeometryError(
             "sin(alpha) is 0: the three positions are not distinct", field="alpha"
         )
-    w = 0.5 * (b + c) - a  # P4 - P1, eqs. 8-10 and 13
+    w = b + c  # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
+    w *= 0.5
+    w -= a
     cb = c - b  # |P3 P4| = |P3 - P2| / 2, eq. 11
-    half_chord = 0.5 * np.sqrt(_sq(cb))
+    half_chord = np.sqrt(_sq(cb))
+    half_chord *= 0.5
     length = np.sqrt(_sq(w))  # |P1 P4|, eq. 13
     if np.any(~(length > 0.0)):
         raise DegenerateGeometryError("P1 coincides with P4, the middle of P2 and P3", field="axis")
     # eq. 12: R = |P3 P4| / sin(alpha); eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
-    centre = a + w * (half_chord / (s * length))[:, None]
+    half_chord = half_chord / (length * s)  # not in place: alpha may carry the batch
+    centre = w * half_chord[:, None]
+    centre += a
     return Line(centre, n)
 
 
