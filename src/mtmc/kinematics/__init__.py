@@ -6,7 +6,8 @@ equation of motion written out with SymPy, a library of common configurations, a
 drawing of the kinematic chain. This package knows nothing of instruments or files.
 """
 
-from mtmc.kinematics import error_terms, functions, library, machine, symbolic, topology
+from mtmc.kinematics import draw, error_terms, functions, library, machine, symbolic, topology
+from mtmc.kinematics.draw import *  # noqa: F403
 from mtmc.kinematics.error_terms import *  # noqa: F403
 from mtmc.kinematics.functions import *  # noqa: F403
 from mtmc.kinematics.library import *  # noqa: F403
@@ -15,6 +16,7 @@ from mtmc.kinematics.symbolic import *  # noqa: F403
 from mtmc.kinematics.topology import *  # noqa: F403
 
 __all__: list[str] = [
+    *draw.__all__,
     *error_terms.__all__,
     *functions.__all__,
     *library.__all__,

@@ -1,0 +1,67 @@
+"""``mtmc kinematics``: the CLI prints what the library computes; errors are one line."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from mtmc.cli.main import main
+from mtmc.kinematics import equation_of_motion, library_machine, library_names
+
+
+def test_list(capsys) -> None:  # type: ignore[no-untyped-def]
+    assert main(["kinematics", "list"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert [ln.split()[0] for ln in out] == list(library_names())
+    assert main(["kinematics", "list", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["wbzfxyct"]["topology"] == "wBZfXYCt"
+
+
+def test_show(capsys) -> None:  # type: ignore[no-untyped-def]
+    assert main(["kinematics", "show", "wCBXfYZt"]) == 0
+    out = capsys.readouterr().out
+    assert "axes (column order of q): X Y Z B C" in out
+    assert "chain: workpiece -> C -> B -> X -> frame -> Y -> Z -> tool" in out
+    assert "  C: rotary, moves the part" in out and "  Z: linear, moves the tool" in out
+    assert main(["kinematics", "show", "table-head", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    m = library_machine("table-head")
+    assert data["errors"] == list(m.error_names)
+    assert data["tool"] == m.tool.tolist()
+
+
+def test_equation_matches_library(capsys) -> None:  # type: ignore[no-untyped-def]
+    assert main(["kinematics", "equation", "XFYZ"]) == 0
+    out = capsys.readouterr().out
+    eq = equation_of_motion(library_machine("xfyz"), first_order=True)
+    assert out.strip() == eq.text()
+    assert main(["kinematics", "equation", "xfyz", "--latex", "-e", "EXX", "-e", "C0Y"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("\\begin{aligned}") and "EC0Y" in out
+    assert (
+        out.strip()
+        == equation_of_motion(
+            library_machine("xfyz"), errors=["EXX", "EC0Y"], first_order=True
+        ).latex()
+    )
+
+
+def test_draw(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    f = tmp_path / "chain.svg"
+    assert main(["kinematics", "draw", "wBZfXYCt", "-o", str(f)]) == 0
+    root = ET.fromstring(f.read_text())
+    groups = [g for g in root.iter("{http://www.w3.org/2000/svg}g") if "axis" in g.get("class", "")]
+    assert [g.get("data-axis") for g in groups] == ["B", "Z", "X", "Y", "C"]
+    assert [g.get("class") for g in groups][:2] == ["axis rotary part", "axis linear part"]
+
+
+def test_errors_are_one_line(capsys) -> None:  # type: ignore[no-untyped-def]
+    assert main(["kinematics", "show", "XYZ"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mtmc: error: field topology: topology 'XYZ': no frame")
+    assert len(err.strip().splitlines()) == 1
+    assert main(["kinematics", "equation", "XFYZ", "-e", "EX0C"]) == 2
+    err = capsys.readouterr().err
+    assert "error EX0C refers to axis C, which machine wXfYZt does not have" in err
