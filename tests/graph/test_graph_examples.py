@@ -35,6 +35,15 @@ def test_ball_centre_closed_form():
     assert abs(p.cov[0, 1]) < 5 * U_DIR**2 / 2 / math.sqrt(100_000)
 
 
+def test_ball_centre_box_muller():
+    """The same closed form with normals made by Box-Muller (seed 000 eq. 6)."""
+    g = load_graph(EXAMPLES / "ball_centre.toml")
+    r = run_graph(g, 100_000, seed=11, normal_method="box-muller", outputs=["p"])
+    np.testing.assert_allclose(r.places["p"].u[:2], U_DIR / math.sqrt(2), rtol=0.012)
+    d = run_graph(g, 1000, seed=11, outputs=["p"])
+    assert not np.array_equal(r.places["p"].mean, d.places["p"].mean)
+
+
 def test_plane_3pt_closed_form():
     """Normal of the plane through (0,0), (a,0), (0,b): n ~ (-(e2-e1)/a, -(e3-e1)/b, 1)."""
     r = run_graph(load_graph(EXAMPLES / "plane_3pt.toml"), 100_000, seed=12)
