@@ -61,6 +61,7 @@ def test_errors_are_one_line(capsys) -> None:  # type: ignore[no-untyped-def]
     assert main(["kinematics", "show", "XYZ"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("mtmc: error: field topology: topology 'XYZ': no frame")
+    assert "nor is it a library name (xfyz, fxyz" in err
     assert len(err.strip().splitlines()) == 1
     assert main(["kinematics", "equation", "XFYZ", "-e", "EX0C"]) == 2
     err = capsys.readouterr().err

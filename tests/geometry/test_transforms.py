@@ -172,3 +172,17 @@ def test_bad_input_messages() -> None:
         matrix_from_axis_angle([[0.0, 0.0, 0.0]], [1.0])
     with pytest.raises(InputError, match="field points"):
         apply_htm(np.eye(4), np.zeros((2, 2, 2, 3)))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.lists(st.floats(-np.pi, np.pi), min_size=3, max_size=3),
+    st.lists(st.floats(-1e3, 1e3), min_size=3, max_size=3),
+    st.sampled_from(ALL_SEQS),
+)
+def test_inverse_property(angles: list[float], t: list[float], seq: str) -> None:
+    T = htm(matrix_from_euler(angles, seq), t)
+    np.testing.assert_allclose(htm_inverse(T) @ T, np.eye(4), atol=1e-12)
+    np.testing.assert_allclose(T @ htm_inverse(T), np.eye(4), atol=1e-12)
+    p = np.array([1.0, -2.0, 3.0])
+    np.testing.assert_allclose(apply_htm(htm_inverse(T), apply_htm(T, p)), p, atol=1e-9)

@@ -90,6 +90,10 @@ def test_with_coefficients_and_errors() -> None:
     np.testing.assert_allclose(g(np.array([3.0])), [1.0])
     with pytest.raises(InputError, match="expected 2 coefficients, got 3"):
         f.with_coefficients([1.0, 2.0, 3.0])
+    # value objects: equal when of the same kind with the same settings and coefficients
+    assert f == LegendreSeries([0.0, 1.0], low=0.0, high=10.0)
+    assert f != LegendreSeries([0.0, 1.0], low=0.0, high=20.0)
+    assert f != ChebyshevSeries([0.0, 1.0], low=0.0, high=10.0)
     with pytest.raises(InputError, match="low < high"):
         LegendreSeries([1.0], low=5.0, high=5.0)
     with pytest.raises(InputError, match="field coefficients: expected finite"):

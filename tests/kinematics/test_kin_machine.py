@@ -422,3 +422,17 @@ def test_bad_inputs_are_named() -> None:
         Machine.from_topology("XFYZ", tool=(0.0, 1.0))
     with pytest.raises(InputError, match="no machine 'nope' in the library: expected one of xfyz"):
         library_machine("nope")
+
+
+def test_head_head_closed_form() -> None:
+    # wfXYZCAt: the fork head carries A on C; tool point t below the A axis:
+    # p = (x, y, z) + Rz(c) Rx(a) t, tool axis Rz(c) Rx(a) e_z
+    m = library_machine("head-head")
+    q = _random_q(m, 50, _rng(13))
+    x, y, z, a, c = q.T
+    R = Rotation.from_euler("xz", np.stack([a, c], axis=1))
+    np.testing.assert_allclose(
+        m.tool_position(q), np.stack([x, y, z], 1) + R.apply(m.tool), atol=1e-9
+    )
+    np.testing.assert_allclose(m.tool_direction(q), R.apply([0.0, 0.0, 1.0]), atol=1e-12)
+    np.testing.assert_allclose(m.pose(q)[:, :3, :3], R.as_matrix(), atol=1e-12)

@@ -13,7 +13,7 @@ import typer
 
 from mtmc.cli.common import fail as _common_fail
 from mtmc.cli.common import print_json
-from mtmc.errors import MtmcError
+from mtmc.errors import MtmcError, TopologyError
 from mtmc.kinematics.machine import Machine
 
 app = typer.Typer(
@@ -40,7 +40,13 @@ def _machine(spec: str) -> Machine:
 
     if spec.strip().lower() in library_names():
         return library_machine(spec)
-    return Machine.from_topology(spec)
+    try:
+        return Machine.from_topology(spec)
+    except TopologyError as exc:
+        raise TopologyError(
+            f"{exc.message}; nor is it a library name ({', '.join(library_names())})",
+            field=exc.field,
+        ) from exc
 
 
 @app.command("list")

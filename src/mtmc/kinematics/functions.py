@@ -124,6 +124,19 @@ class ErrorFunction(ABC):
             )
         return _replace(self, c)
 
+    def __eq__(self, other: object) -> bool:
+        """Same kind of function, same settings, equal coefficients."""
+        import dataclasses
+
+        if type(self) is not type(other):
+            return NotImplemented
+        return all(
+            np.array_equal(getattr(self, f.name), getattr(other, f.name))
+            for f in dataclasses.fields(self)  # type: ignore[arg-type]
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
     def __call__(self, q: npt.ArrayLike) -> NDArray[np.float64]:
         """Evaluate at axis positions ``q`` of shape ``(M,)``; returns ``(M,)``."""
         B = self.basis(q)
@@ -137,7 +150,7 @@ def _replace(obj: Any, c: NDArray[np.float64]) -> ErrorFunction:
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ConstantFunction(ErrorFunction):
     """A constant error ``c0``.
 
@@ -160,7 +173,7 @@ class ConstantFunction(ErrorFunction):
         return np.ones((*x.shape, 1))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PolynomialFunction(ErrorFunction):
     """A plain power series ``sum_k c_k q^k``.
 
@@ -200,7 +213,7 @@ def _check_range(low: float, high: float) -> None:
         raise InputError(f"expected low < high, got low={low}, high={high}", field="low")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LegendreSeries(ErrorFunction):
     """A Legendre series over the axis travel.
 
@@ -236,7 +249,7 @@ class LegendreSeries(ErrorFunction):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ChebyshevSeries(ErrorFunction):
     """A Chebyshev series (first kind) over the axis travel.
 
@@ -272,7 +285,7 @@ class ChebyshevSeries(ErrorFunction):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class FourierSeries(ErrorFunction):
     """A Fourier series in the angle of a rotary axis.
 
@@ -311,7 +324,7 @@ class FourierSeries(ErrorFunction):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ErrorTable(ErrorFunction):
     """A measured error map, interpolated linearly between its positions.
 

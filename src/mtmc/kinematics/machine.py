@@ -286,7 +286,7 @@ def _vec3(v: npt.ArrayLike, name: str) -> _F:
     return a
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Machine:
     """A machine tool: topology, nominal offsets, and the error model around them.
 
@@ -309,6 +309,11 @@ class Machine:
         Direction of the tool axis in the tool frame (default +z).
     name : str
         A label.
+
+    Notes
+    -----
+    Machines compare by identity (they hold arrays); compare ``topology``, ``tool`` ...
+    to compare two configurations.
 
     Examples
     --------
