@@ -432,7 +432,7 @@ def test_head_head_closed_form() -> None:
     x, y, z, a, c = q.T
     R = Rotation.from_euler("xz", np.stack([a, c], axis=1))
     np.testing.assert_allclose(
-        m.tool_position(q), np.stack([x, y, z], 1) + R.apply(m.tool), atol=1e-9
+        m.tool_position(q), np.stack([x, y, z], 1) + R.apply(m.tool.copy()), atol=1e-9
     )
     np.testing.assert_allclose(m.tool_direction(q), R.apply([0.0, 0.0, 1.0]), atol=1e-12)
     np.testing.assert_allclose(m.pose(q)[:, :3, :3], R.as_matrix(), atol=1e-12)
