@@ -61,7 +61,10 @@ def test_run_table(capsys):
         .places["cx"]
         .u
     )
-    assert f"u {u:.6g}" in out
+    row = next(ln for ln in out.splitlines() if ln.startswith("│ cx "))
+    cells = [c.strip() for c in row.strip("│").split("│")]
+    assert cells == ["cx", "x", "", cells[3], f"{u:.6g}", "mm"]
+    assert "trials 1000  seed 1" in out
 
 
 def test_draw_and_export(tmp_path, capsys):

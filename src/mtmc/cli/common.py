@@ -1,19 +1,65 @@
-"""Options and helpers shared by the subcommands: error printing and JSON output."""
+"""Options and helpers shared by the subcommands: errors, JSON output, progress bars, files.
+
+Every subcommand fails the same way, through :func:`fail` (one line on stderr, exit status
+2); prints JSON through :func:`print_json` (one object on stdout); shows progress through
+:func:`progress_bar` (a Rich bar on stderr, so stdout stays clean for ``--json``); and
+writes files through :func:`write_output` (atomic, :mod:`mtmc.io`).
+"""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
+from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 import typer
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
 from mtmc.errors import MtmcError
+from mtmc.io import write_bytes_atomic, write_text_atomic
+
+#: A progress callback of the library: ``progress(done, total)`` after each block of
+#: trials; ``total`` is None while it is not known (adaptive Monte Carlo).
+ProgressFn = Callable[[int, int | None], None]
+
+#: The ``--progress/--no-progress`` option of the long-running subcommands.
+PROGRESS_OPTION: Any = typer.Option(
+    None,
+    "--progress/--no-progress",
+    help="Show a progress bar on stderr (default: when stderr is a terminal).",
+    show_default=False,
+)
 
 
 def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
-    """Print a one-line error on stderr and exit with ``code``."""
+    """Print a one-line error on stderr and stop the subcommand with status ``code``.
+
+    This is the one way a subcommand fails: :func:`mtmc.cli.main.main` returns ``code``.
+
+    Parameters
+    ----------
+    exc : exception or str
+        The error; only the first line of its text is printed, after ``mtmc: error:``.
+    code : int, default 2
+        The exit status.
+
+    Raises
+    ------
+    typer.Exit
+        Always, carrying ``code``.
+    """
     msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
     typer.echo(f"mtmc: error: {msg}", err=True)
     raise typer.Exit(code)
@@ -37,4 +83,94 @@ def print_json(obj: Any) -> None:
     sys.stdout.write(json.dumps(to_jsonable(obj), allow_nan=True) + "\n")
 
 
-__all__ = ["MtmcError", "fail", "print_json", "to_jsonable"]
+def write_output(path: Path, content: str | bytes) -> None:
+    """Write a file of the CLI atomically (:mod:`mtmc.io`), or fail with one line.
+
+    Parameters
+    ----------
+    path : Path
+        The destination; its folder must exist.
+    content : str or bytes
+        Text (written as UTF-8) or bytes.
+
+    Raises
+    ------
+    typer.Exit
+        Through :func:`fail` (status 2) when the file cannot be written; the message
+        names the file and the reason. An existing file is then left as it was.
+    """
+    try:
+        if isinstance(content, bytes):
+            write_bytes_atomic(path, content)
+        else:
+            write_text_atomic(path, content)
+    except OSError as exc:
+        fail(f"{path}: cannot write: {exc.strerror or exc}")
+
+
+def progress_wanted(flag: bool | None) -> bool:
+    """Resolve ``--progress/--no-progress``: unset means "when stderr is a terminal"."""
+    if flag is not None:
+        return flag
+    isatty = getattr(sys.stderr, "isatty", None)
+    return bool(isatty and isatty())
+
+
+@contextlib.contextmanager
+def progress_bar(
+    description: str, enabled: bool | None = None, *, console: Console | None = None
+) -> Iterator[ProgressFn | None]:
+    """A Rich progress bar on stderr, as a library progress callback.
+
+    Parameters
+    ----------
+    description : str
+        The text before the bar.
+    enabled : bool or None
+        ``True``/``False`` from ``--progress/--no-progress``; ``None``: only when stderr
+        is a terminal (:func:`progress_wanted`).
+    console : rich.console.Console, optional
+        Where to draw (default: a console on stderr). On a terminal the bar is removed
+        when done; elsewhere (stderr redirected to a file) its final state is printed once.
+
+    Yields
+    ------
+    callable or None
+        ``update(done, total)`` to pass as ``progress=`` to :func:`mtmc.monte_carlo`,
+        :func:`mtmc.graph.run_graph` or :func:`mtmc.graph.sweep_graph`; ``None`` when the
+        bar is off. A ``total`` of None shows a bar of unknown length.
+    """
+    if not progress_wanted(enabled):
+        yield None
+        return
+    con = console if console is not None else Console(stderr=True)
+    bar = Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("trials"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+        console=con,
+        transient=con.is_terminal,
+    )
+    with bar:
+        task = bar.add_task(description, total=None)
+
+        def update(done: int, total: int | None) -> None:
+            bar.update(task, completed=done, total=total)
+
+        yield update
+
+
+__all__ = [
+    "PROGRESS_OPTION",
+    "MtmcError",
+    "ProgressFn",
+    "fail",
+    "print_json",
+    "progress_bar",
+    "progress_wanted",
+    "to_jsonable",
+    "write_output",
+]

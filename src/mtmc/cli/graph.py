@@ -1,37 +1,30 @@
-"""``mtmc graph``: check, draw, run and sweep a measurement graph (seed 000).
+"""``mtmc graph``: check, draw, export, run and sweep a measurement graph (seed 000).
 
 A thin shell: it reads the file, calls :mod:`mtmc.graph` and prints. Errors print one
-line (``mtmc: error: FILE:LINE: field F: ...``) and exit with status 2.
+line (``mtmc: error: FILE:LINE: field F: ...``) and exit with status 2; files are
+written atomically (:mod:`mtmc.io`); ``run`` and ``sweep`` show a progress bar on stderr.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import NoReturn
+from typing import Any
 
+import numpy as np
 import typer
+from rich.console import Console
+from rich.table import Table
 
-from mtmc.cli.common import fail as _common_fail
-from mtmc.cli.common import print_json
+from mtmc.cli.common import PROGRESS_OPTION, fail, print_json, progress_bar, write_output
 from mtmc.errors import MtmcError
-from mtmc.graph.model import Graph
+from mtmc.graph.model import Graph, Plan
 
 app = typer.Typer(
     help="Measurement graphs (seed 000): check, draw, run, sweep.", no_args_is_help=True
 )
 
-
-def fail(exc: BaseException | str) -> NoReturn:
-    """Print one error line and exit with status 2 (as ``SystemExit``).
-
-    ``mtmc.cli.main.main`` runs the app with ``standalone_mode=False``, where click turns a
-    ``typer.Exit`` into a return value that ``main`` drops; ``SystemExit`` reaches it.
-    """
-    try:
-        _common_fail(exc)
-    except typer.Exit as stop:
-        raise SystemExit(stop.exit_code) from None
-
+#: Suffixes ``graph draw`` writes: Matplotlib formats, and Graphviz DOT text.
+DRAW_SUFFIXES = (".svg", ".png", ".pdf", ".dot")
 
 FILE = typer.Argument(..., help="Graph file: .toml, or the assertion database (.pl, .db, .facts).")
 
@@ -69,17 +62,22 @@ def draw_cmd(
 ) -> None:
     """Draw FILE: places as circles, transitions as boxes, markers as dots."""
     from mtmc.graph.draw import draw, to_dot
+    from mtmc.io import atomic_path
 
+    suffix = output.suffix.lower()
+    if suffix not in DRAW_SUFFIXES:
+        fail(f"{output}: expected a file ending in {', '.join(DRAW_SUFFIXES)}, got {suffix!r}")
     try:
         g = _read(file)
-        if output.suffix.lower() == ".dot":
-            output.write_text(to_dot(g), encoding="utf-8")
+        if suffix == ".dot":
+            write_output(output, to_dot(g))
         else:
-            draw(g, output)
+            with atomic_path(output) as tmp:
+                draw(g, tmp)
     except MtmcError as exc:
         fail(exc)
     except OSError as exc:
-        fail(f"{output}: cannot write: {exc.strerror}")
+        fail(f"{output}: cannot write: {exc.strerror or exc}")
     typer.echo(f"wrote {output}")
 
 
@@ -87,6 +85,9 @@ def draw_cmd(
 def export_cmd(
     file: Path = FILE,
     to: str = typer.Option("assertions", "--to", help="assertions, toml or dot."),
+    output: Path | None = typer.Option(
+        None, "-o", "--output", help="Write to this file (default: stdout)."
+    ),
 ) -> None:
     """Print FILE as the seed's assertion database, as TOML or as DOT."""
     from mtmc.graph.assertions import dumps_assertions
@@ -97,9 +98,14 @@ def export_cmd(
     if to not in writers:
         fail(f"--to: expected one of {', '.join(writers)}, got {to!r}")
     try:
-        typer.echo(writers[to](_read(file)), nl=False)
+        text = writers[to](_read(file))
     except MtmcError as exc:
         fail(exc)
+    if output is None:
+        typer.echo(text, nl=False)
+    else:
+        write_output(output, text)
+        typer.echo(f"wrote {output}")
 
 
 @app.command("run")
@@ -109,34 +115,122 @@ def run_cmd(
     seed: int | None = typer.Option(None, "--seed", help="Seed (default: fresh, printed)."),
     place: list[str] | None = typer.Option(None, "--place", "-p", help="Only these places."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    progress: bool | None = PROGRESS_OPTION,
 ) -> None:
-    """Run FILE by Monte Carlo and print each place's estimate and standard uncertainty."""
+    """Run FILE by Monte Carlo and print each place's estimate and standard uncertainty.
+
+    The table gives lengths in the graph's units (``units`` of the file), angles in rad;
+    ``--json`` gives the library's result as it is (mm, rad).
+    """
+    from mtmc.graph.model import check
     from mtmc.graph.run import run_graph
 
     try:
-        res = run_graph(_read(file), trials, seed, outputs=place or None)
+        plan = check(_read(file))
+        with progress_bar(f"{file.name}: Monte Carlo", progress) as bar:
+            res = run_graph(plan, trials, seed, outputs=place or None, progress=bar)
     except MtmcError as exc:
         fail(exc)
     if as_json:
         print_json(res.to_dict())
         return
-    typer.echo(f"trials {res.trials}  seed {res.seed}  (lengths mm, angles rad)")
+    g = plan.graph
+    table = Table(title=f"{file.name}: Monte Carlo over the graph (seed 000)")
+    for col, justify in (
+        ("place", "left"),
+        ("type", "left"),
+        ("part", "left"),
+        ("estimate", "right"),
+        ("u", "right"),
+        ("unit", "left"),
+    ):
+        table.add_column(col, justify=justify)  # type: ignore[arg-type]
     for name, s in res.places.items():
-        d = s.to_dict()
-        if "estimate" in d:
-            typer.echo(f"{name:>14} {s.type:<7} estimate {_fmt(d['estimate'])}  u {_fmt(d['u'])}")
-        else:
-            typer.echo(f"{name:>14} {s.type:<7}")
-            for part, v in d.items():
-                if part != "type":
-                    typer.echo(
-                        f"{'':>14} {part:<11} estimate {_fmt(v['estimate'])}  u {_fmt(v['u'])}"
-                    )
+        first = True
+        for part, _size in _parts(s.type):
+            est, u, _cov = s.part(part)
+            power = _length_power(plan, name, part)
+            scale = g.factor**power
+            table.add_row(
+                name if first else "",
+                s.type if first else "",
+                "" if part == "value" else part,
+                _fmt(np.asarray(est) / scale),
+                _fmt(np.asarray(u) / scale),
+                _unit_label(g.units, power, _is_angle(plan, name, part)),
+            )
+            first = False
+    Console().print(table)
+    typer.echo(f"trials {res.trials}  seed {res.seed}")
 
 
-def _fmt(v: object) -> str:
-    import numpy as np
+def _parts(type_: str) -> tuple[tuple[str, int], ...]:
+    from mtmc.graph.run import PARTS
 
+    return PARTS[type_]
+
+
+#: The parts of each place type that are lengths (the others are unit vectors, rotation
+#: matrices or the value of a scalar place, decided by :func:`_scalar_unit`).
+_LENGTH_PARTS = {"point", "centre", "radius", "translation"}
+
+
+def _scalar_unit(plan: Plan, name: str, seen: frozenset[str] = frozenset()) -> tuple[int, int]:
+    """The unit of the value of an x/y/z/real/vector place: (power of length, of angle).
+
+    A marked place says it (``unit``: none = a length, ``1``, ``rad``/``deg``); a produced
+    one follows its op: ``distance`` and ``vector`` give lengths, ``angle`` radians,
+    ``ratio`` the product of its inputs' units, ``middle`` and ``displace`` the unit of
+    their first input; ``meas`` and the coordinates of points are lengths.
+    """
+    type_ = plan.types[name]
+    if type_ in ("x", "y", "z", "point"):
+        return (1, 0)
+    if type_ == "unit":
+        return (0, 0)
+    place = plan.graph.place(name)
+    if name not in plan.producer or name in seen:
+        unit = place.unit if place is not None else None
+        if unit == "1":
+            return (0, 0)
+        if unit in ("rad", "deg"):
+            return (0, 1)
+        return (1, 0)
+    t = plan.graph.transition(plan.producer[name])
+    assert t is not None
+    inner = seen | {name}
+    if t.op == "angle":
+        return (0, 1)
+    if t.op in ("distance", "vector"):
+        return (1, 0)
+    if t.op == "ratio":
+        a, b = (_scalar_unit(plan, p, inner) for p in t.inputs[:2])
+        return (a[0] + b[0], a[1] + b[1])
+    if t.op in ("middle", "displace") and t.inputs:
+        return _scalar_unit(plan, t.inputs[0], inner)
+    return (1, 0)
+
+
+def _length_power(plan: Plan, name: str, part: str) -> int:
+    if part == "value":
+        return _scalar_unit(plan, name)[0]
+    return 1 if part in _LENGTH_PARTS else 0
+
+
+def _is_angle(plan: Plan, name: str, part: str) -> int:
+    return _scalar_unit(plan, name)[1] if part == "value" else 0
+
+
+def _unit_label(length_unit: str, length_power: int, angle_power: int) -> str:
+    names = []
+    if length_power:
+        names.append(length_unit + (f"^{length_power}" if length_power != 1 else ""))
+    if angle_power:
+        names.append("rad" + (f"^{angle_power}" if angle_power != 1 else ""))
+    return "·".join(names) or "1"
+
+
+def _fmt(v: Any) -> str:
     a = np.asarray(v, dtype=float)
     if a.ndim == 0:
         return f"{float(a):.6g}"
@@ -155,6 +249,7 @@ def sweep_cmd(
     csv: Path | None = typer.Option(None, "--csv", help="Write the grid as CSV here."),
     no_intercept: bool = typer.Option(False, "--no-intercept", help="Fit without c0."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Run FILE on a grid and fit the surrogate U^2 = c0 + sum c_i sigma_i^2 (seed 000 eq. 31)."""
     from mtmc.graph.sweep import parse_range, sweep
@@ -166,13 +261,15 @@ def sweep_cmd(
             if not eq:
                 fail(f"--vary: expected KEY=LOW:HIGH:N, got {item!r}")
             ranges[key.strip()] = parse_range(rng, field=key.strip())
-        res = sweep(_read(file), ranges, output, trials=trials, seed=seed)
+        g = _read(file)
+        with progress_bar(f"{file.name}: sweep", progress) as bar:
+            res = sweep(g, ranges, output, trials=trials, seed=seed, progress=bar)
         fit = res.fit(intercept=not no_intercept)
     except MtmcError as exc:
         fail(exc)
     text = res.to_csv(fit)
     if csv is not None:
-        csv.write_text(text, encoding="utf-8")
+        write_output(csv, text)
     if as_json:
         print_json(
             {

@@ -1,18 +1,17 @@
 """``mtmc kinematics``: library, machine summary, equation of motion, chain drawing.
 
 A thin shell over :mod:`mtmc.kinematics`. ``SPEC`` is a library name (``table-table``) or
-a topology string (``wCBXfYZt``, ``XFYZ``). Errors print one line and exit with status 2.
+a topology string (``wCBXfYZt``, ``XFYZ``). Errors print one line and exit with status 2;
+the drawing is written atomically (:mod:`mtmc.io`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import NoReturn
 
 import typer
 
-from mtmc.cli.common import fail as _common_fail
-from mtmc.cli.common import print_json
+from mtmc.cli.common import fail, print_json, write_output
 from mtmc.errors import MtmcError, TopologyError
 from mtmc.kinematics.machine import Machine
 
@@ -24,14 +23,6 @@ app = typer.Typer(
 SPEC = typer.Argument(
     ..., help="A library name (see `list`) or a topology string (wCBXfYZt, XFYZ)."
 )
-
-
-def fail(exc: BaseException | str) -> NoReturn:
-    """Print one error line and exit with status 2 (as ``SystemExit``, which ``main`` keeps)."""
-    try:
-        _common_fail(exc)
-    except typer.Exit as stop:
-        raise SystemExit(stop.exit_code) from None
 
 
 def _machine(spec: str) -> Machine:
@@ -135,14 +126,16 @@ def equation_cmd(
 @app.command("draw")
 def draw_cmd(
     spec: str = SPEC,
-    output: Path = typer.Option(..., "-o", "--output", help="Output SVG file."),
+    output: Path = typer.Option(..., "-o", "--output", help="Output SVG file (.svg)."),
 ) -> None:
     """Draw the kinematic chain of a machine as SVG."""
     from mtmc.kinematics.draw import draw_chain
 
+    if output.suffix.lower() != ".svg":
+        fail(f"{output}: the chain is drawn as SVG; expected a file ending in .svg")
     try:
         m = _machine(spec)
     except MtmcError as exc:
         fail(exc)
-    output.write_text(draw_chain(m), encoding="utf-8")
+    write_output(output, draw_chain(m))
     typer.echo(f"wrote {output}")

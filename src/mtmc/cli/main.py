@@ -1,4 +1,9 @@
-"""The ``mtmc`` command: parses arguments, calls the library, prints. No maths here."""
+"""The ``mtmc`` command: parses arguments, calls the library, prints. No maths here.
+
+Exit status: 0 on success; 2 on bad input, whether the subcommand found it (through
+:func:`mtmc.cli.common.fail`, one line ``mtmc: error: ...`` on stderr) or the argument
+parser did (one line naming the command, and ``--help`` for more); 130 on Ctrl-C.
+"""
 
 from __future__ import annotations
 
@@ -34,24 +39,58 @@ def _root(
     """Machine-tool Monte Carlo."""
 
 
+def _usage_error(exc: Exception) -> int | None:
+    """Print an argument-parser error (a click ``UsageError``) and return its status.
+
+    Returns None for anything that is not such an error. The check is by behaviour (an
+    ``exit_code`` and a ``format_message``), so it holds whether Typer vendors click or
+    depends on it.
+    """
+    code = getattr(exc, "exit_code", None)
+    fmt = getattr(exc, "format_message", None)
+    if not isinstance(code, int) or not callable(fmt):
+        return None
+    ctx = getattr(exc, "ctx", None)
+    if type(exc).__name__ == "NoArgsIsHelpError":  # a group called alone: its help
+        typer.echo(str(fmt()), err=True)
+        return code
+    msg = " ".join(str(fmt()).split())
+    hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+    typer.echo(f"mtmc: error: {msg}{hint}", err=True)
+    return code
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI with ``argv`` (default: ``sys.argv[1:]``) and return the exit code."""
+    """Run the CLI with ``argv`` and return the exit status.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 on success, the status given to :func:`mtmc.cli.common.fail` (2) on bad input,
+        2 on a usage error, 1 on an abort.
+    """
     try:
-        # With standalone_mode=False click returns the exit code of typer.Exit/click.Exit.
+        # standalone_mode=False: the parser raises instead of exiting, and a typer.Exit
+        # raised by a subcommand (cli.common.fail) comes back as its exit code.
         rv = app(args=argv, prog_name="mtmc", standalone_mode=False)
-    except SystemExit as exc:  # pragma: no cover - typer/click exit paths
-        return int(exc.code or 0)
     except typer.Exit as exc:
         return int(exc.exit_code)
-    except Exception as exc:  # click usage errors
-        import click
-
-        if isinstance(exc, click.exceptions.ClickException):
-            exc.show()
-            return exc.exit_code
-        if isinstance(exc, click.exceptions.Abort):
-            return 1
-        raise
+    except typer.Abort:
+        typer.echo("mtmc: aborted", err=True)
+        return 1
+    except SystemExit as exc:
+        code = exc.code
+        return code if isinstance(code, int) else (0 if code is None else 1)
+    except Exception as exc:
+        code = _usage_error(exc)
+        if code is None:
+            raise
+        return code
     return rv if isinstance(rv, int) else 0
 
 

@@ -7,13 +7,13 @@ Parses the expression and the ``-i NAME=DIST`` options, calls
 
 from __future__ import annotations
 
-from typing import Any, NoReturn
+from typing import Any
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import fail, print_json
+from mtmc.cli.common import PROGRESS_OPTION, fail, print_json, progress_bar
 from mtmc.errors import InputError, MtmcError
 from mtmc.uncertainty.distributions import Distribution, parse_distribution
 from mtmc.uncertainty.expression import Expression, expression
@@ -70,19 +70,6 @@ def parse_inputs(expr: Expression, specs: list[str]) -> dict[str, Distribution]:
     return {n: dists[n] for n in expr.names}
 
 
-def _fail(exc: BaseException) -> NoReturn:
-    """:func:`~mtmc.cli.common.fail`, re-raised as ``SystemExit``.
-
-    With ``standalone_mode=False`` (as :func:`mtmc.cli.main.main` runs the app) click
-    turns ``typer.Exit`` into a return value that ``main`` drops; ``SystemExit`` reaches
-    ``main``'s handler, so the exit status is non-zero either way.
-    """
-    try:
-        fail(exc)
-    except typer.Exit as stop:
-        raise SystemExit(stop.exit_code) from None
-
-
 def _fmt(x: float) -> str:
     return f"{x:.6g}"
 
@@ -98,6 +85,7 @@ def propagate(
     with_gum: bool = typer.Option(False, "--gum", help="Also the GUM and §8 validation."),
     p: float = typer.Option(0.95, "--p", help="Coverage probability."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Propagate input distributions through EXPR by Monte Carlo (JCGM 101)."""
     from mtmc.uncertainty.montecarlo import monte_carlo
@@ -105,7 +93,10 @@ def propagate(
     try:
         model = expression(expr)
         dists = parse_inputs(model, inputs)
-        mc = monte_carlo(model, dists, trials=trials, seed=seed, adaptive=adaptive, p=p)
+        with progress_bar("Monte Carlo", progress) as bar:
+            mc = monte_carlo(
+                model, dists, trials=trials, seed=seed, adaptive=adaptive, p=p, progress=bar
+            )
         if mc.dim != 0:
             raise InputError(
                 f"the expression gives an output of {mc.dim} components; propagate "
@@ -139,7 +130,7 @@ def propagate(
                 "passed": v.passed,
             }
     except (MtmcError, ValueError) as exc:
-        _fail(exc)
+        fail(exc)
     if as_json:
         print_json(out)
         return

@@ -510,6 +510,7 @@ def run_graph(
     keep: Iterable[str] = (),
     block_size: int = GRAPH_BLOCK_SIZE,
     normal_method: str = "default",
+    progress: Callable[[int, int | None], None] | None = None,
 ) -> GraphResult:
     """Monte Carlo over a measurement graph (JCGM 101 with seed 000's graph as the model).
 
@@ -530,6 +531,10 @@ def run_graph(
         and the speed, not the numbers.
     normal_method : {"default", "box-muller"}
         How normal numbers are made (Box-Muller as in seed 000 eq. 6).
+    progress : callable, optional
+        ``progress(done, trials)``, called after each block with the number of trials
+        done so far (increasing, the last call with ``done == trials``). It does not
+        change any number.
 
     Returns
     -------
@@ -581,6 +586,8 @@ def run_graph(
             acc[n].add(_cols(plan.types[n], vals[n], m), m)
         for n in keep_s:
             kept[n].append(vals[n])
+        if progress is not None:
+            progress(b, trials)
     places = {}
     for n in summ:
         mean, cov = acc[n].result()

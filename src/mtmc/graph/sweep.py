@@ -27,7 +27,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -317,6 +317,7 @@ def sweep(
     *,
     trials: int = 1000,
     seed: int | None | np.random.SeedSequence = None,
+    progress: Callable[[int, int | None], None] | None = None,
 ) -> SweepResult:
     """Run a graph on the grid of all combinations of the varied parameters.
 
@@ -333,6 +334,11 @@ def sweep(
         Trials per grid point (seed 000: 1000).
     seed : int, SeedSequence or None
         One seed for every grid point (common random numbers).
+    progress : callable, optional
+        ``progress(done, total)`` with ``total = n·trials`` for the ``n`` grid points,
+        called after each block of each grid point with the trials done so far over the
+        whole sweep (increasing, the last call with ``done == total``). It does not
+        change any number.
 
     Returns
     -------
@@ -361,11 +367,19 @@ def sweep(
     seed_i = resolve_seed(seed)
     grid = np.array(list(itertools.product(*axes)), dtype=np.float64).reshape(-1, len(names))
     us, est = [], []
-    for row in grid:
+    total = grid.shape[0] * int(trials)
+    for i, row in enumerate(grid):
         g = graph
         for key, val in zip(names, row, strict=True):
             g = apply_setting(g, key, float(val))
-        res = run_graph(g, trials, seed_i, outputs=[output])
+        step = None
+        if progress is not None:
+            done_before = i * int(trials)
+
+            def step(done: int, _total: int | None, _before: int = done_before) -> None:
+                progress(_before + done, total)
+
+        res = run_graph(g, trials, seed_i, outputs=[output], progress=step)
         us.append(res.places[output].u)
         est.append(res.places[output].estimate)
     return SweepResult(names, grid, np.array(us), np.array(est), output, int(trials), seed_i)

@@ -44,6 +44,10 @@ __all__ = ["adaptive_block_size", "monte_carlo"]
 
 NanPolicy = Literal["raise", "omit"]
 
+#: ``progress(done, total)``: called after each block of trials with the number of trials
+#: done so far; ``total`` is None while it is not known (adaptive runs).
+ProgressFn = Callable[[int, int | None], None]
+
 
 def adaptive_block_size(p: float) -> int:
     """Trials per block of the adaptive procedure: ``h = max(⌈100/(1 - p)⌉, 10⁴)``.
@@ -129,8 +133,11 @@ class _Runner:
     def _serial(self, span: tuple[int, int]) -> NDArray[np.float64]:
         return _evaluate(self.model, self.source.trials(*span), *span)
 
-    def run(self, start: int, stop: int) -> NDArray[np.float64]:
-        """Model values of trials ``start..stop-1``: ``(n,)`` or ``(n, d)``."""
+    def run(self, start: int, stop: int, progress: ProgressFn | None = None) -> NDArray[np.float64]:
+        """Model values of trials ``start..stop-1``: ``(n,)`` or ``(n, d)``.
+
+        ``progress(b, stop)`` is called after each block, ``b`` the end of the block.
+        """
         spans = [(a, min(a + self.block_size, stop)) for a in range(start, stop, self.block_size)]
         serial = self.workers == 1 and not hasattr(self.executor, "map")
         fn = self._serial if serial else self.job
@@ -153,6 +160,8 @@ class _Runner:
             if out is None:
                 out = np.empty((stop - start, *vals.shape[1:]))
             out[a - start : b - start] = vals
+            if progress is not None:
+                progress(b, stop)
         assert out is not None
         return out
 
@@ -197,6 +206,7 @@ def monte_carlo(
     kind: Literal["shortest", "symmetric"] = "shortest",
     max_trials: int = 10**8,
     executor: ExecutorKind | Any = "thread",
+    progress: ProgressFn | None = None,
 ) -> MonteCarloResult:
     """Propagate the input distributions through a vectorised model (JCGM 101 §7).
 
@@ -242,6 +252,12 @@ def monte_carlo(
         beyond this number of trials.
     executor : {"thread", "process"} or concurrent.futures.Executor, keyword-only
         Where the blocks run when ``workers > 1`` (or an executor used as is).
+    progress : callable, optional, keyword-only
+        ``progress(done, total)``, called in this process after each block with the
+        number of trials evaluated so far (non-decreasing). A fixed run passes
+        ``total = trials`` and ends with ``done == total``; an adaptive run passes
+        ``total = None`` after each block of ``h`` trials and, once it stops,
+        ``(n·h, n·h)``. It does not change any number.
 
     Returns
     -------
@@ -289,7 +305,7 @@ def monte_carlo(
 
     if not adaptive:
         trials = _check_int(trials, "trials", 2)
-        vals = runner.run(0, trials)
+        vals = runner.run(0, trials, progress)
         vals, omitted = _apply_nan_policy(vals, 0, nan_policy, trials)
         if vals.shape[0] < 2:
             raise InputError(
@@ -313,6 +329,7 @@ def monte_carlo(
         nan_policy=nan_policy,
         kind=kind,
         max_trials=_check_int(max_trials, "max_trials", 1),
+        progress=progress,
     )
 
 
@@ -338,6 +355,7 @@ def _adaptive(
     nan_policy: NanPolicy,
     kind: str,
     max_trials: int,
+    progress: ProgressFn | None = None,
 ) -> MonteCarloResult:
     if tolerance is not None:
         try:
@@ -388,6 +406,8 @@ def _adaptive(
                 m2 = m2 + bm2 + diff**2 * (count * bcount / tot)
                 count = tot
             nblocks = n + i + 1
+            if progress is not None:
+                progress(nblocks * h, None)
             if nblocks < 2:
                 continue
             s = np.stack(stats)  # (nblocks, 4, d)
@@ -401,6 +421,8 @@ def _adaptive(
                 )
             delta = float(deltas.min())
             if np.all(2.0 * sd <= deltas):
+                if progress is not None:
+                    progress(nblocks * h, nblocks * h)
                 samples = np.concatenate(kept, axis=0)
                 return MonteCarloResult(
                     samples=samples,
