@@ -330,6 +330,29 @@ def test_sphere_covariance_matches_monte_carlo_spread() -> None:
         assert np.all(bias <= 4 * predicted / np.sqrt(m))
 
 
+def test_sphere_covariance_mean_is_closed_form_with_unbiased_variance() -> None:
+    # For radial noise of sigma the linearised covariance of (centre, radius) is
+    # sigma^2 (J^T J)^{-1}, J with rows (-n_i, -1) (n_i the unit normal at point i), or
+    # (-n_i) with a known radius. Its estimate s^2 (J^T J)^{-1}, s^2 = sum r^2 / (n - k),
+    # is unbiased only with the divisor n - k: the mean over M trials must match the
+    # closed form within five standard errors of the mean of s^2 / sigma^2
+    # (chi^2_{n-k} / (n - k), relative standard deviation sqrt(2 / ((n - k) M))).
+    rng = _rng(17)
+    radius, sigma, m = 5.0, 1e-3, 4000
+    nominal = _seed003_patch(radius)
+    normal = nominal / radius
+    pts = nominal + rng.normal(scale=sigma, size=(m, 30, 1)) * normal
+    for kwargs, k in (({}, 4), ({"radius": radius}, 3)):
+        fit = fit_sphere(pts, **kwargs)
+        assert fit.covariance is not None and fit.dof == 30 - k
+        jac = np.column_stack([-normal, -np.ones(30)])[:, :k]
+        exact = sigma**2 * np.linalg.inv(jac.T @ jac)
+        scale = np.sqrt(np.outer(np.diag(exact), np.diag(exact)))
+        gap = np.abs(fit.covariance.mean(axis=0) - exact) / scale
+        rel_se = np.sqrt(2.0 / ((30 - k) * m))
+        assert np.all(gap <= 5 * rel_se), gap
+
+
 def test_circle_covariance_matches_monte_carlo_spread() -> None:
     rng = _rng(8)
     sigma, m = 0.01, 4000
