@@ -144,3 +144,126 @@ def test_bad_file_names_line(tmp_path, capsys):
     )
     assert main(["graph", "check", str(f)]) == 2
     assert "bad.toml:9: field op: transition t2: unknown op 'spin'" in capsys.readouterr().err
+
+
+def _units_graph(units: str, scale: float) -> str:
+    """Three probed points, their distance, a ratio, a plane and an angle, in ``units``."""
+    text = f'units = "{units}"\n[probe]\nu_axis = {0.002 * scale}\nu_probe = {0.001 * scale}\n'
+    text += 'u_perp = 0.0\n[[place]]\nname = "k"\ntype = "real"\nvalue = 2.0\nunit = "1"\n'
+    text += '[[place]]\nname = "tilt"\ntype = "real"\nvalue = 30.0\nu = 0.5\nunit = "deg"\n'
+    for i, (x, z) in enumerate([(0.0, 0.0), (100.0, 0.0), (0.0, 80.0)]):
+        text += (
+            f'[[transition]]\nname = "m{i}"\nop = "meas"\nat = [{x * scale}, 0, {z * scale}]\n'
+            f'direction = [0, 1, 0]\nout = "p{i}"\n'
+        )
+    return text + (
+        '[[transition]]\nname = "d"\nop = "distance"\nin = ["p0", "p1"]\nout = "d01"\n'
+        '[[transition]]\nname = "d2"\nop = "ratio"\nin = ["d01", "k"]\nout = "twice"\n'
+        '[[transition]]\nname = "pl"\nop = "plane"\nin = ["p0", "p1", "p2"]\nout = "pln"\n'
+    )
+
+
+def test_run_table_in_graph_units(tmp_path, capsys):
+    # the same geometry in mm and in um: the table shows the um graph in um
+    (tmp_path / "mm.toml").write_text(_units_graph("mm", 1.0))
+    (tmp_path / "um.toml").write_text(_units_graph("um", 1000.0))
+    lib = run_graph(load_graph(tmp_path / "mm.toml"), 2000, seed=3)
+    assert main(["graph", "run", str(tmp_path / "um.toml"), "-n", "2000", "--seed", "3"]) == 0
+    out = capsys.readouterr().out
+
+    def row(name):
+        line = next(ln for ln in out.splitlines() if ln.startswith(f"│ {name} "))
+        return [c.strip() for c in line.strip("│").split("│")]
+
+    d = lib.places["d01"]
+    assert row("d01") == ["d01", "real", "", f"{d.estimate * 1e3:.6g}", f"{d.u * 1e3:.6g}", "um"]
+    t = lib.places["twice"]
+    assert row("twice")[3:] == [f"{t.estimate * 1e3:.6g}", f"{t.u * 1e3:.6g}", "um"]
+    assert row("k")[3:] == ["2", "0", "1"]
+    tilt = lib.places["tilt"]
+    assert row("tilt")[3:] == [f"{tilt.estimate:.6g}", f"{tilt.u:.6g}", "rad"]
+    assert abs(tilt.estimate - np.pi / 6) < 1e-3
+    assert row("pln")[2] == "point" and row("pln")[-1] == "um"
+    normal = next(ln for ln in out.splitlines() if "│ normal " in ln)
+    assert normal.rstrip("│ ").endswith("│ 1")
+
+
+def test_progress_keeps_stdout_json(capsys):
+    args = ["graph", "run", str(EXAMPLES / "axis_c.toml"), "-n", "40000", "--seed", "2"]
+    assert main([*args, "--json", "--no-progress"]) == 0
+    quiet = capsys.readouterr()
+    assert main([*args, "--json", "--progress"]) == 0
+    loud = capsys.readouterr()
+    assert loud.out == quiet.out and json.loads(loud.out)["trials"] == 40000
+    assert quiet.err == "" and "40000/40000 trials" in loud.err
+    sweep = ["graph", "sweep", str(EXAMPLES / "ball_centre.toml"), "--output", "cx"]
+    sweep += ["--vary", "probe.u_probe=0.001:0.002:2", "-n", "300", "--seed", "1", "--json"]
+    assert main([*sweep, "--progress"]) == 0
+    loud = capsys.readouterr()
+    assert json.loads(loud.out)["trials"] == 300 and "600/600 trials" in loud.err
+
+
+def test_files_are_written_atomically(tmp_path, capsys, monkeypatch):
+    import mtmc.graph.draw as gdraw
+
+    out = tmp_path / "g.svg"
+    out.write_text("old drawing")
+
+    def broken_draw(graph, path):
+        Path(path).write_text("<svg half")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(gdraw, "draw", broken_draw)
+    assert main(["graph", "draw", str(EXAMPLES / "plane_3pt.toml"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"mtmc: error: {out}: cannot write: No space left on device\n"
+    assert out.read_text() == "old drawing"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.svg"]  # no temporary left
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["graph", "draw", "{plane}", "-o", "{tmp}/g.jpg"], "expected a file ending in .svg, .png"),
+        (["graph", "draw", "{plane}", "-o", "{tmp}/no/g.svg"], "cannot write"),
+        (["graph", "export", "{plane}", "-o", "{tmp}/no/g.pl"], "g.pl: cannot write"),
+        (
+            [
+                "graph",
+                "sweep",
+                "{ball}",
+                "--vary",
+                "probe.u_probe=0.001:0.002:2",
+                "--output",
+                "cx",
+                "-n",
+                "50",
+                "--csv",
+                "{tmp}/no/s.csv",
+            ],
+            "s.csv: cannot write",
+        ),
+    ],
+)
+def test_bad_output_files(argv, message, tmp_path, capsys):
+    subs = {
+        "{plane}": str(EXAMPLES / "plane_3pt.toml"),
+        "{ball}": str(EXAMPLES / "ball_centre.toml"),
+        "{tmp}": str(tmp_path),
+    }
+    for k, v in subs.items():
+        argv = [a.replace(k, v) for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mtmc: error:") and message in err and err.count("\n") == 1
+
+
+def test_export_to_file_equals_stdout(tmp_path, capsys):
+    f = EXAMPLES / "axis_c.toml"
+    for to in ("assertions", "toml", "dot"):
+        assert main(["graph", "export", str(f), "--to", to]) == 0
+        text = capsys.readouterr().out
+        dest = tmp_path / f"g.{to}"
+        assert main(["graph", "export", str(f), "--to", to, "-o", str(dest)]) == 0
+        assert capsys.readouterr().out == f"wrote {dest}\n"
+        assert dest.read_text() == text

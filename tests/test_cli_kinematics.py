@@ -66,3 +66,20 @@ def test_errors_are_one_line(capsys) -> None:  # type: ignore[no-untyped-def]
     assert main(["kinematics", "equation", "XFYZ", "-e", "EX0C"]) == 2
     err = capsys.readouterr().err
     assert "error EX0C refers to axis C, which machine wXfYZt does not have" in err
+
+
+def test_draw_refuses_other_formats_and_keeps_old_file(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    png = tmp_path / "chain.png"
+    assert main(["kinematics", "draw", "XFYZ", "-o", str(png)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"mtmc: error: {png}: the chain is drawn as SVG; expected a file ending in .svg\n"
+    assert not png.exists()
+    svg = tmp_path / "chain.svg"
+    svg.write_text("old")
+    assert main(["kinematics", "draw", "XYZ", "-o", str(svg)]) == 2  # bad topology
+    assert svg.read_text() == "old"
+    assert main(["kinematics", "draw", "XFYZ", "-o", str(tmp_path / "no" / "c.svg")]) == 2
+    assert "c.svg: cannot write" in capsys.readouterr().err
+    assert main(["kinematics", "draw", "XFYZ", "-o", str(svg)]) == 0
+    assert svg.read_text().lstrip().startswith("<")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chain.svg"]

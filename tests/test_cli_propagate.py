@@ -158,3 +158,14 @@ def test_errors_exit_non_zero_with_one_line(argv, fragments, capsys):
     assert len(lines) == 1 and lines[0].startswith("mtmc: error: ")
     for fragment in fragments:
         assert fragment in lines[0]
+
+
+@pytest.mark.parametrize("adaptive", [False, True])
+def test_progress_bar_on_stderr_only(adaptive, capsys):
+    argv = [*ARGS, "--json"] + (["--adaptive"] if adaptive else [])
+    code, quiet, quiet_err = _run(argv, capsys)
+    assert code == 0 and quiet_err == ""
+    code, loud, loud_err = _run([*argv, "--progress"], capsys)
+    assert code == 0 and loud == quiet
+    n = json.loads(loud)["trials"]
+    assert f"{n}/{n} trials" in loud_err and loud_err.count("\n") == 1
