@@ -168,6 +168,21 @@ def test_welch_satterthwaite_gum_h1_end_gauge():
     assert welch_satterthwaite(contrib**2, nu) == pytest.approx(hand, rel=1e-14)
 
 
+def test_welch_satterthwaite_gum_h1_combined_length_difference():
+    """JCGM 100 H.1.3.2: d = d̄ + d1 + d2 with u = 5.8, 3.9, 6.7 nm and ν = 24, 5, 8;
+    published u(d) = 9.7 nm, ν(d) = 25.6 (also asserted by suncal's
+    ``test/test_examples.py::test_GUMH1``). H.1 forms ν(d) with u(d) rounded to 9.7 nm;
+    unrounded, eq. (G.2b) gives 25.4."""
+    u = np.array([5.8, 3.9, 6.7])
+    nu = np.array([24.0, 5.0, 8.0])
+    u_d = math.sqrt(float(np.sum(u**2)))
+    assert round(u_d, 1) == 9.7
+    denom = float(np.sum(u**4 / nu))
+    assert round(9.7**4 / denom, 1) == 25.6  # as printed, from the rounded u(d)
+    assert welch_satterthwaite(u**2, nu) == pytest.approx(u_d**4 / denom, rel=1e-14)
+    assert round(welch_satterthwaite(u**2, nu), 1) == 25.4
+
+
 def test_welch_satterthwaite_edge_cases():
     assert welch_satterthwaite([1.0, 2.0], [math.inf, math.inf]) == math.inf
     assert welch_satterthwaite([1.0, 0.0], [4.0, 1.0]) == pytest.approx(4.0)
