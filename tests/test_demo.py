@@ -284,3 +284,13 @@ def test_bad_trials_is_refused_with_a_message(capsys, tmp_path):
         demo.main(["--trials", "1", "--out", str(tmp_path)])
     assert exc.value.code == 2
     assert "--trials: expected an integer >= 2, got 1" in capsys.readouterr().err
+
+
+def test_endpoint_standard_error_against_replicated_runs():
+    # the sampling error of a 2.5 % quantile, from 400 replicated runs of M = 2000 draws
+    rng = np.random.default_rng(np.random.SeedSequence(77))
+    m, reps, u = 2000, 400, 3.0
+    ends = np.quantile(rng.normal(0.0, u, (reps, m)), 0.025, axis=1)
+    predicted = demo._endpoint_std_error(u, m)
+    # the standard deviation of 400 values is known to about 1/sqrt(2 * 399) = 3.5 %
+    assert ends.std(ddof=1) == pytest.approx(predicted, rel=0.15)
