@@ -135,8 +135,11 @@ def test_bcs_origin_against_run_graph_gum_and_sweep(quick):
     _, out_text, record = quick
     r = record["sections"]["bcs-origin"]
     g = load_graph(EXAMPLES / "bcs_origin.toml")
-    res = run_graph(g, GRAPH_M, SEED, outputs=["d_ac", "p_o"])
+    res = run_graph(g, GRAPH_M, SEED, outputs=["d_ac", "p_o"], keep=["d_ac"])
     d = r["d_ac"]
+    lo, hi = res.result("d_ac").coverage_interval(0.95, kind="symmetric")
+    np.testing.assert_allclose(d["monte_carlo"]["symmetric_95_mm"], [lo, hi], rtol=1e-12)
+    assert f"[{demo._mm(lo)}, {demo._mm(hi)}]" in out_text
     assert d["monte_carlo"]["u_um"] == pytest.approx(res.places["d_ac"].u * 1e3, rel=1e-9)
     assert d["monte_carlo"]["estimate_mm"] == pytest.approx(res.places["d_ac"].estimate, rel=1e-12)
     np.testing.assert_allclose(r["points"]["p_o"]["u_um"], res.places["p_o"].u * 1e3, rtol=1e-9)

@@ -115,6 +115,18 @@ def _f4(x: float) -> str:
     return f"{x:.4g}"
 
 
+def _mm(x: float) -> str:
+    """A length in mm to 1 nm (six decimals): the resolution of the µm tables."""
+    text = f"{x:.6f}"
+    return text.lstrip("-") if float(text) == 0.0 else text
+
+
+def _unit(x: float) -> str:
+    """A component of a unit vector to 10⁻⁹ (1 nrad)."""
+    text = f"{x:.9f}"
+    return text.lstrip("-") if float(text) == 0.0 else text
+
+
 def _table(title: str, *columns: str) -> Table:
     table = Table(title=title, title_justify="left")
     for i, col in enumerate(columns):
@@ -433,7 +445,7 @@ def ball_centre(console: Console, options: DemoOptions) -> dict[str, Any]:
     for i, c in enumerate("xyz"):
         t.add_row(
             f"{c}  ({forms[i]})",
-            fmt(est[i]),
+            _mm(est[i]),
             _f4(u_mc[i] * UM),
             _f4(closed[i] * UM),
             f"{u_mc[i] / closed[i] - 1:+.2%}",
@@ -560,7 +572,7 @@ def rotary_axes(console: Console, options: DemoOptions) -> dict[str, Any]:
         for i, c in enumerate("xyz"):
             t.add_row(
                 f"location {c} / mm, u / µm",
-                fmt(r["point_mm"][i]),
+                _mm(r["point_mm"][i]),
                 _f4(r["u_point_mc_um"][i]),
                 _f4(r["u_point_gum_um"][i]),
                 f"{r['u_point_mc_um'][i] / r['u_point_gum_um'][i]:.4f}",
@@ -569,7 +581,7 @@ def rotary_axes(console: Console, options: DemoOptions) -> dict[str, Any]:
             u_g = r["u_direction_gum_urad"][i]
             t.add_row(
                 f"direction {c} / 1, u / µrad",
-                fmt(r["direction"][i]),
+                _unit(r["direction"][i]),
                 _f4(r["u_direction_mc_urad"][i]),
                 _f4(u_g),
                 f"{r['u_direction_mc_urad'][i] / u_g:.4f}" if u_g > 0 else "— (2nd order)",
@@ -716,7 +728,7 @@ def bcs_origin(console: Console, options: DemoOptions) -> dict[str, Any]:
     for name, label in (("p_o", "P_O, BCS origin on axis A"), ("p_c", "P_C, on axis C")):
         est, u, _ = res.places[name].part("value")
         points[name] = {"estimate_mm": est, "u_um": u * UM}
-        t_p.add_row(label, ", ".join(fmt(x) for x in est), ", ".join(_f4(x) for x in u * UM))
+        t_p.add_row(label, ", ".join(_mm(x) for x in est), ", ".join(_f4(x) for x in u * UM))
     console.print(t_p)
 
     t = _table(
@@ -725,14 +737,14 @@ def bcs_origin(console: Console, options: DemoOptions) -> dict[str, Any]:
         "Monte Carlo",
         "GUM (first order)",
     )
-    t.add_row("estimate / mm", fmt(mc.estimate), fmt(g.estimate))
+    t.add_row("estimate / mm", _mm(mc.estimate), _mm(g.estimate))
     t.add_row("u / µm", _f4(mc.u * UM), _f4(g.u * UM))
     t.add_row(
         "95 % interval / mm (MC: symmetric)",
-        f"[{fmt(lo_y)}, {fmt(hi_y)}]",
-        f"[{fmt(g.interval[0])}, {fmt(g.interval[1])}]",
+        f"[{_mm(lo_y)}, {_mm(hi_y)}]",
+        f"[{_mm(g.interval[0])}, {_mm(g.interval[1])}]",
     )
-    t.add_row("shortest 95 % interval / mm", f"[{fmt(lo_s)}, {fmt(hi_s)}]", "")
+    t.add_row("shortest 95 % interval / mm", f"[{_mm(lo_s)}, {_mm(hi_s)}]", "")
     t.add_row("same trials by run_graph: u / µm", _f4(res.places["d_ac"].u * UM), "")
     console.print(t)
     se_end = _endpoint_std_error(float(mc.u), mc.trials)
