@@ -297,3 +297,12 @@ def test_endpoint_standard_error_against_replicated_runs():
     predicted = demo._endpoint_std_error(u, m)
     # the standard deviation of 400 values is known to about 1/sqrt(2 * 399) = 3.5 %
     assert ends.std(ddof=1) == pytest.approx(predicted, rel=0.15)
+
+
+def test_out_that_is_a_file_is_refused_with_a_message(capsys, tmp_path):
+    f = tmp_path / "results"
+    f.write_text("not a folder")
+    with pytest.raises(SystemExit) as exc:
+        demo.main(["--quick", "--out", str(f)])
+    assert exc.value.code == 2
+    assert f"--out: expected a folder, but {f} is a file" in capsys.readouterr().err

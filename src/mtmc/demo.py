@@ -1155,7 +1155,12 @@ def main(argv: Sequence[str] | None = None, console: Any = None) -> int:
     if args.trials is not None:
         trials = graph_trials = args.trials
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        parser.error(f"--out: expected a folder, but {out} is a file")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        parser.error(f"--out: cannot create the folder {out}: {exc.strerror}")
     options = DemoOptions(trials=trials, graph_trials=graph_trials, seed=args.seed, out=out)
     if console is None:
         console = Console()
