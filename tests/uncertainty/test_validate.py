@@ -52,6 +52,29 @@ def test_validation_by_hand_rectangular_output_fails():
     assert v1.delta == 50.0 and not v1.passed
 
 
+def test_one_endpoint_off_is_enough_to_fail():
+    """JCGM 101 §8.2: the GUF is validated only if *both* d_low and d_high are <= δ.
+    Values at the normal quantiles of N(0, 1) with the upper half stretched by 1.1: the
+    lower endpoint agrees with the GUM's y - U (d_low ≈ 0), the upper one is off by
+    0.1 × 1.95996 ≈ 0.196 > δ = 0.05 (u = 1.0 = 10 × 10⁻¹)."""
+    m = 40_000
+    x = _normal_quantile_samples(0.0, 1.0, m)
+    x = np.where(x > 0, 1.1 * x, x)
+    mc = MonteCarloResult.from_samples(x, seed=None)
+    g = gum(expression("x"), {"x": Normal(0.0, 1.0)})
+    v = validate(g, mc)
+    z = stats.norm.ppf(0.975)
+    sorted_values = np.sort(x)
+    assert v.d_low == pytest.approx(abs(-z - sorted_values[999]), rel=1e-12)
+    assert v.d_high == pytest.approx(abs(z - sorted_values[38_999]), rel=1e-12)
+    assert v.delta == 0.05 and v.d_low <= v.delta < v.d_high
+    assert abs(v.d_high - 0.1 * z) <= 0.002
+    assert not v.passed
+    # and mirrored: the lower endpoint off, the upper one right
+    mirrored = validate(g, MonteCarloResult.from_samples(-x, seed=None))
+    assert mirrored.d_high <= mirrored.delta < mirrored.d_low and not mirrored.passed
+
+
 def test_other_p_recomputes_k_and_shortest_kind():
     mu, sigma, m = 0.0, 1.0, 100_000
     mc = MonteCarloResult.from_samples(_normal_quantile_samples(mu, sigma, m), seed=None)
