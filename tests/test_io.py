@@ -28,3 +28,12 @@ def test_temporary_keeps_the_suffix_for_format_sniffing_writers(tmp_path):
 def test_missing_folder_is_a_clear_error(tmp_path):
     with pytest.raises(FileNotFoundError, match="does not exist"):
         write_text_atomic(tmp_path / "nope" / "a.txt", "x")
+
+
+def test_file_mode_is_that_of_a_plain_open(tmp_path):
+    import os
+
+    plain = tmp_path / "plain.txt"
+    plain.write_text("x")
+    atomic = write_text_atomic(tmp_path / "atomic.txt", "x")
+    assert os.stat(atomic).st_mode == os.stat(plain).st_mode
