@@ -136,15 +136,11 @@ def run_cmd(
         return
     g = plan.graph
     table = Table(title=f"{file.name}: Monte Carlo over the graph (seed 000)")
-    for col, justify in (
-        ("place", "left"),
-        ("type", "left"),
-        ("part", "left"),
-        ("estimate", "right"),
-        ("u", "right"),
-        ("unit", "left"),
-    ):
-        table.add_column(col, justify=justify)  # type: ignore[arg-type]
+    for col in ("place", "type", "part"):
+        table.add_column(col)
+    table.add_column("estimate", justify="right")
+    table.add_column("u", justify="right")
+    table.add_column("unit")
     for name, s in res.places.items():
         first = True
         for part, _size in _parts(s.type):
