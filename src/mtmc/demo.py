@@ -99,7 +99,7 @@ class DemoOptions:
     """
 
     trials: int = 10**6
-    graph_trials: int = 10**5
+    graph_trials: int = 10**6
     sweep_trials: int = 1000
     seed: int = 101
     out: Path | None = None
@@ -1126,7 +1126,7 @@ def main(argv: Sequence[str] | None = None, console: Any = None) -> int:
     argv : sequence of str, optional
         ``[--trials N] [--seed S] [--out DIR] [--quick] [--section NAME]`` (default:
         ``sys.argv[1:]``). ``--trials`` sets the trials of every section (default 10⁶
-        for the mass calibration, 10⁵ for the others); ``--quick`` runs 2·10⁴ and 10⁴.
+        for the mass calibration, 10⁶ for the others too); ``--quick`` runs 2·10⁴ and 10⁴.
     console : rich.console.Console, optional
         Where to print (default: standard output).
 
@@ -1151,7 +1151,7 @@ def main(argv: Sequence[str] | None = None, console: Any = None) -> int:
     args = parser.parse_args(argv)
     if args.trials is not None and args.trials < 2:
         parser.error(f"--trials: expected an integer >= 2, got {args.trials}")
-    trials, graph_trials = (20_000, 10_000) if args.quick else (10**6, 10**5)
+    trials, graph_trials = (20_000, 10_000) if args.quick else (10**6, 10**6)
     if args.trials is not None:
         trials = graph_trials = args.trials
     out = Path(args.out)
