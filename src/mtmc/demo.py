@@ -1126,7 +1126,7 @@ def main(argv: Sequence[str] | None = None, console: Any = None) -> int:
     argv : sequence of str, optional
         ``[--trials N] [--seed S] [--out DIR] [--quick] [--section NAME]`` (default:
         ``sys.argv[1:]``). ``--trials`` sets the trials of every section (default 10⁶
-        for the mass calibration, 10⁶ for the others too); ``--quick`` runs 2·10⁴ and 10⁴.
+        for each); ``--quick`` runs 2·10⁴ and 10⁴.
     console : rich.console.Console, optional
         Where to print (default: standard output).
 
