@@ -131,3 +131,19 @@ def test_progress_wanted_follows_stderr(monkeypatch):
     assert progress_wanted(None) is False
     monkeypatch.setattr("sys.stderr", Tty())
     assert progress_wanted(None) is True
+
+
+def test_sweep_with_several_blocks_per_grid_point():
+    from mtmc.graph.run import GRAPH_BLOCK_SIZE
+
+    g = load_graph(EXAMPLES / "ball_centre.toml")
+    trials = GRAPH_BLOCK_SIZE + 100
+    rec = Recorder()
+    res = sweep_graph(
+        g, {"probe.u_axis": [0.001, 0.002]}, "cz", trials=trials, seed=8, progress=rec
+    )
+    plain = sweep_graph(g, {"probe.u_axis": [0.001, 0.002]}, "cz", trials=trials, seed=8)
+    np.testing.assert_array_equal(res.u, plain.u)
+    ends = [GRAPH_BLOCK_SIZE, trials]
+    assert rec.done == [*ends, *(trials + e for e in ends)]
+    assert {t for _, t in rec.calls} == {2 * trials}
