@@ -152,8 +152,13 @@ def test_exact_circle_recovered(seed: int, n: int) -> None:
     R = _rotations(rng, m)
     centre = rng.normal(scale=100, size=(m, 3))
     radius = rng.uniform(1, 50, size=m)
-    angle = rng.uniform(0, 2 * np.pi, size=(m, 1)) + np.sort(
-        rng.uniform(0, 2.5, size=(m, n)), axis=1
+    # arcs of up to 2.5 rad with the points at least 0.01 rad apart (uniform draws
+    # alone can put two of three points 1e-5 rad apart: a degenerate triangle, rightly
+    # refused by the collinearity test l2 <= RTOL l3)
+    angle = (
+        rng.uniform(0, 2 * np.pi, size=(m, 1))
+        + np.sort(rng.uniform(0, 2.5 - 0.01 * n, size=(m, n)), axis=1)
+        + 0.01 * np.arange(n)
     )
     local = np.stack([np.cos(angle), np.sin(angle), np.zeros_like(angle)], axis=2)
     pts = centre[:, None, :] + radius[:, None, None] * np.einsum("mij,mnj->mni", R, local)

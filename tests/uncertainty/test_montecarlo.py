@@ -217,16 +217,30 @@ def test_jcgm101_9_2_additive_rectangular():
 
 
 def test_jcgm101_9_3_mass_calibration():
-    # JCGM 101 §9.3 Table 8 (MCM, M = 10^6): δm = 1.2341 mg, u = 0.0754 mg,
-    # shortest 95 % interval [1.0834, 1.3825] mg
+    """JCGM 101 §9.3 against its exact output moments and interval length.
+
+    δm = M (1 + AB) - 10⁵ with M ~ N(100 001.234, 0.050² + 0.020²), A = ρ_a - 1.2,
+    B = 1/ρ_W - 1/ρ_R: E = 1.234 mg exactly (E[A] = 0) and
+    Var = σ² (1 + E[A²]E[B²]) + μ² E[A²]E[B²] (u = 0.075480 mg; published MCM:
+    1.2341 mg, 0.0754 mg from 10⁶ trials). The exact shortest 95 % interval,
+    [1.084433, 1.383567] mg (length 0.299133 mg, PDF g = 0.73915 mg⁻¹ at both ends), is
+    computed by quadrature in ``test_jcgm101_clause9._mass_exact``. The length of a
+    shortest interval varies like the difference of the quantiles at 0.025 and 0.975:
+    standard error √(2 × 0.025 × 0.95 / M) / g. Its location is checked there."""
     r = monte_carlo(mass_calibration, MASS_INPUTS, M, seed=930)
-    u_pub = 0.0754
-    assert abs(r.estimate - 1.2341) <= 5 * u_pub / math.sqrt(M) + 5e-5
-    assert abs(r.u - u_pub) <= 5 * u_pub / math.sqrt(2 * M) + 5e-5
+    mu, var_m = 100_001.234, 0.050**2 + 0.020**2
+    e_w, e_w2 = math.log(9 / 7) / 2000, (1 / 7000 - 1 / 9000) / 2000
+    e_r, e_r2 = math.log(8050 / 7950) / 100, (1 / 7950 - 1 / 8050) / 100
+    e_ab2 = 0.1**2 / 3 * (e_w2 - 2 * e_w * e_r + e_r2)
+    u = math.sqrt(var_m * (1 + e_ab2) + mu**2 * e_ab2)
+    assert u == pytest.approx(0.075480, abs=5e-7)
+    assert abs(r.estimate - 1.234) <= 5 * u / math.sqrt(M)
+    assert abs(r.u - u) <= 5 * u / math.sqrt(2 * M)
     lo, hi = r.coverage_interval(0.95, "shortest")
-    assert abs(lo - 1.0834) <= 0.003 and abs(hi - 1.3825) <= 0.003
+    se_len = math.sqrt(2 * 0.025 * 0.95 / M) / 0.73915
+    assert abs((hi - lo) - 0.299133) <= 5 * se_len
     # two significant digits of u agree with the published value: the §7.9.2 tolerance
-    assert abs(r.u - u_pub) <= numerical_tolerance(u_pub)
+    assert abs(r.u - 0.0754) <= numerical_tolerance(0.0754)
 
 
 def test_given_executor_gives_identical_numbers():
