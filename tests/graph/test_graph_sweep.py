@@ -77,7 +77,8 @@ def test_surrogate_coefficient_matches_the_closed_form():
         seed=3,
     )
     fit = res.fit()
-    # every grid point runs with the same seed, so u(cx)² = K (u1² + u2² + u3²)/2
+    # every grid point runs with the same seed and the probe draws each coordinate of an
+    # axis-aligned probing as one normal (mtmc.graph.probe), so u(cx)² = K (u1² + u2² + u3²)/2
     # with one sample factor K = s²/σ² for the whole grid (u3 = u_perp = 0.0005 mm is not
     # swept: c0 = K u3²/2): the surrogate is exact, its coefficients are equal, and each
     # is K/2 with K within five relative standard errors of a sample variance,
