@@ -61,10 +61,20 @@ def _sphere_points(
     radius: np.ndarray,
     centre: np.ndarray,
 ) -> np.ndarray:
-    """Points on a spherical cap of the given half angle, in random orientations."""
+    """Points on a spherical cap of the given half angle, in random orientations.
+
+    The first four are the pole and three points 120° apart on the rim (or on the
+    equator for caps wider than a hemisphere): a tetrahedron, never coplanar; the others
+    are uniform on the cap. Four uniform points alone are
+    sometimes coplanar to 1e-11 (e.g. seed 2325), which the fit rightly refuses.
+    """
     cos_t = rng.uniform(np.cos(half_angle), 1.0, size=(m, n))
-    sin_t = np.sqrt(1 - cos_t**2)
     phi = rng.uniform(0, 2 * np.pi, size=(m, n))
+    if n >= 4:
+        cos_t[:, 0] = 1.0
+        cos_t[:, 1:4] = np.cos(min(half_angle, np.pi / 2))  # on the cap, never the antipode
+        phi[:, 1:4] = phi[:, 1:2] + np.array([0.0, 2.0, 4.0]) * np.pi / 3
+    sin_t = np.sqrt(1 - cos_t**2)
     local = np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), cos_t], axis=2)
     return centre[:, None, :] + radius[:, None, None] * np.einsum(
         "mij,mnj->mni", _rotations(rng, m), local
