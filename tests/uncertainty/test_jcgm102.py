@@ -10,7 +10,7 @@ Two checks of a two-output model:
   ``Z = X1 + i X2`` with ``X ~ N((x1, 0), u² [[1, r], [r, 1]])``, ``u = 0.010``. The
   Monte Carlo results are checked against the exact moments of that output, computed in
   the test by quadrature of the density of the angle of a bivariate normal (closed form
-  in the radius, see ``_polar_moment``), and against the published values of JCGM 102
+  in the radius, see ``_polar_moments``), and against the published values of JCGM 102
   Tables 6-7 as quoted in suncal's ``test/test_examples.py::test_GUMSUP2``.
 """
 
@@ -133,8 +133,8 @@ def test_jcgm102_magnitude_and_phase(x1, r, mag, u_mag, ph, u_ph, gu_mag, gu_ph)
         assert sd_r == pytest.approx(rice.std(), rel=1e-8)
         assert e_t == pytest.approx(0.0, abs=1e-12)
 
-    # Monte Carlo against the exact moments: 5 standard errors (the error of a standard
-    # deviation from the sample fourth moment, bounded here by that of the values).
+    # Monte Carlo against the exact moments: 5 standard errors (that of a standard
+    # deviation from the sample fourth moment).
     y, s = mc.samples[:, 0], mc.samples[:, 1]
     for vals, est, unc, exact_mean, exact_sd in (
         (y, mc.estimate[0], mc.u[0], e_r, sd_r),
@@ -162,7 +162,7 @@ def test_jcgm102_magnitude_and_phase(x1, r, mag, u_mag, ph, u_ph, gu_mag, gu_ph)
     np.testing.assert_allclose(g.u, [u, u / x1], rtol=1e-4)
 
 
-def test_ellipse_of_published_size_from_values():
+def test_ellipse_scale_from_values_of_a_known_region():
     """JCGM 102 §7.7.2 on values whose region is known: the 2-D standard normal scaled
     by diag(2, 3); k_p² = -2 ln(1 - p) and the semi-axes 2k, 3k."""
     rng = np.random.default_rng(np.random.SeedSequence(7702))
