@@ -306,3 +306,22 @@ def test_out_that_is_a_file_is_refused_with_a_message(capsys, tmp_path):
         demo.main(["--quick", "--out", str(f)])
     assert exc.value.code == 2
     assert f"--out: expected a folder, but {f} is a file" in capsys.readouterr().err
+
+
+def test_five_axis_names_exactly_the_rows_failing_beyond_noise(capsys, tmp_path):
+    """The verdict line lists the rows whose d exceeds δ by more than 3 endpoint errors."""
+    argv = ["--seed", "101", "--out", str(tmp_path), "--section", "five-axis"]
+    assert demo.main(argv) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    rows = json.loads((tmp_path / "results.json").read_text(encoding="utf-8"))["sections"][
+        "five-axis"
+    ]["rows"]
+    firm = [
+        f"pose {r['pose']} {r['coordinate']}"
+        for r in rows
+        if max(r["d_low_um"], r["d_high_um"]) > r["delta_um"] + 3 * r["endpoint_std_error_um"]
+    ]
+    # With rectangular errors dominating its x coordinate, pose 1 has k_MC well below 1.96.
+    assert "pose 1 x" in firm
+    assert all(not r["validated"] for r in rows if f"pose {r['pose']} {r['coordinate']}" in firm)
+    assert f"(d > δ + 3 σ(end)): {', '.join(firm)}:" in out

@@ -763,7 +763,7 @@ def bcs_origin(console: Console, options: DemoOptions) -> dict[str, Any]:
         + (
             "; here it is."
             if firm
-            else f": at M = {mc.trials} it is not (run with more trials, e.g. --trials 1000000)."
+            else f": at M = {mc.trials} it is not (run with more trials, --trials N)."
         )
     )
 
@@ -1085,8 +1085,20 @@ def five_axis(console: Console, options: DemoOptions) -> dict[str, Any]:
         "of the §8 validation takes sensitivities of the same model by differentiation, "
         "which equal the Jacobian's. σ(end) is the sampling error of a Monte Carlo interval "
         "endpoint: where it is not small beside δ, a 'no' may be Monte Carlo noise (run "
-        "with --trials 1000000)."
+        "with more trials, --trials N)."
     )
+    firm = [
+        f"pose {r['pose']} {r['coordinate']}"
+        for r in rows
+        if not r["validated"]
+        and max(r["d_low_um"], r["d_high_um"]) > r["delta_um"] + 3.0 * r["endpoint_std_error_um"]
+    ]
+    if firm:
+        console.print(
+            "Not validated beyond Monte Carlo noise (d > δ + 3 σ(end)): "
+            + ", ".join(firm)
+            + ": there the GUM's normal interval misses the output PDF."
+        )
     drawing = None
     if options.out is not None:
         write_text_atomic(options.out / "machine.svg", draw_chain(machine))
