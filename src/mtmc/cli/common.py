@@ -11,7 +11,7 @@ from __future__ import annotations
 import contextlib
 import json
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -29,10 +29,7 @@ from rich.progress import (
 
 from mtmc.errors import MtmcError
 from mtmc.io import write_bytes_atomic, write_text_atomic
-
-#: A progress callback of the library: ``progress(done, total)`` after each block of
-#: trials; ``total`` is None while it is not known (adaptive Monte Carlo).
-ProgressFn = Callable[[int, int | None], None]
+from mtmc.uncertainty.montecarlo import ProgressFn
 
 #: The ``--progress/--no-progress`` option of the long-running subcommands.
 PROGRESS_OPTION: Any = typer.Option(

@@ -17,7 +17,8 @@ from rich.table import Table
 
 from mtmc.cli.common import PROGRESS_OPTION, fail, print_json, progress_bar, write_output
 from mtmc.errors import MtmcError
-from mtmc.graph.model import Graph, Plan
+from mtmc.graph.model import Graph
+from mtmc.graph.units import place_dimension
 
 app = typer.Typer(
     help="Measurement graphs (seed 000): check, draw, run, sweep.", no_args_is_help=True
@@ -145,7 +146,7 @@ def run_cmd(
         first = True
         for part, _size in _parts(s.type):
             est, u, _cov = s.part(part)
-            power = _length_power(plan, name, part)
+            power, angle = place_dimension(plan, name, part)
             scale = g.factor**power
             table.add_row(
                 name if first else "",
@@ -153,7 +154,7 @@ def run_cmd(
                 "" if part == "value" else part,
                 _fmt(np.asarray(est) / scale),
                 _fmt(np.asarray(u) / scale),
-                _unit_label(g.units, power, _is_angle(plan, name, part)),
+                _unit_label(g.units, power, angle),
             )
             first = False
     Console().print(table)
@@ -164,57 +165,6 @@ def _parts(type_: str) -> tuple[tuple[str, int], ...]:
     from mtmc.graph.run import PARTS
 
     return PARTS[type_]
-
-
-#: The parts of each place type that are lengths (the others are unit vectors, rotation
-#: matrices or the value of a scalar place, decided by :func:`_scalar_unit`).
-_LENGTH_PARTS = {"point", "centre", "radius", "translation"}
-
-
-def _scalar_unit(plan: Plan, name: str, seen: frozenset[str] = frozenset()) -> tuple[int, int]:
-    """The unit of the value of an x/y/z/real/vector place: (power of length, of angle).
-
-    A marked place says it (``unit``: none = a length, ``1``, ``rad``/``deg``); a produced
-    one follows its op: ``distance`` and ``vector`` give lengths, ``angle`` radians,
-    ``ratio`` the product of its inputs' units, ``middle`` and ``displace`` the unit of
-    their first input; ``meas`` and the coordinates of points are lengths.
-    """
-    type_ = plan.types[name]
-    if type_ in ("x", "y", "z", "point"):
-        return (1, 0)
-    if type_ == "unit":
-        return (0, 0)
-    place = plan.graph.place(name)
-    if name not in plan.producer or name in seen:
-        unit = place.unit if place is not None else None
-        if unit == "1":
-            return (0, 0)
-        if unit in ("rad", "deg"):
-            return (0, 1)
-        return (1, 0)
-    t = plan.graph.transition(plan.producer[name])
-    assert t is not None
-    inner = seen | {name}
-    if t.op == "angle":
-        return (0, 1)
-    if t.op in ("distance", "vector"):
-        return (1, 0)
-    if t.op == "ratio":
-        a, b = (_scalar_unit(plan, p, inner) for p in t.inputs[:2])
-        return (a[0] + b[0], a[1] + b[1])
-    if t.op in ("middle", "displace") and t.inputs:
-        return _scalar_unit(plan, t.inputs[0], inner)
-    return (1, 0)
-
-
-def _length_power(plan: Plan, name: str, part: str) -> int:
-    if part == "value":
-        return _scalar_unit(plan, name)[0]
-    return 1 if part in _LENGTH_PARTS else 0
-
-
-def _is_angle(plan: Plan, name: str, part: str) -> int:
-    return _scalar_unit(plan, name)[1] if part == "value" else 0
 
 
 def _unit_label(length_unit: str, length_power: int, angle_power: int) -> str:

@@ -27,6 +27,7 @@ from mtmc.graph.toml_format import dump as dump_graph
 from mtmc.graph.toml_format import dumps as dumps_graph
 from mtmc.graph.toml_format import load as load_graph
 from mtmc.graph.toml_format import loads as loads_graph
+from mtmc.graph.units import place_dimension
 
 __all__: list[str] = [
     "Graph",
@@ -55,4 +56,5 @@ __all__: list[str] = [
     "fit_surrogate",
     "SweepResult",
     "Surrogate",
+    "place_dimension",
 ]

@@ -1,0 +1,89 @@
+"""The physical dimension of each part of a place: a length, an angle, or a number.
+
+A graph file states its length unit once (``units = "mm"`` or ``"um"``) and marked real
+places may say ``unit = "1"``, ``"rad"`` or ``"deg"``; the dimension of a produced place
+follows from the op that produces it. Reports and the CLI use this to print every value
+in the file's unit, and the library's results stay in mm and rad.
+"""
+
+from __future__ import annotations
+
+from mtmc.graph.model import Plan
+
+__all__ = ["place_dimension"]
+
+#: The parts of each place type that are lengths (the others are unit vectors, rotation
+#: matrices, or the value of a scalar place, whose dimension follows its producer).
+_LENGTH_PARTS = frozenset({"point", "centre", "radius", "translation"})
+
+
+def _scalar_dimension(plan: Plan, name: str, seen: frozenset[str] = frozenset()) -> tuple[int, int]:
+    """Dimension of the value of an x/y/z/real/vector place: (power of length, of angle).
+
+    A marked place says it (``unit``: none = a length, ``1``, ``rad``/``deg``); a produced
+    one follows its op: ``distance`` and ``vector`` give lengths, ``angle`` radians,
+    ``ratio`` the product of its inputs' dimensions, ``middle`` and ``displace`` the
+    dimension of their first input; ``meas`` and the coordinates of points are lengths.
+    """
+    type_ = plan.types[name]
+    if type_ in ("x", "y", "z", "point"):
+        return (1, 0)
+    if type_ == "unit":
+        return (0, 0)
+    place = plan.graph.place(name)
+    if name not in plan.producer or name in seen:
+        unit = place.unit if place is not None else None
+        if unit == "1":
+            return (0, 0)
+        if unit in ("rad", "deg"):
+            return (0, 1)
+        return (1, 0)
+    t = plan.graph.transition(plan.producer[name])
+    assert t is not None
+    inner = seen | {name}
+    if t.op == "angle":
+        return (0, 1)
+    if t.op in ("distance", "vector"):
+        return (1, 0)
+    if t.op == "ratio":
+        a, b = (_scalar_dimension(plan, p, inner) for p in t.inputs[:2])
+        return (a[0] + b[0], a[1] + b[1])
+    if t.op in ("middle", "displace") and t.inputs:
+        return _scalar_dimension(plan, t.inputs[0], inner)
+    return (1, 0)
+
+
+def place_dimension(plan: Plan, name: str, part: str = "value") -> tuple[int, int]:
+    """The dimension of one part of a place, as (power of length, power of angle).
+
+    Parameters
+    ----------
+    plan : Plan
+        A checked graph (:func:`mtmc.graph.model.check`).
+    name : str
+        The place.
+    part : str
+        ``"value"`` for x/y/z/real/vector/unit places, else a part of a compound place
+        (``"point"``, ``"direction"``, ``"normal"``, ``"centre"``, ``"radius"``,
+        ``"rotation"``, ``"translation"``).
+
+    Returns
+    -------
+    tuple of int
+        ``(1, 0)`` a length, ``(0, 1)`` an angle, ``(0, 0)`` a number (a unit vector's
+        components), ``(2, 0)`` an area (a ratio of two lengths' product), and so on.
+
+    Examples
+    --------
+    >>> from mtmc.graph.places import Place, Transition
+    >>> from mtmc.graph.model import Graph, check
+    >>> g = Graph(
+    ...     places=(Place("a", "point", [0, 0, 0]), Place("b", "point", [1, 0, 0])),
+    ...     transitions=(Transition("t", "distance", ("a", "b"), "d"),),
+    ... )
+    >>> place_dimension(check(g), "d"), place_dimension(check(g), "a", "value")
+    ((1, 0), (1, 0))
+    """
+    if part == "value":
+        return _scalar_dimension(plan, name)
+    return (1 if part in _LENGTH_PARTS else 0, 0)

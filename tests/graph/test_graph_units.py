@@ -1,0 +1,96 @@
+"""place_dimension: the dimension of each place, worked out by hand for small graphs."""
+
+from mtmc.graph.model import check
+from mtmc.graph.toml_format import loads
+from mtmc.graph.units import place_dimension
+
+TEXT = """
+title = "dimensions"
+[[place]]
+name = "a"
+type = "point"
+value = [0, 0, 0]
+[[place]]
+name = "b"
+type = "point"
+value = [3, 4, 0]
+[[place]]
+name = "c"
+type = "point"
+value = [0, 5, 0]
+[[place]]
+name = "k"
+type = "real"
+value = 2.0
+unit = "1"
+[[place]]
+name = "phi"
+type = "real"
+value = 30.0
+unit = "deg"
+[[transition]]
+name = "t_ab"
+op = "vector"
+in = ["a", "b"]
+out = "ab"
+[[transition]]
+name = "t_ac"
+op = "vector"
+in = ["a", "c"]
+out = "ac"
+[[transition]]
+name = "t_d"
+op = "distance"
+in = ["a", "b"]
+out = "d"
+[[transition]]
+name = "t_dd"
+op = "ratio"
+in = ["d", "d"]
+out = "area"
+[[transition]]
+name = "t_dk"
+op = "ratio"
+in = ["d", "k"]
+out = "twice_d"
+[[transition]]
+name = "t_ang"
+op = "angle"
+in = ["ab", "ac"]
+out = "theta"
+[[transition]]
+name = "t_sum"
+op = "displace"
+in = ["phi", "theta"]
+out = "phi_plus"
+[[transition]]
+name = "t_u"
+op = "unit_v"
+in = ["ab"]
+out = "u_ab"
+[[transition]]
+name = "t_line"
+op = "aline"
+in = ["a", "u_ab"]
+out = "l"
+"""
+
+
+def test_dimensions_follow_the_ops():
+    plan = check(loads(TEXT))
+    expected = {
+        ("a", "value"): (1, 0),  # a point: coordinates are lengths
+        ("ab", "value"): (1, 0),  # vector b - a
+        ("d", "value"): (1, 0),  # distance
+        ("area", "value"): (2, 0),  # length x length
+        ("twice_d", "value"): (1, 0),  # length x number
+        ("k", "value"): (0, 0),  # declared unit = "1"
+        ("phi", "value"): (0, 1),  # declared in degrees: an angle
+        ("theta", "value"): (0, 1),  # angle op
+        ("phi_plus", "value"): (0, 1),  # displace keeps its first input's dimension
+        ("u_ab", "value"): (0, 0),  # unit vector: numbers
+        ("l", "point"): (1, 0),
+        ("l", "direction"): (0, 0),
+    }
+    got = {key: place_dimension(plan, *key) for key in expected}
+    assert got == expected
