@@ -60,6 +60,7 @@ from mtmc.geometry._checks import (
     check_vectors,
     degenerate,
 )
+from mtmc.geometry._vec import cross as _cross
 from mtmc.geometry.primitives import Circle, Index, Line, Plane, Sphere, _index
 
 __all__ = ["FitResult", "fit_circle", "fit_line", "fit_plane", "fit_sphere"]
@@ -167,14 +168,6 @@ def _scatter(
     S = np.matmul(X.transpose(0, 2, 1), X)
     w, V = np.linalg.eigh(S)
     return c, X, w, V
-
-
-def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return out
 
 
 def _plane_axes(

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 from mtmc.errors import DegenerateGeometryError, GraphError
 from mtmc.geometry import constructions as gc
 from mtmc.geometry import fits
+from mtmc.geometry._vec import cross as _cross
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 
 __all__ = [
@@ -494,16 +495,6 @@ def _frame(plane: Plane, line: Line, p: Any) -> Any:
 
 # --------------------------------------------------------------------------------------
 # axis: seed 000 eqs. 8-19
-
-
-def _cross(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``u × v`` row by row (faster than ``np.cross`` on ``(M, 3)``)."""
-    u, v = np.broadcast_arrays(u, v)
-    n = np.empty(u.shape)
-    n[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
-    n[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
-    n[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
-    return n
 
 
 def _sq(v: NDArray[np.float64]) -> NDArray[np.float64]:
