@@ -95,7 +95,13 @@ def propagate(
         dists = parse_inputs(model, inputs)
         with progress_bar("Monte Carlo", progress) as bar:
             mc = monte_carlo(
-                model, dists, trials=trials, seed=seed, adaptive=adaptive, p=p, progress=bar
+                model,
+                dists,
+                trials=None if adaptive else trials,
+                seed=seed,
+                adaptive=adaptive,
+                p=p,
+                progress=bar,
             )
         if mc.dim != 0:
             raise InputError(

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -29,11 +30,21 @@ from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 from mtmc.graph import probe as _probe
 from mtmc.graph.model import Graph, Plan, check
 from mtmc.graph.places import Place
-from mtmc.uncertainty.distributions import Distribution, Normal, parse_distribution
-from mtmc.uncertainty.sampling import iter_blocks, resolve_seed
+from mtmc.parallel import ExecutorKind
+from mtmc.uncertainty.distributions import (
+    Constant,
+    Distribution,
+    Normal,
+    NormalMethod,
+    parse_distribution,
+)
+from mtmc.uncertainty.montecarlo import NanPolicy, monte_carlo
+from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = [
     "GRAPH_BLOCK_SIZE",
+    "GraphModel",
+    "unflatten",
     "PlaceSummary",
     "GraphResult",
     "random_inputs",
@@ -122,7 +133,7 @@ def _rows(cols: list[Any], m: int) -> NDArray[np.float64]:
 
 @dataclass(frozen=True)
 class PlaceSummary:
-    """Estimate and covariance of one place over a run.
+    """Estimate and covariance of one place over a run, by the place's named parts.
 
     Parameters
     ----------
@@ -130,16 +141,24 @@ class PlaceSummary:
         The place.
     type : str
         Its type.
-    mean : ndarray, shape (k,)
-        Mean of the components (layout of :func:`flatten`), mm / rad.
-    cov : ndarray, shape (k, k)
-        Their covariance (divisor ``M - 1``, seed 000 eq. 5).
+    result : MonteCarloResult
+        The engine's result for the place's components, flattened in the layout of
+        :data:`PARTS` (:func:`flatten`): ``(M, k)`` values or their moments.
     """
 
     name: str
     type: str
-    mean: NDArray[np.float64]
-    cov: NDArray[np.float64]
+    result: MonteCarloResult = field(repr=False)
+
+    @property
+    def mean(self) -> NDArray[np.float64]:
+        """Mean of the components (layout of :func:`flatten`), ``(k,)``, mm / rad."""
+        return np.atleast_1d(np.asarray(self.result.estimate, dtype=np.float64))
+
+    @property
+    def cov(self) -> NDArray[np.float64]:
+        """Their covariance (divisor ``M - 1``, Stryczek eq. 5), ``(k, k)``."""
+        return self.result.cov
 
     def part(self, part: str) -> tuple[Any, Any, NDArray[np.float64]]:
         """Estimate, standard uncertainty and covariance of one part (e.g. ``"direction"``).
@@ -254,8 +273,6 @@ class GraphResult:
             raise InputError(
                 f"the samples of place {name} were not kept (run with keep=[...])", field=name
             )
-        from mtmc.uncertainty.results import MonteCarloResult
-
         flat = flatten(self.types[name], self.samples[name], self.trials)
         arr = flat[:, 0] if flat.shape[1] == 1 else flat
         return MonteCarloResult.from_samples(
@@ -452,53 +469,73 @@ def evaluate(
     return {k: _full(v, m) for k, v in values.items() if k in want}
 
 
-class _Accumulator:
-    """Running sums of deviations from a shift and of their outer products."""
-
-    def __init__(self) -> None:
-        self.n = 0
-        self.shift: NDArray[np.float64] | None = None
-        self.s1: NDArray[np.float64] | None = None
-        self.s2: NDArray[np.float64] | None = None
-
-    def add(self, cols: list[Any], m: int) -> None:
-        """Add a block of ``m`` trials given as parts (:func:`_cols`), each ``(m, j)``.
-
-        The deviations are written component by component into a ``(k, m)`` array, whose
-        rows NumPy reduces much faster than the columns of an ``(m, k)`` one; the
-        products are dot products, not a BLAS matrix product (no thread start-up).
-        """
-        if self.shift is None:
-            self.shift = np.concatenate([np.asarray(c).mean(axis=0) for c in cols])
-            k0 = self.shift.shape[0]
-            self.s1 = np.zeros(k0)
-            self.s2 = np.zeros((k0, k0))
-        assert self.s1 is not None and self.s2 is not None
-        k = self.shift.shape[0]
-        rows = np.empty((k, m))
-        i = 0
-        for c in cols:
-            j = c.shape[1]
-            np.subtract(np.asarray(c).T, self.shift[i : i + j, None], out=rows[i : i + j])
-            i += j
-        self.s1 += rows.sum(axis=1)
-        for i in range(k):
-            for j in range(i, k):
-                self.s2[i, j] += np.einsum("m,m->", rows[i], rows[j])
-        self.n += m
-
-    def result(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        assert self.shift is not None and self.s1 is not None and self.s2 is not None
-        mean = self.shift + self.s1 / self.n
-        if self.n < 2:
-            return mean, np.zeros_like(self.s2)
-        s2 = np.triu(self.s2) + np.triu(self.s2, 1).T
-        cov = (s2 - np.outer(self.s1, self.s1) / self.n) / (self.n - 1)
-        return mean, cov
-
-
 def _as_plan(graph: Graph | Plan) -> Plan:
     return graph if isinstance(graph, Plan) else check(graph)
+
+
+#: The input a graph without random inputs is given, so that the engine's blocks know
+#: their number of trials (a constant zero; no transition reads it).
+_TRIAL_INPUT = "_trial"
+
+
+@dataclass(frozen=True, eq=False)
+class GraphModel:
+    """A checked graph compiled once into the engine's model: named inputs, named outputs.
+
+    Everything a run re-uses is resolved here once: the random inputs (:func:`random_inputs`,
+    their distributions parsed), the ``meas`` parameters of every probing (probe specs),
+    and the transition variants bound by input types (the plan's steps). Calling it fires
+    every transition once on a block of trials; it is picklable, so worker processes
+    can evaluate blocks.
+
+    Parameters
+    ----------
+    plan : Plan
+        A checked graph.
+    outputs : tuple of str
+        The places it returns, each flattened as :func:`flatten` (``(m,)`` for a scalar
+        place, ``(m, k)`` otherwise).
+
+    Attributes
+    ----------
+    inputs : mapping of str to Distribution
+        The random inputs, in mm / rad.
+    specs : mapping of str to MeasSpec
+        The resolved parameters of each ``meas`` transition.
+    """
+
+    plan: Plan
+    outputs: tuple[str, ...]
+    inputs: Mapping[str, Distribution] = field(init=False, repr=False)
+    specs: Mapping[str, _probe.MeasSpec] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        g = self.plan.graph
+        for name in self.outputs:
+            if name not in self.plan.types:
+                raise InputError(f"the graph has no place {name}", file=g.file, field=name)
+        inputs = random_inputs(self.plan) or {_TRIAL_INPUT: Constant(0.0)}
+        specs = {
+            s.transition.name: _probe.meas_spec(s.transition, g.probe, g.factor)
+            for s in self.plan.steps
+            if s.transition.op == "meas"
+        }
+        object.__setattr__(self, "inputs", MappingProxyType(inputs))
+        object.__setattr__(self, "specs", MappingProxyType(specs))
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (GraphModel, (self.plan, self.outputs))
+
+    def __call__(self, **arrays: Any) -> dict[str, NDArray[np.float64]]:
+        """The output places of a block of trials, flattened (:func:`flatten`)."""
+        m = max((np.shape(v)[0] for v in arrays.values() if np.ndim(v) > 0), default=1)
+        arrays.pop(_TRIAL_INPUT, None)
+        vals = evaluate(self.plan, arrays, m, self.outputs, specs=self.specs)
+        out = {}
+        for name in self.outputs:
+            flat = flatten(self.plan.types[name], vals[name], m)
+            out[name] = flat[:, 0] if flat.shape[1] == 1 else flat
+        return out
 
 
 def run_graph(
@@ -509,32 +546,49 @@ def run_graph(
     outputs: Iterable[str] | None = None,
     keep: Iterable[str] = (),
     block_size: int = GRAPH_BLOCK_SIZE,
-    normal_method: str = "default",
+    normal_method: NormalMethod = "default",
     progress: Callable[[int, int | None], None] | None = None,
+    workers: int = 1,
+    executor: ExecutorKind | Any = "thread",
+    nan_policy: NanPolicy = "raise",
 ) -> GraphResult:
-    """Monte Carlo over a measurement graph (JCGM 101 with seed 000's graph as the model).
+    """Monte Carlo over a measurement graph (JCGM 101 with Stryczek's graph as the model).
+
+    The graph is compiled once into a :class:`GraphModel` and run by the engine,
+    :func:`mtmc.uncertainty.monte_carlo`, like any other model: the same seeded blocks,
+    workers, ``nan_policy`` and result type (one :class:`MonteCarloResult` per place,
+    wrapped by :class:`PlaceSummary`).
 
     Parameters
     ----------
     graph : Graph or Plan
         The graph (checked here if a Graph).
     trials : int
-        Number of trials M.
+        Number of trials M (at least 2).
     seed : int, SeedSequence or None
         The seed; None draws fresh entropy, recorded in the result.
     outputs : iterable of str, optional
         Places to summarise (default: all places).
     keep : iterable of str
-        Places whose samples to keep whole (for coverage intervals, histograms).
+        Places whose samples to keep whole (for coverage intervals, histograms). The
+        others keep the moments of fixed blocks of trials merged in trial order, so a
+        run of 10^6 trials needs the memory of one block, and no number depends on
+        ``block_size`` or ``workers``.
     block_size : int
         Trials per block (default :data:`GRAPH_BLOCK_SIZE`); it changes the memory used
         and the speed, not the numbers.
     normal_method : {"default", "box-muller"}
-        How normal numbers are made (Box-Muller as in seed 000 eq. 6).
+        How normal numbers are made (Box-Muller as in Stryczek eq. 6).
     progress : callable, optional
         ``progress(done, trials)``, called after each block with the number of trials
         done so far (increasing, the last call with ``done == trials``). It does not
         change any number.
+    workers : int, default 1
+        Local workers (see :mod:`mtmc.parallel`); the numbers do not depend on it.
+    executor : {"thread", "process"} or concurrent.futures.Executor
+        Where the blocks run when ``workers > 1``.
+    nan_policy : {"raise", "omit"}
+        As :func:`~mtmc.uncertainty.monte_carlo`.
 
     Returns
     -------
@@ -545,6 +599,8 @@ def run_graph(
     ------
     GraphError
         If the graph is not valid.
+    InputError
+        Fewer than 2 trials, or an unknown place in ``outputs`` or ``keep``.
     DegenerateGeometryError
         If a construction is degenerate in some trial.
 
@@ -560,57 +616,64 @@ def run_graph(
     0.05
     """
     plan = _as_plan(graph)
-    g = plan.graph
-    seed_i = resolve_seed(seed)
     keep_s = list(dict.fromkeys(keep))
     summ = list(plan.types) if outputs is None else list(dict.fromkeys(outputs))
-    for name in (*keep_s, *summ):
-        if name not in plan.types:
-            raise InputError(f"the graph has no place {name}", file=g.file, field=name)
-    inputs = random_inputs(plan)
-    specs = {
-        s.transition.name: _probe.meas_spec(s.transition, g.probe, g.factor)
-        for s in plan.steps
-        if s.transition.op == "meas"
-    }
-    want = set(summ) | set(keep_s)
-    acc = {n: _Accumulator() for n in summ}
-    kept: dict[str, list[Any]] = {n: [] for n in keep_s}
-    blocks = iter_blocks(inputs, trials, seed_i, block_size, normal_method=normal_method)  # type: ignore[arg-type]
-    if not inputs:
-        blocks = ((a, min(a + block_size, trials), {}) for a in range(0, trials, block_size))
-    for a, b, samples in blocks:
-        m = b - a
-        vals = evaluate(plan, samples, m, want, specs=specs)
-        for n in summ:
-            acc[n].add(_cols(plan.types[n], vals[n], m), m)
-        for n in keep_s:
-            kept[n].append(vals[n])
-        if progress is not None:
-            progress(b, trials)
-    places = {}
-    for n in summ:
-        mean, cov = acc[n].result()
-        places[n] = PlaceSummary(n, plan.types[n], mean, cov)
-    samples_out = {n: _concat(plan.types[n], v, trials) for n, v in kept.items()}
-    return GraphResult(trials, seed_i, places, samples_out, dict(plan.types))
+    model = GraphModel(plan, tuple(dict.fromkeys([*summ, *keep_s])))
+    res = monte_carlo(
+        model,
+        model.inputs,
+        trials,
+        seed,
+        keep=keep_s,
+        block_size=block_size,
+        normal_method=normal_method,
+        progress=progress,
+        workers=workers,
+        executor=executor,
+        nan_policy=nan_policy,
+    )
+    places = {n: PlaceSummary(n, plan.types[n], res[n]) for n in summ}
+    samples_out = {n: unflatten(plan.types[n], res[n].values) for n in keep_s}
+    return GraphResult(res.trials, res.seed, places, samples_out, dict(plan.types))
 
 
-def _concat(type_: str, parts: list[Any], m: int) -> Any:
-    first = parts[0]
-    if isinstance(first, Line):
-        return Line(*_cat([(p.point, p.direction) for p in parts]))
-    if isinstance(first, Plane):
-        return Plane(*_cat([(p.point, p.normal) for p in parts]))
-    if isinstance(first, Circle):
-        return Circle(*_cat([(p.centre, p.normal, p.radius) for p in parts]))
-    if isinstance(first, Sphere):
-        return Sphere(*_cat([(p.centre, p.radius) for p in parts]))
-    return np.concatenate([np.array(p, dtype=np.float64) for p in parts], axis=0)
+def unflatten(type_: str, flat: NDArray[np.float64]) -> Any:
+    """A place value from its components, the inverse of :func:`flatten`.
 
+    Parameters
+    ----------
+    type_ : str
+        The place type.
+    flat : ndarray, shape (M,) or (M, k)
+        The components in the layout of :data:`PARTS`.
 
-def _cat(cols: list[tuple[Any, ...]]) -> list[NDArray[np.float64]]:
-    return [np.concatenate([c[i] for c in cols], axis=0) for i in range(len(cols[0]))]
+    Returns
+    -------
+    ndarray or primitive
+        ``(M,)`` for scalars, ``(M, 3)`` for points, vectors and unit vectors, a
+        Line/Plane/Circle/Sphere, or ``(M, 4, 4)`` frames.
+    """
+    x = np.asarray(flat, dtype=np.float64)
+    x = x.reshape(x.shape[0], -1)
+    if type_ in ("x", "y", "z", "real"):
+        return x[:, 0].copy()
+    if type_ in ("point", "vector", "unit"):
+        return x.copy()
+    if type_ == "line":
+        return Line(x[:, 0:3], x[:, 3:6])
+    if type_ == "plane":
+        return Plane(x[:, 0:3], x[:, 3:6])
+    if type_ == "circle":
+        return Circle(x[:, 0:3], x[:, 3:6], x[:, 6])
+    if type_ == "sphere":
+        return Sphere(x[:, 0:3], x[:, 3])
+    if type_ == "frame":
+        t = np.zeros((x.shape[0], 4, 4))
+        t[:, :3, :3] = x[:, :9].reshape(-1, 3, 3)
+        t[:, :3, 3] = x[:, 9:12]
+        t[:, 3, 3] = 1.0
+        return t
+    raise InputError(f"unknown place type {type_!r}", field="type")  # pragma: no cover
 
 
 def graph_model(
@@ -645,15 +708,9 @@ def graph_model(
     array([2. , 2.5])
     """
     plan = _as_plan(graph)
-    if output not in plan.types:
-        raise InputError(f"the graph has no place {output}", file=plan.graph.file, field=output)
-    inputs = random_inputs(plan)
-    type_ = plan.types[output]
+    compiled = GraphModel(plan, (output,))
 
     def model(**arrays: Any) -> NDArray[np.float64]:
-        m = max((np.shape(v)[0] for v in arrays.values() if np.ndim(v) > 0), default=1)
-        vals = evaluate(plan, arrays, m, [output])
-        flat = flatten(type_, vals[output], m)
-        return flat[:, 0] if flat.shape[1] == 1 else flat
+        return compiled(**arrays)[output]
 
-    return model, inputs
+    return model, dict(compiled.inputs)

@@ -43,6 +43,7 @@ __all__ = [
     "Distribution",
     "Exponential",
     "Gamma",
+    "IID",
     "MultivariateNormal",
     "Normal",
     "NormalMethod",
@@ -122,6 +123,8 @@ def standard_normal(
 # --------------------------------------------------------------------------- helpers
 def _fmt(x: Any) -> str:
     """Format a number or nested list of numbers so that the text parses back exactly."""
+    if isinstance(x, Distribution):
+        return str(x)
     if isinstance(x, np.ndarray):
         return "[" + ", ".join(_fmt(v) for v in x) + "]"
     xf = float(x)
@@ -902,6 +905,92 @@ class MultivariateNormal(Distribution):
         return out
 
 
+@register_distribution("iid")
+@dataclass(frozen=True, eq=False)
+class IID(Distribution):
+    """``k`` independent, identically distributed copies of a scalar PDF, as one input.
+
+    A Monte Carlo input with many independent components of one PDF — the noise of each
+    coordinate of every point a laser tracker or a touch probe measures — without a
+    ``k × k`` covariance matrix and without ``k`` separately named inputs.
+
+    Parameters
+    ----------
+    base : Distribution
+        The scalar PDF of each component.
+    k : int
+        Number of components, ``k >= 1``.
+
+    Notes
+    -----
+    ``sample(rng, n)`` draws ``n·k`` values of ``base`` from ``rng`` in one call and
+    returns them as ``(n, k)`` in C order (trial by trial). An input of dimension ``k``
+    is drawn in seed blocks of at most :data:`~mtmc.uncertainty.sampling.MAX_SEED_BLOCK_VALUES`
+    numbers (see :func:`~mtmc.uncertainty.sampling.seed_block_trials`), so the memory of
+    a run does not grow with ``k`` times a fixed number of trials.
+
+    Examples
+    --------
+    >>> d = IID(Normal(0, 2), 3)
+    >>> d.dim, d.std.tolist(), str(d)
+    (3, [2.0, 2.0, 2.0], 'iid(normal(0, 2), 3)')
+    >>> d.sample(np.random.default_rng(0), 4).shape
+    (4, 3)
+    """
+
+    base: Distribution
+    k: int
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.base, Distribution):
+            raise DistributionError(
+                f"iid: expected a distribution as first parameter, got {self.base!r}",
+                field="base",
+            )
+        if self.base.dim != 0 or isinstance(self.base, IID):
+            raise DistributionError(
+                f"iid: expected a scalar distribution, got {self.base}", field="base"
+            )
+        k: Any = self.k
+        if isinstance(k, float) and k.is_integer():
+            k = int(k)
+        if isinstance(k, bool) or not isinstance(k, int | np.integer) or k < 1:
+            raise DistributionError(
+                f"iid: expected a whole number of components k >= 1, got {self.k!r}", field="k"
+            )
+        object.__setattr__(self, "k", int(k))
+
+    def __repr__(self) -> str:
+        return f"IID(base={self.base!r}, k={self.k})"
+
+    @property
+    def mean(self) -> NDArray[np.float64]:
+        """The base mean repeated, shape ``(k,)``."""
+        return np.full(self.k, float(self.base.mean))
+
+    @property
+    def std(self) -> NDArray[np.float64]:
+        """The base standard deviation repeated, shape ``(k,)``."""
+        return np.full(self.k, float(self.base.std))
+
+    @property
+    def dim(self) -> int:
+        """``k``."""
+        return self.k
+
+    @property
+    def dof(self) -> float:
+        """The degrees of freedom of the base PDF."""
+        return self.base.dof
+
+    def sample(
+        self, rng: np.random.Generator, n: int, *, normal_method: NormalMethod = "default"
+    ) -> NDArray[np.float64]:
+        """Draw ``n`` vectors of ``k`` independent values, shape ``(n, k)``."""
+        n = _check_n(n)
+        return self.base.sample(rng, n * self.k, normal_method=normal_method).reshape(n, self.k)
+
+
 @register_distribution("constant")
 @dataclass(frozen=True, eq=False)
 class Constant(Distribution):
@@ -1005,6 +1094,8 @@ class _Parser:
 
     def value(self) -> Any:
         tok = self.peek()
+        if tok[0] == "name":
+            return self.distribution()
         if tok[0] == "num":
             self.i += 1
             return float(tok[1])
@@ -1022,6 +1113,13 @@ class _Parser:
         self.fail(f"expected a number or a list, got {got}", tok[2])
 
     def parse(self) -> Distribution:
+        dist = self.distribution()
+        tail = self.peek()
+        if tail[0] != "end":
+            self.fail(f"unexpected {tail[1]!r} after the closing ')'", tail[2])
+        return dist
+
+    def distribution(self) -> Distribution:
         name_tok = self.take("name", what="a distribution name")
         name = name_tok[1].lower()
         if name not in _REGISTRY:
@@ -1037,7 +1135,8 @@ class _Parser:
         if self.peek()[1] != ")":
             while True:
                 tok = self.peek()
-                if tok[0] == "name":
+                nxt = self.tokens[self.i + 1] if self.i + 1 < len(self.tokens) else None
+                if tok[0] == "name" and nxt is not None and nxt[1] == "=":
                     self.i += 1
                     self.take("punct", "=", "'='")
                     if tok[1] in kwargs:
@@ -1051,9 +1150,6 @@ class _Parser:
                     break
                 self.i += 1
         self.take("punct", ")", "',' or ')'")
-        tail = self.peek()
-        if tail[0] != "end":
-            self.fail(f"unexpected {tail[1]!r} after the closing ')'", tail[2])
         params = [f for f in dataclasses.fields(cast(Any, cls)) if f.init]
         names = [f.name for f in params]
         required = [
@@ -1124,6 +1220,7 @@ def parse_distribution(
     ``gamma(shape, scale)``                                :class:`Gamma`
     ``mvnormal([m1, ...], [[v11, ...], ...])``             :class:`MultivariateNormal`
     ``constant(value)``                                    :class:`Constant`
+    ``iid(dist, k)``                                       :class:`IID`
     =====================================================  ===========================
 
     Parameters

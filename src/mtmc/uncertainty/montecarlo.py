@@ -20,7 +20,8 @@ Seed 000 (Fig. 4): the sum of N(0, 1) and N(0.5, 0.5) has u = √1.25 ≈ 1.118.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+import os
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -30,12 +31,20 @@ from numpy.typing import NDArray
 from mtmc.errors import ConvergenceError, InputError
 from mtmc.parallel import ExecutorKind, map_blocks
 from mtmc.uncertainty.distributions import Distribution, NormalMethod
-from mtmc.uncertainty.results import MonteCarloResult, _check_p
+from mtmc.uncertainty.results import (
+    MAX_COV_DIM,
+    Moments,
+    MonteCarloResult,
+    MonteCarloResults,
+    _check_p,
+)
 from mtmc.uncertainty.sampling import (
     DEFAULT_BLOCK_SIZE,
+    SEED_BLOCK_SIZE,
     _BlockSource,
     _check_int,
     _prepare,
+    evaluation_block_size,
     resolve_seed,
 )
 from mtmc.uncertainty.tolerance import numerical_tolerance
@@ -73,9 +82,16 @@ def adaptive_block_size(p: float) -> int:
     return max(10**4, math.ceil(100.0 / (1.0 - pf) - 1e-6))
 
 
+Outputs = dict[str, NDArray[np.float64]]
+
+#: The name of the output of a model that returns one array rather than a mapping.
+_SINGLE = ""
+
+
 def _evaluate(
     model: Callable[..., Any], samples: dict[str, NDArray[np.float64]], start: int, stop: int
-) -> NDArray[np.float64]:
+) -> Outputs:
+    """Call the model on one block; its outputs by name, each ``(m,)`` or ``(m, d)``."""
     m = stop - start
     try:
         raw = model(**samples)
@@ -85,14 +101,26 @@ def _evaluate(
             f"arrays: {exc}",
             field="model",
         ) from exc
-    out = np.asarray(raw, dtype=np.float64)
-    if out.ndim not in (1, 2) or out.shape[0] != m:
-        raise InputError(
-            f"the model returned shape {out.shape} for a block of {m} trials (trials "
-            f"{start}..{stop - 1}); expected ({m},) or ({m}, d): a vectorised model returns "
-            "one value (or one row) per trial",
-            field="model",
-        )
+    items = raw.items() if isinstance(raw, Mapping) else ((_SINGLE, raw),)
+    out: Outputs = {}
+    for name, value in items:
+        if not isinstance(name, str) or (not name and isinstance(raw, Mapping)):
+            raise InputError(
+                f"expected the model's outputs to be named by strings, got {name!r}",
+                field="model",
+            )
+        arr = np.asarray(value, dtype=np.float64)
+        if arr.ndim not in (1, 2) or arr.shape[0] != m:
+            what = f"output {name!r}" if name else "the model"
+            raise InputError(
+                f"{what} returned shape {arr.shape} for a block of {m} trials (trials "
+                f"{start}..{stop - 1}); expected ({m},) or ({m}, d): a vectorised model returns "
+                "one value (or one row) per trial",
+                field="model",
+            )
+        out[name] = arr
+    if not out:
+        raise InputError("the model returned no output", field="model")
     return out
 
 
@@ -105,10 +133,168 @@ class _BlockJob:
     seed: int
     method: NormalMethod
 
-    def __call__(self, span: tuple[int, int]) -> NDArray[np.float64]:
+    def __call__(self, span: tuple[int, int]) -> Outputs:
         a, b = span
         samples = _BlockSource(self.dists, self.seed, self.method).trials(a, b)
         return _evaluate(self.model, samples, a, b)
+
+
+def _memory_bytes() -> int:
+    """Physical memory of this machine (bytes), or 8 GiB where it cannot be read."""
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        return 8 * 2**30
+
+
+def _gib(nbytes: float) -> str:
+    return f"{nbytes / 2**30:.3g} GiB"
+
+
+class _Collector:
+    """Receives the outputs of consecutive trial ranges, in trial order.
+
+    Keeps the samples of the outputs named in ``keep`` (preallocated, after a memory
+    check) and, for the others, the moments of each fixed block of
+    :data:`SEED_BLOCK_SIZE` trials merged in order (:class:`Moments`), so that no number
+    depends on the evaluation block size or the number of workers.
+    """
+
+    def __init__(
+        self, total: int, keep: bool | frozenset[str], nan_policy: NanPolicy, base: int = 0
+    ) -> None:
+        self.total, self.keep, self.nan_policy, self.base = total, keep, nan_policy, base
+        self.shapes: dict[str, tuple[int, ...]] | None = None
+        self.kept: dict[str, NDArray[np.float64]] = {}
+        self.filled = 0  # rows written to the kept arrays
+        self.omitted = 0
+        self.first_bad: int | None = None
+        self.bad_outputs: set[str] = set()
+        self.buffer: dict[str, list[NDArray[np.float64]]] = {}
+        self.moments: dict[str, Moments] = {}
+
+    def _setup(self, outs: Outputs) -> None:
+        self.shapes = {n: a.shape[1:] for n, a in outs.items()}
+        if self.keep is not True and self.keep is not False:
+            unknown = sorted(set(self.keep) - set(outs))
+            if unknown:
+                raise InputError(
+                    f"keep names {', '.join(unknown)}, which the model does not return; "
+                    f"its outputs are {', '.join(outs) or 'unnamed'}",
+                    field="keep",
+                )
+        keep = [n for n in outs if self.keep is True or (self.keep is not False and n in self.keep)]
+        need = sum(8 * self.total * max(1, math.prod(self.shapes[n])) for n in keep)
+        limit = _memory_bytes() // 2
+        if need > limit:
+            raise InputError(
+                f"keeping the samples of {self.total} trials needs {_gib(need)}, more than half "
+                f"of this machine's memory ({_gib(2 * limit)}); run with keep=False (estimate, "
+                "u and covariance only) or with fewer trials",
+                field="trials",
+            )
+        for n in keep:
+            self.kept[n] = np.empty((self.total, *self.shapes[n]))
+        for n in outs:
+            if n not in self.kept:
+                self.buffer[n] = []
+                width = max(1, math.prod(self.shapes[n]))
+                self.moments[n] = Moments(
+                    0, np.zeros(width), np.zeros((width, width) if width <= MAX_COV_DIM else width)
+                )
+
+    def add(self, start: int, outs: Outputs) -> None:
+        if self.shapes is None:
+            self._setup(outs)
+        assert self.shapes is not None
+        shapes = {n: a.shape[1:] for n, a in outs.items()}
+        if shapes != self.shapes:
+            raise InputError(
+                f"the model returned outputs of shapes {_shape_text(shapes)} for trials from "
+                f"{start} but {_shape_text(self.shapes)} before; expected the same outputs and "
+                "shapes for every block",
+                field="model",
+            )
+        m = next(iter(outs.values())).shape[0]
+        ok = np.ones(m, dtype=np.bool_)
+        for a in outs.values():
+            # the sum of finite values is finite (but for an overflow, which then takes
+            # the row-by-row check): one pass, no temporary, in the common case
+            if not np.isfinite(a.sum()):
+                fin = np.isfinite(a)
+                ok &= fin if fin.ndim == 1 else fin.all(axis=1)
+        nbad = m - int(np.count_nonzero(ok))
+        if nbad and self.nan_policy == "raise":
+            if self.first_bad is None:
+                self.first_bad = start + int(np.argmin(ok))
+            self.bad_outputs.update(n for n, a in outs.items() if not np.isfinite(a).all())
+        self.omitted += nbad
+        good = m - nbad
+        for n, kept in self.kept.items():
+            kept[self.filled : self.filled + good] = outs[n][ok] if nbad else outs[n]
+        self.filled += good
+        # moments of the fixed blocks of SEED_BLOCK_SIZE trials, merged in trial order
+        s = SEED_BLOCK_SIZE
+        lo = 0
+        while lo < m:
+            hi = min(m, lo + (s - (start + lo) % s))
+            sel = ok[lo:hi]
+            for n, buf in self.buffer.items():
+                x = outs[n][lo:hi].reshape(hi - lo, -1).T  # (k, rows)
+                buf.append(x[:, sel] if nbad else x)
+            if (start + hi) % s == 0 or start + hi == self.base + self.total:
+                self._close()
+            lo = hi
+
+    def _close(self) -> None:
+        for n, buf in self.buffer.items():
+            if buf:
+                # a new C-ordered (k, rows) array of the block, however its rows arrived:
+                # the same summation order, hence the same bits, for any evaluation
+                # block size or number of workers
+                if len(buf) > 1:
+                    x = np.ascontiguousarray(np.concatenate(buf, axis=1))
+                else:
+                    x = np.array(buf[0], order="C")
+                if x.shape[1]:
+                    self.moments[n] = self.moments[n].merge(Moments.of_columns(x))
+                buf.clear()
+
+    def check(self) -> None:
+        """Raise for the non-finite values seen under ``nan_policy="raise"``."""
+        if self.first_bad is None:
+            return
+        what = ", ".join(f"output {n!r}" for n in self.bad_outputs if n) or "the model value"
+        raise InputError(
+            f"{what} is not finite (NaN or inf) in {self.omitted} of {self.total} trials "
+            f"(first at trial {self.first_bad}); expected finite values, or "
+            "nan_policy='omit' to leave those trials out",
+            field="model",
+        )
+
+    def results(self, **run: Any) -> dict[str, MonteCarloResult]:
+        assert self.shapes is not None
+        self.check()
+        self._close()
+        out: dict[str, MonteCarloResult] = {}
+        for n, shape in self.shapes.items():
+            if n in self.kept:
+                out[n] = MonteCarloResult(
+                    samples=self.kept[n][: self.filled], omitted=self.omitted, **run
+                )
+            else:
+                out[n] = MonteCarloResult(
+                    samples=None,
+                    moments=self.moments[n],
+                    scalar=len(shape) == 0,
+                    omitted=self.omitted,
+                    **run,
+                )
+        return out
+
+
+def _shape_text(shapes: Mapping[str, tuple[int, ...]]) -> str:
+    return ", ".join(f"{n or 'y'}: (m{''.join(f', {k}' for k in sh)})" for n, sh in shapes.items())
 
 
 class _Runner:
@@ -124,76 +310,59 @@ class _Runner:
         workers: int,
         executor: ExecutorKind | Any,
     ) -> None:
-        self.model, self.block_size = model, block_size
+        self.model, self.block_size = model, evaluation_block_size(dists, block_size)
         self.workers, self.executor = workers, executor
         self.job = _BlockJob(model, dists, seed, method)
         self.source = _BlockSource(dists, seed, method)
-        self.dim: int | None = None
 
-    def _serial(self, span: tuple[int, int]) -> NDArray[np.float64]:
+    def _serial(self, span: tuple[int, int]) -> Outputs:
         return _evaluate(self.model, self.source.trials(*span), *span)
 
-    def run(self, start: int, stop: int, progress: ProgressFn | None = None) -> NDArray[np.float64]:
-        """Model values of trials ``start..stop-1``: ``(n,)`` or ``(n, d)``.
+    def run(
+        self,
+        start: int,
+        stop: int,
+        sink: Callable[[int, Outputs], None],
+        progress: ProgressFn | None = None,
+    ) -> None:
+        """Evaluate trials ``start..stop-1`` and hand each block to ``sink`` in order.
 
         ``progress(b, stop)`` is called after each block, ``b`` the end of the block.
         """
         spans = [(a, min(a + self.block_size, stop)) for a in range(start, stop, self.block_size)]
         serial = self.workers == 1 and not hasattr(self.executor, "map")
         fn = self._serial if serial else self.job
-        out: NDArray[np.float64] | None = None
-        for (a, b), vals in zip(
+        for (a, b), outs in zip(
             spans,
             map_blocks(fn, spans, workers=self.workers, executor=self.executor),
             strict=True,
         ):
-            d = 0 if vals.ndim == 1 else int(vals.shape[1])
-            if self.dim is None:
-                self.dim = d
-            elif d != self.dim:
-                raise InputError(
-                    f"the model returned {d or 'scalar'} values per trial for trials "
-                    f"{a}..{b - 1} but {self.dim or 'scalar'} before; expected the same "
-                    "shape for every block",
-                    field="model",
-                )
-            if out is None:
-                out = np.empty((stop - start, *vals.shape[1:]))
-            out[a - start : b - start] = vals
+            sink(a, outs)
             if progress is not None:
                 progress(b, stop)
-        assert out is not None
-        return out
 
 
-def _finite_rows(vals: NDArray[np.float64]) -> NDArray[np.bool_]:
-    ok = np.isfinite(vals)
-    return np.asarray(ok if ok.ndim == 1 else ok.all(axis=1), dtype=np.bool_)
-
-
-def _apply_nan_policy(
-    vals: NDArray[np.float64], start: int, policy: NanPolicy, total: int
-) -> tuple[NDArray[np.float64], int]:
-    ok = _finite_rows(vals)
-    nbad = int(vals.shape[0] - np.count_nonzero(ok))
-    if nbad == 0:
-        return vals, 0
-    if policy == "raise":
-        first = start + int(np.argmin(ok))
+def _check_keep(keep: Any) -> bool | frozenset[str]:
+    if isinstance(keep, bool):
+        return keep
+    if isinstance(keep, str) or not isinstance(keep, Iterable):
         raise InputError(
-            f"the model value is not finite (NaN or inf) in {nbad} of {total} trials (first "
-            f"at trial {first}); expected finite values, or nan_policy='omit' to leave "
-            "those trials out",
-            field="model",
+            f"expected True, False or a list of output names, got {keep!r}", field="keep"
         )
-    return vals[ok], nbad
+    names = frozenset(keep)
+    if not all(isinstance(n, str) for n in names):
+        raise InputError(
+            f"expected output names as strings, got {sorted(map(repr, names))}", field="keep"
+        )
+    return names
 
 
 def monte_carlo(
     model: Callable[..., Any],
     inputs: Mapping[str, Any],
-    trials: int = 10**6,
+    trials: int | None = None,
     seed: int | None | np.random.SeedSequence = None,
+    *,
     adaptive: bool = False,
     tolerance: float | None = None,
     ndig: int = 2,
@@ -201,50 +370,57 @@ def monte_carlo(
     block_size: int = DEFAULT_BLOCK_SIZE,
     workers: int = 1,
     normal_method: NormalMethod = "default",
-    *,
     nan_policy: NanPolicy = "raise",
     kind: Literal["shortest", "symmetric"] = "shortest",
     max_trials: int = 10**8,
     executor: ExecutorKind | Any = "thread",
     progress: ProgressFn | None = None,
-) -> MonteCarloResult:
+    keep: bool | Iterable[str] = True,
+) -> Any:
     """Propagate the input distributions through a vectorised model (JCGM 101 §7).
+
+    The one Monte Carlo engine of mtmc: an expression, a measurement graph, a
+    verification or an artefact run are each a vectorised model that this function
+    evaluates block by block.
 
     Parameters
     ----------
     model : callable
         ``model(**arrays)``: receives each input by name as an array whose first axis is
         the trial (``(m,)`` for a scalar input, ``(m, k)`` for a ``k``-variate one; the
-        arrays are read-only) and returns the ``m`` model values, ``(m,)`` or ``(m, d)``.
+        arrays are read-only) and returns the ``m`` model values, ``(m,)`` or ``(m, d)``,
+        or a mapping of output names to such arrays (named outputs).
     inputs : mapping of str to Distribution, number or str
         The input quantities by name (numbers are constants, strings are parsed by
         :func:`~mtmc.uncertainty.distributions.parse_distribution`).
     trials : int, default 10**6
-        Number of trials ``M`` of a fixed run (ignored when ``adaptive``).
+        Number of trials ``M`` of a fixed run. Not with ``adaptive``, which chooses it.
     seed : int, None or SeedSequence
         The seed; ``None`` draws fresh entropy, recorded in the result's ``seed`` so the
         run can be repeated exactly.
-    adaptive : bool, default False
+    adaptive : bool, default False, keyword-only
         Use the adaptive procedure of JCGM 101 §7.9.4 (see Notes).
-    tolerance : float, optional
+    tolerance : float, optional, keyword-only
         Numerical tolerance ``δ`` for the adaptive procedure, in the unit of the output;
         by default ``δ`` follows from ``u(y)`` and ``ndig`` (JCGM 101 §7.9.2).
-    ndig : int, default 2
+    ndig : int, default 2, keyword-only
         Significant decimal digits of ``u(y)`` regarded as meaningful.
-    p : float, default 0.95
+    p : float, default 0.95, keyword-only
         Coverage probability used by the adaptive stopping rule.
-    block_size : int, default DEFAULT_BLOCK_SIZE
-        Trials per evaluation of the model (memory vs overhead); it does not change the
-        numbers.
-    workers : int, default 1
+    block_size : int, default DEFAULT_BLOCK_SIZE, keyword-only
+        Trials per evaluation of the model (memory vs overhead; reduced for wide inputs,
+        see :func:`~mtmc.uncertainty.sampling.evaluation_block_size`); it does not change
+        the numbers.
+    workers : int, default 1, keyword-only
         Number of local workers (threads by default; see :mod:`mtmc.parallel`); it does
         not change the numbers.
-    normal_method : {"default", "box-muller"}
-        How standard normal numbers are made (Box–Muller: seed 000 eq. 6).
+    normal_method : {"default", "box-muller"}, keyword-only
+        How standard normal numbers are made (Box–Muller: Stryczek eq. 6).
     nan_policy : {"raise", "omit"}, keyword-only
         What to do with trials whose model value is not finite: ``"raise"`` an
         :class:`~mtmc.errors.InputError` giving their number and the first trial, or
-        ``"omit"`` them (their number is in the result's ``omitted``).
+        ``"omit"`` them (their number is in the result's ``omitted``). With named
+        outputs a trial is left out of every output when one of them is not finite.
     kind : {"shortest", "symmetric"}, keyword-only
         Coverage interval whose endpoints the adaptive stopping rule watches.
     max_trials : int, default 10**8, keyword-only
@@ -258,18 +434,30 @@ def monte_carlo(
         ``total = trials`` and ends with ``done == total``; an adaptive run passes
         ``total = None`` after each block of ``h`` trials and, once it stops,
         ``(n·h, n·h)``. It does not change any number.
+    keep : bool or iterable of str, default True, keyword-only
+        Which outputs keep all their samples (coverage intervals, histograms, ellipsoids
+        need them): all (``True``), none (``False``), or those named. The others keep
+        their estimate and covariance only, from the moments of fixed blocks of
+        :data:`~mtmc.uncertainty.sampling.SEED_BLOCK_SIZE` trials merged in trial order
+        (:class:`~mtmc.uncertainty.results.Moments`): memory independent of ``M``, and
+        the same numbers whatever ``block_size`` and ``workers``. An adaptive run keeps
+        every output. A run whose kept samples would take more than half of the
+        machine's memory is refused before it starts.
 
     Returns
     -------
-    MonteCarloResult
-        The model values in trial order, with the seed, number of trials and, for an
-        adaptive run, the number of blocks and the tolerance met.
+    MonteCarloResult or MonteCarloResults
+        For a model returning one array: its :class:`MonteCarloResult` (the model values
+        in trial order, with the seed, number of trials and, for an adaptive run, the
+        number of blocks and the tolerance met). For named outputs: a
+        :class:`MonteCarloResults` mapping each name to its :class:`MonteCarloResult`.
 
     Raises
     ------
     InputError
-        Bad arguments; a model returning the wrong shape; non-finite values with
-        ``nan_policy="raise"``.
+        Bad arguments (``trials`` with ``adaptive``); a model returning the wrong shape;
+        non-finite values with ``nan_policy="raise"``; kept samples that would not fit
+        in memory.
     DistributionError
         An input that is not a distribution.
     ConvergenceError
@@ -277,7 +465,7 @@ def monte_carlo(
 
     Notes
     -----
-    Adaptive procedure (JCGM 101 §7.9.4), for each component of the output:
+    Adaptive procedure (JCGM 101 §7.9.4), for each component of each output:
 
     1. ``h = max(⌈100/(1 - p)⌉, 10⁴)`` trials per block (:func:`adaptive_block_size`);
     2. after block ``n >= 2``, with ``x⁽¹⁾..x⁽ⁿ⁾`` the block values of the estimate, of
@@ -309,36 +497,48 @@ def monte_carlo(
         raise InputError(f"expected 'raise' or 'omit', got {nan_policy!r}", field="nan_policy")
     if kind not in ("shortest", "symmetric"):
         raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
+    keep_set = _check_keep(keep)
     runner = _Runner(model, dists, seed_int, method, block_size, workers, executor)
 
-    if not adaptive:
-        trials = _check_int(trials, "trials", 2)
-        vals = runner.run(0, trials, progress)
-        vals, omitted = _apply_nan_policy(vals, 0, nan_policy, trials)
-        if vals.shape[0] < 2:
+    if adaptive:
+        if trials is not None:
             raise InputError(
-                f"only {vals.shape[0]} of {trials} trials gave a finite value; need at least 2",
-                field="model",
+                f"trials = {trials!r} was given with adaptive=True, which chooses the number "
+                "of trials itself; give max_trials (and tolerance or ndig) instead",
+                field="trials",
             )
-        return MonteCarloResult(
-            samples=vals,
-            trials=trials,
-            seed=seed_int,
-            omitted=omitted,
-            normal_method=method,
+        return _adaptive(
+            runner,
+            seed_int,
+            method,
+            p=_check_p(p),
+            ndig=_check_int(ndig, "ndig", 1),
+            tolerance=tolerance,
+            nan_policy=nan_policy,
+            kind=kind,
+            max_trials=_check_int(max_trials, "max_trials", 1),
+            progress=progress,
         )
-    return _adaptive(
-        runner,
-        seed_int,
-        method,
-        p=_check_p(p),
-        ndig=_check_int(ndig, "ndig", 1),
-        tolerance=tolerance,
-        nan_policy=nan_policy,
-        kind=kind,
-        max_trials=_check_int(max_trials, "max_trials", 1),
-        progress=progress,
-    )
+    m_total = _check_int(10**6 if trials is None else trials, "trials", 2)
+    collector = _Collector(m_total, keep_set, nan_policy)
+    runner.run(0, m_total, collector.add, progress)
+    collector.check()
+    good = m_total - collector.omitted
+    if good < 2:
+        raise InputError(
+            f"only {good} of {m_total} trials gave a finite value; need at least 2",
+            field="model",
+        )
+    results = collector.results(trials=m_total, seed=seed_int, normal_method=method)
+    return _package(results, m_total, seed_int, collector.omitted)
+
+
+def _package(
+    results: dict[str, MonteCarloResult], trials: int, seed: int, omitted: int
+) -> MonteCarloResult | MonteCarloResults:
+    if list(results) == [_SINGLE]:
+        return results[_SINGLE]
+    return MonteCarloResults(outputs=results, trials=trials, seed=seed, omitted=omitted)
 
 
 def _block_stats(vals: NDArray[np.float64], p: float, kind: str) -> NDArray[np.float64]:
@@ -364,7 +564,7 @@ def _adaptive(
     kind: str,
     max_trials: int,
     progress: ProgressFn | None = None,
-) -> MonteCarloResult:
+) -> MonteCarloResult | MonteCarloResults:
     if tolerance is not None:
         try:
             tol = float(tolerance)
@@ -376,10 +576,10 @@ def _adaptive(
             )
     h = adaptive_block_size(p)
     ahead = runner.workers if runner.workers > 1 else 1
-    kept: list[NDArray[np.float64]] = []
+    kept: list[Outputs] = []
     stats: list[NDArray[np.float64]] = []
-    # running moments of all kept values, per component (Chan et al. pairwise update)
-    count, mean, m2 = 0, None, None
+    # running moments of all kept values, every component of every output side by side
+    total: Moments | None = None
     omitted = 0
     n = 0
     delta = math.inf
@@ -390,29 +590,23 @@ def _adaptive(
                 f"max_trials = {max_trials} ({n} blocks of {h}); last δ = {delta:.3g}",
                 field="max_trials",
             )
-        chunk = runner.run(n * h, (n + ahead) * h)  # blocks n..n+ahead-1 at once
-        for i in range(ahead):
+        for i in range(ahead):  # blocks n..n+ahead-1, evaluated together
             start = (n + i) * h
-            vals, nbad = _apply_nan_policy(chunk[i * h : (i + 1) * h], start, nan_policy, h)
-            if vals.shape[0] < 2:
+            block = _Collector(h, True, nan_policy, base=start)
+            runner.run(start, start + h, block.add)
+            block.check()
+            if h - block.omitted < 2:
                 raise InputError(
-                    f"only {vals.shape[0]} of {h} trials of block {n + i} gave a finite value",
+                    f"only {h - block.omitted} of {h} trials of block {n + i} gave a finite value",
                     field="model",
                 )
-            omitted += nbad
+            omitted += block.omitted
+            vals = {k: v[: block.filled] for k, v in block.kept.items()}
             kept.append(vals)
-            stats.append(_block_stats(vals, p, kind))
-            x = vals.reshape(vals.shape[0], -1)
-            bm, bcount = x.mean(axis=0), x.shape[0]
-            bm2 = ((x - bm) ** 2).sum(axis=0)
-            if mean is None or m2 is None:
-                count, mean, m2 = bcount, bm, bm2
-            else:
-                tot = count + bcount
-                diff = bm - mean
-                mean = mean + diff * (bcount / tot)
-                m2 = m2 + bm2 + diff**2 * (count * bcount / tot)
-                count = tot
+            flat = np.concatenate([v.reshape(v.shape[0], -1) for v in vals.values()], axis=1)
+            stats.append(_block_stats(flat, p, kind))
+            bm = Moments.of(flat) if flat.shape[1] <= MAX_COV_DIM else Moments.of(flat)
+            total = bm if total is None else total.merge(bm)
             nblocks = n + i + 1
             if progress is not None:
                 progress(nblocks * h, None)
@@ -420,7 +614,8 @@ def _adaptive(
                 continue
             s = np.stack(stats)  # (nblocks, 4, d)
             sd = s.std(axis=0, ddof=1) / math.sqrt(nblocks)  # (4, d)
-            u_all = np.sqrt(m2 / (count - 1))
+            c = total.cov
+            u_all = np.sqrt(np.clip(np.diag(c) if c.ndim == 2 else c, 0.0, None))
             if tolerance is not None:
                 deltas = np.full(u_all.shape, tol)
             else:
@@ -431,16 +626,19 @@ def _adaptive(
             if np.all(2.0 * sd <= deltas):
                 if progress is not None:
                     progress(nblocks * h, nblocks * h)
-                samples = np.concatenate(kept, axis=0)
-                return MonteCarloResult(
-                    samples=samples,
-                    trials=nblocks * h,
-                    seed=seed,
-                    adaptive=True,
-                    blocks=nblocks,
-                    block_trials=h,
-                    tolerance=delta,
-                    omitted=omitted,
-                    normal_method=method,
-                )
+                results = {
+                    name: MonteCarloResult(
+                        samples=np.concatenate([b[name] for b in kept], axis=0),
+                        trials=nblocks * h,
+                        seed=seed,
+                        adaptive=True,
+                        blocks=nblocks,
+                        block_trials=h,
+                        tolerance=delta,
+                        omitted=omitted,
+                        normal_method=method,
+                    )
+                    for name in kept[0]
+                }
+                return _package(results, nblocks * h, seed, omitted)
         n += ahead

@@ -28,8 +28,10 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
+from types import MappingProxyType
 from typing import Any, Literal
 
 import numpy as np
@@ -40,7 +42,10 @@ from scipy import stats
 from mtmc.errors import InputError
 
 __all__ = [
+    "MAX_COV_DIM",
     "CoverageEllipsoid",
+    "Moments",
+    "MonteCarloResults",
     "Histogram",
     "MonteCarloResult",
     "coverage_indices",
@@ -217,15 +222,104 @@ def _mahalanobis2(
     return np.einsum("ij,ij->j", w, w)
 
 
+#: Vector outputs of up to this many components keep their full covariance when their
+#: samples are not kept; wider ones keep the variances only.
+MAX_COV_DIM: int = 256
+
+
+@dataclass(frozen=True)
+class Moments:
+    """Count, mean and second central moments of a set of values, mergeable.
+
+    Attributes
+    ----------
+    n : int
+        Number of values.
+    mean : ndarray, shape (d,)
+        Their mean.
+    m2 : ndarray, shape (d, d) or (d,)
+        ``Σ (x - mean)(x - mean)ᵀ`` (the full matrix for ``d <= MAX_COV_DIM``, else its
+        diagonal ``Σ (x - mean)²``).
+
+    Notes
+    -----
+    Two sets merge exactly as Chan, Golub and LeVeque (1979) give it:
+    ``n = nₐ + n_b``, ``δ = x̄_b - x̄ₐ``, ``x̄ = x̄ₐ + δ n_b/n``,
+    ``M₂ = M₂ₐ + M₂_b + δδᵀ nₐn_b/n``. The Monte Carlo engine forms the moments of fixed
+    blocks of trials and merges them in trial order, so the result does not depend on
+    how the trials were cut into evaluation blocks or shared between workers.
+
+    Examples
+    --------
+    >>> x = np.arange(10.0).reshape(5, 2)
+    >>> m = Moments.of(x[:2]).merge(Moments.of(x[2:]))
+    >>> bool(np.allclose(m.cov, np.cov(x, rowvar=False)))
+    True
+    """
+
+    n: int
+    mean: NDArray[np.float64]
+    m2: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for name in ("mean", "m2"):
+            arr = np.array(getattr(self, name), dtype=np.float64)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    @classmethod
+    def of(cls, x: NDArray[np.float64]) -> Moments:
+        """The moments of the rows of ``x``, shape ``(n, d)``."""
+        return cls.of_columns(np.ascontiguousarray(np.asarray(x, dtype=np.float64).T))
+
+    @classmethod
+    def of_columns(cls, xt: NDArray[np.float64]) -> Moments:
+        """The moments of the columns of ``xt``, shape ``(d, n)`` (one row per component).
+
+        Row-wise reductions of a C-ordered ``(d, n)`` array are NumPy's fast pairwise
+        sums; the same array gives the same bits.
+        """
+        n = int(xt.shape[1])
+        mean = xt.mean(axis=1)
+        dev = xt - mean[:, None]
+        if xt.shape[0] <= 32:  # NumPy's own loops: no BLAS threads for a few components
+            m2 = np.einsum("ik,jk->ij", dev, dev)
+        elif xt.shape[0] <= MAX_COV_DIM:
+            m2 = dev @ dev.T
+        else:
+            m2 = np.einsum("ij,ij->i", dev, dev)
+        return cls(n, mean, m2)
+
+    def merge(self, other: Moments) -> Moments:
+        """The moments of the union of both sets."""
+        if other.n == 0:
+            return self
+        if self.n == 0:
+            return other
+        n = self.n + other.n
+        delta = other.mean - self.mean
+        mean = self.mean + delta * (other.n / n)
+        w = self.n * other.n / n
+        corr = np.outer(delta, delta) if self.m2.ndim == 2 else delta * delta
+        return Moments(n, mean, self.m2 + other.m2 + corr * w)
+
+    @property
+    def cov(self) -> NDArray[np.float64]:
+        """Covariance with divisor ``n - 1``: ``(d, d)``, or the variances ``(d,)``."""
+        return self.m2 / (self.n - 1)
+
+
 @dataclass(frozen=True)
 class MonteCarloResult:
     """The values of a Monte Carlo run and their summaries (JCGM 101 §7.5–7.7).
 
     Attributes
     ----------
-    samples : ndarray, shape (M,) or (M, d)
+    samples : ndarray, shape (M,) or (M, d), or None
         The model values, in trial order (trials whose value was not finite are left out
-        when the run used ``nan_policy="omit"``).
+        when the run used ``nan_policy="omit"``); ``None`` when the run did not keep
+        them (then ``moments`` holds the estimate and covariance, and coverage
+        intervals, histograms and ellipsoids are not available).
     trials : int
         Number of trials run (``M`` plus the omitted ones).
     seed : int or None
@@ -244,9 +338,15 @@ class MonteCarloResult:
         Trials whose model value was not finite and that were left out.
     normal_method : str
         How standard normal numbers were made (``"default"`` or ``"box-muller"``).
+    moments : Moments or None
+        Count, mean and second moments of the values, merged over fixed blocks of trials
+        (only for a result whose samples were not kept).
+    scalar : bool
+        With ``samples=None``: whether the output is a scalar (``(M,)``) rather than a
+        vector of one component (``(M, 1)``).
     """
 
-    samples: NDArray[np.float64] = field(repr=False)
+    samples: NDArray[np.float64] | None = field(repr=False)
     trials: int
     seed: int | None
     adaptive: bool = False
@@ -255,8 +355,21 @@ class MonteCarloResult:
     tolerance: float | None = None
     omitted: int = 0
     normal_method: str = "default"
+    moments: Moments | None = field(default=None, repr=False)
+    scalar: bool = True
 
     def __post_init__(self) -> None:
+        if self.block_trials == 0:
+            object.__setattr__(self, "block_trials", int(self.trials))
+        if self.samples is None:
+            if self.moments is None or self.moments.n < 2:
+                raise InputError(
+                    "expected samples, or the moments of at least 2 values", field="samples"
+                )
+            if self.scalar and self.moments.mean.shape != (1,):
+                raise InputError("a scalar result has moments of one component", field="scalar")
+            return
+        object.__setattr__(self, "moments", None)
         s = np.asarray(self.samples, dtype=np.float64)
         if s.ndim not in (1, 2) or s.shape[0] < 2:
             raise InputError(
@@ -275,8 +388,7 @@ class MonteCarloResult:
             s = s.view()
         s.setflags(write=False)
         object.__setattr__(self, "samples", s)
-        if self.block_trials == 0:
-            object.__setattr__(self, "block_trials", int(self.trials))
+        object.__setattr__(self, "scalar", s.ndim == 1)
 
     @classmethod
     def from_samples(
@@ -307,45 +419,97 @@ class MonteCarloResult:
 
     # ------------------------------------------------------------------ basic summaries
     @property
+    def kept(self) -> bool:
+        """Whether the samples were kept (else only their moments)."""
+        return self.samples is not None
+
+    @property
+    def values(self) -> NDArray[np.float64]:
+        """The samples, or an :class:`~mtmc.errors.InputError` if they were not kept."""
+        if self.samples is None:
+            raise InputError(
+                "the samples of this output were not kept (run with keep=[...] or "
+                "keep_samples=True); only its estimate, u and covariance are available",
+                field="samples",
+            )
+        return self.samples
+
+    @property
     def m(self) -> int:
         """Number of values ``M``."""
+        if self.samples is None:
+            assert self.moments is not None
+            return self.moments.n
         return int(self.samples.shape[0])
 
     @property
     def dim(self) -> int:
         """0 for a scalar output, ``d`` for a vector output."""
+        if self.samples is None:
+            assert self.moments is not None
+            return 0 if self.scalar else int(self.moments.mean.shape[0])
         return 0 if self.samples.ndim == 1 else int(self.samples.shape[1])
 
     @cached_property
     def estimate(self) -> Any:
-        """The estimate ``y``: the average of the values (JCGM 101 eq. (12)); float or (d,)."""
-        mean = self.samples.mean(axis=0)
-        return float(mean) if self.dim == 0 else mean
+        """The estimate ``y``: the average of the values (JCGM 101 eq. (12)); float or (d,).
+
+        A vector estimate is a read-only array.
+        """
+        if self.samples is None:
+            assert self.moments is not None
+            mean = np.array(self.moments.mean)
+        else:
+            mean = self.samples.mean(axis=0)
+        if self.dim == 0:
+            return float(mean.reshape(-1)[0])
+        mean.setflags(write=False)
+        return mean
 
     @cached_property
     def u(self) -> Any:
         """Standard uncertainty ``u(y)``: standard deviation with divisor ``M - 1``.
 
-        JCGM 101 eq. (13), seed 000 eq. (5); float, or ``(d,)`` for a vector output.
+        JCGM 101 eq. (13), Stryczek eq. (5); float, or a read-only ``(d,)`` array for a
+        vector output.
         """
-        sd = self.samples.std(axis=0, ddof=1)
-        return float(sd) if self.dim == 0 else sd
+        if self.samples is None:
+            assert self.moments is not None
+            c = self.moments.cov
+            sd = np.sqrt(np.clip(np.diag(c) if c.ndim == 2 else c, 0.0, None))
+        else:
+            sd = self.samples.std(axis=0, ddof=1)
+        if self.dim == 0:
+            return float(sd.reshape(-1)[0])
+        sd.setflags(write=False)
+        return sd
 
     @cached_property
     def cov(self) -> NDArray[np.float64]:
         """Covariance matrix ``U_y`` with divisor ``M - 1`` (JCGM 102 eq. (21)), ``(d, d)``.
 
-        For a scalar output, the ``(1, 1)`` matrix ``[[u²]]``.
+        For a scalar output, the ``(1, 1)`` matrix ``[[u²]]``. Read-only.
         """
-        x = self.samples.reshape(self.m, -1)
-        c = np.atleast_2d(np.cov(x, rowvar=False, ddof=1))
+        if self.samples is None:
+            assert self.moments is not None
+            c = self.moments.cov
+            if c.ndim == 1:
+                raise InputError(
+                    f"the covariance of an output of {c.shape[0]} components is not kept "
+                    f"when its samples are not (more than {MAX_COV_DIM}); u is available",
+                    field="samples",
+                )
+            c = np.array(c)
+        else:
+            x = self.samples.reshape(self.m, -1)
+            c = np.atleast_2d(np.cov(x, rowvar=False, ddof=1))
         c.setflags(write=False)
         return c
 
     @cached_property
     def _sorted(self) -> NDArray[np.float64]:
         self._require_scalar("coverage intervals")
-        s = np.sort(self.samples)
+        s = np.sort(self.values)
         s.setflags(write=False)
         return s
 
@@ -374,8 +538,18 @@ class MonteCarloResult:
             raise InputError("component() needs a vector output", field="samples")
         if not -self.dim <= i < self.dim:
             raise InputError(f"expected 0 <= i < {self.dim}, got {i}", field="i")
+        moments = None
+        if self.samples is None:
+            assert self.moments is not None
+            c = self.moments.m2
+            moments = Moments(
+                self.moments.n,
+                self.moments.mean[i : i + 1],
+                c[i : i + 1, i : i + 1] if c.ndim == 2 else c[i : i + 1],
+            )
         return MonteCarloResult(
-            samples=self.samples[:, i],
+            samples=None if self.samples is None else self.samples[:, i],
+            moments=moments,
             trials=self.trials,
             seed=self.seed,
             adaptive=self.adaptive,
@@ -467,7 +641,7 @@ class MonteCarloResult:
         Histogram
         """
         self._require_scalar("a histogram")
-        counts, edges = np.histogram(self.samples, bins=bins)
+        counts, edges = np.histogram(self.values, bins=bins)
         density = counts / (self.m * np.diff(edges))
         return Histogram(edges=edges, counts=counts.astype(np.int64), density=density)
 
@@ -510,7 +684,7 @@ class MonteCarloResult:
         centre = np.asarray(self.estimate, dtype=np.float64)
         cov = np.array(self.cov)
         if method == "mc":
-            d2 = _mahalanobis2(self.samples, centre, cov)
+            d2 = _mahalanobis2(self.values, centre, cov)
             q, _ = coverage_indices(self.m, pf)
             k2 = float(np.partition(d2, q - 1)[q - 1])
         elif method == "chi2":
@@ -550,7 +724,11 @@ class MonteCarloResult:
             "tolerance": self.tolerance,
             "omitted": self.omitted,
         }
-        if self.dim == 0:
+        if self.samples is None:
+            out["kept"] = False
+            if self.dim:
+                out["cov"] = self.cov.tolist()
+        elif self.dim == 0:
             out["p"] = float(p)
             out["interval_shortest"] = list(self.coverage_interval(p, "shortest"))
             out["interval_symmetric"] = list(self.coverage_interval(p, "symmetric"))
@@ -558,3 +736,55 @@ class MonteCarloResult:
         else:
             out["cov"] = self.cov.tolist()
         return out
+
+
+@dataclass(frozen=True, eq=False)
+class MonteCarloResults(Mapping[str, MonteCarloResult]):
+    """The results of one Monte Carlo run of a model with named outputs.
+
+    A read-only mapping from output name to its :class:`MonteCarloResult` (samples kept,
+    or their moments only), with the run's number of trials and seed. Every output comes
+    from the same trials: their joint samples (where kept) are row-aligned.
+
+    Attributes
+    ----------
+    outputs : mapping of str to MonteCarloResult
+        The outputs, in the order the model returned them.
+    trials : int
+        Number of trials run.
+    seed : int or None
+        The seed that reproduces the run.
+    omitted : int
+        Trials left out because an output was not finite (``nan_policy="omit"``).
+
+    Examples
+    --------
+    >>> from mtmc.uncertainty.montecarlo import monte_carlo
+    >>> r = monte_carlo(lambda x: {"twice": 2 * x, "pair": np.stack([x, -x], axis=1)},
+    ...                 {"x": "normal(1, 0.1)"}, trials=10_000, seed=1)
+    >>> list(r), round(r["twice"].u, 2), r["pair"].dim
+    (['twice', 'pair'], 0.2, 2)
+    """
+
+    outputs: Mapping[str, MonteCarloResult]
+    trials: int
+    seed: int | None
+    omitted: int = 0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "outputs", MappingProxyType(dict(self.outputs)))
+
+    def __getitem__(self, name: str) -> MonteCarloResult:
+        try:
+            return self.outputs[name]
+        except KeyError:
+            raise InputError(
+                f"the run has no output {name!r}; expected one of {', '.join(self.outputs)}",
+                field=name,
+            ) from None
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.outputs)
+
+    def __len__(self) -> int:
+        return len(self.outputs)

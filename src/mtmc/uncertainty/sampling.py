@@ -4,8 +4,10 @@ One integer seed fixes every number of a run, whatever the chunking, the number 
 workers, or the order of the inputs:
 
 * The trials ``0, 1, ..., M-1`` are cut into *seed blocks* of the fixed size
-  :data:`SEED_BLOCK_SIZE`. Seed block ``k`` is drawn from the ``k``-th spawned child of
-  ``SeedSequence(seed)``, i.e. ``SeedSequence(seed, spawn_key=(k,))``.
+  :data:`SEED_BLOCK_SIZE` (for an input of more than 64 components, of the smaller fixed
+  size :func:`seed_block_trials` gives for its dimension). Seed block ``k`` is drawn
+  from the ``k``-th spawned child of ``SeedSequence(seed)``, i.e.
+  ``SeedSequence(seed, spawn_key=(k,))``.
 * Within seed block ``k``, input ``name`` has its own stream, the child of that child
   keyed by a 64-bit hash of the name: ``SeedSequence(seed, spawn_key=(k, key(name)))``
   with ``key`` the first 8 bytes of SHA-256 of the UTF-8 name. Adding, removing or
@@ -50,7 +52,9 @@ from mtmc.uncertainty.distributions import (
 __all__ = [
     "DEFAULT_BLOCK_SIZE",
     "SEED_BLOCK_SIZE",
+    "seed_block_trials",
     "draw",
+    "evaluation_block_size",
     "input_generator",
     "iter_blocks",
     "resolve_seed",
@@ -59,8 +63,48 @@ __all__ = [
 #: Number of trials drawn from one spawned child of the seed (fixed; see module docs).
 SEED_BLOCK_SIZE: int = 16384
 
+#: At most this many numbers of one input in one seed block (8 MiB of float64): an input
+#: of dimension ``k > 64`` is drawn in seed blocks of fewer trials (:func:`seed_block_trials`).
+MAX_SEED_BLOCK_VALUES: int = 2**20
+
 #: Default number of trials per evaluation block (memory vs call overhead).
 DEFAULT_BLOCK_SIZE: int = 65536
+
+#: The drawn inputs of one evaluation block take at most this many bytes
+#: (:func:`evaluation_block_size`).
+BLOCK_BYTES: int = 64 * 2**20
+
+#: One seed block of every input is kept between evaluation blocks while this fits.
+CACHE_BYTES: int = 256 * 2**20
+
+
+def seed_block_trials(dim: int) -> int:
+    """Trials per seed block of an input of dimension ``dim`` (0 for a scalar).
+
+    :data:`SEED_BLOCK_SIZE` for inputs of up to 64 components; for wider inputs
+    (e.g. the noise of every coordinate of every point of a verification,
+    :class:`~mtmc.uncertainty.distributions.IID`) ``⌊MAX_SEED_BLOCK_VALUES / dim⌋``, so
+    that one seed block holds at most :data:`MAX_SEED_BLOCK_VALUES` numbers. Like
+    :data:`SEED_BLOCK_SIZE`, this rule is part of the reproducibility contract.
+
+    Parameters
+    ----------
+    dim : int
+        Dimension of the input.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> seed_block_trials(0), seed_block_trials(3), seed_block_trials(288)
+    (16384, 16384, 3640)
+    """
+    width = max(1, int(dim))
+    if width * SEED_BLOCK_SIZE <= MAX_SEED_BLOCK_VALUES:
+        return SEED_BLOCK_SIZE
+    return max(1, MAX_SEED_BLOCK_VALUES // width)
 
 
 def resolve_seed(seed: int | None | np.random.SeedSequence) -> int:
@@ -186,47 +230,90 @@ def _prepare(
 
 
 class _BlockSource:
-    """Draws seed blocks on demand, keeping the last one for the next evaluation block."""
+    """Draws the seed blocks of each input on demand and slices the trials asked for.
+
+    The last seed block of each input is kept for the next evaluation block, unless
+    keeping one block of every input would take more than :data:`CACHE_BYTES`; then each
+    evaluation block draws the seed blocks it needs and keeps only its own trials, so
+    the memory of a run is bounded by the evaluation block, whatever the number of
+    inputs (at the price of drawing a seed block again for each evaluation block in it).
+    """
 
     def __init__(self, dists: dict[str, Distribution], seed: int, method: NormalMethod):
         self.dists, self.seed, self.method = dists, seed, method
-        self.k: int | None = None
-        self.cached: dict[str, NDArray[np.float64]] = {}
+        self.sizes = {n: seed_block_trials(d.dim) for n, d in dists.items()}
+        width = {n: max(1, d.dim) for n, d in dists.items()}
+        self.caching = sum(self.sizes[n] * width[n] for n in dists) * 8 <= CACHE_BYTES
+        self.cached: dict[str, tuple[int, NDArray[np.float64]]] = {}
 
-    def seed_block(self, k: int) -> dict[str, NDArray[np.float64]]:
-        if self.k != k:
-            self.cached = {
-                name: d.sample(
-                    input_generator(self.seed, k, name), SEED_BLOCK_SIZE, normal_method=self.method
-                )
-                for name, d in self.dists.items()
-            }
-            for arr in self.cached.values():
-                arr.setflags(write=False)  # a model must not change the drawn numbers
-            self.k = k
-        return self.cached
+    def block(self, name: str, k: int) -> NDArray[np.float64]:
+        """Seed block ``k`` of input ``name`` (read-only)."""
+        hit = self.cached.get(name)
+        if hit is not None and hit[0] == k:
+            return hit[1]
+        arr = self.dists[name].sample(
+            input_generator(self.seed, k, name), self.sizes[name], normal_method=self.method
+        )
+        arr.setflags(write=False)  # a model must not change the drawn numbers
+        if self.caching:
+            self.cached[name] = (k, arr)
+        return arr
 
     def trials(self, start: int, stop: int) -> dict[str, NDArray[np.float64]]:
-        s = SEED_BLOCK_SIZE
-        k0, k1 = start // s, (stop - 1) // s
-        if k0 == k1:  # inside one seed block: views, no copy
-            blk = self.seed_block(k0)
-            return {n: a[start - k0 * s : stop - k0 * s] for n, a in blk.items()}
-        out = {
-            n: np.empty((stop - start, *((d.dim,) if d.dim else ()))) for n, d in self.dists.items()
-        }
-        self.fill(out, start, stop, offset=start)
-        for arr in out.values():
+        out: dict[str, NDArray[np.float64]] = {}
+        for name, d in self.dists.items():
+            s = self.sizes[name]
+            k0, k1 = start // s, (stop - 1) // s
+            if k0 == k1 and self.caching:  # inside one seed block: a view, no copy
+                out[name] = self.block(name, k0)[start - k0 * s : stop - k0 * s]
+                continue
+            arr = np.empty((stop - start, *((d.dim,) if d.dim else ())))
+            self.fill_one(name, arr, start, stop, offset=start)
             arr.setflags(write=False)
+            out[name] = arr
         return out
 
-    def fill(self, out: dict[str, NDArray[np.float64]], start: int, stop: int, offset: int) -> None:
-        s = SEED_BLOCK_SIZE
+    def fill_one(
+        self, name: str, out: NDArray[np.float64], start: int, stop: int, offset: int
+    ) -> None:
+        s = self.sizes[name]
         for k in range(start // s, (stop - 1) // s + 1):
             lo, hi = max(start, k * s), min(stop, (k + 1) * s)
-            blk = self.seed_block(k)
-            for n, a in blk.items():
-                out[n][lo - offset : hi - offset] = a[lo - k * s : hi - k * s]
+            out[lo - offset : hi - offset] = self.block(name, k)[lo - k * s : hi - k * s]
+
+    def fill(self, out: dict[str, NDArray[np.float64]], start: int, stop: int, offset: int) -> None:
+        for name in self.dists:
+            self.fill_one(name, out[name], start, stop, offset)
+
+
+def evaluation_block_size(dists: Mapping[str, Distribution], block_size: int) -> int:
+    """The trials per evaluation block: ``block_size``, less where the inputs are wide.
+
+    The drawn inputs of one evaluation block take at most :data:`BLOCK_BYTES` (or one
+    trial); the number of trials per block never changes a number of a run.
+
+    Parameters
+    ----------
+    dists : mapping of str to Distribution
+        The inputs.
+    block_size : int
+        The requested trials per block.
+
+    Returns
+    -------
+    int
+        ``min(block_size, max(1, BLOCK_BYTES // (8 Σ max(1, dim))))``.
+
+    Examples
+    --------
+    >>> from mtmc.uncertainty.distributions import IID, Normal
+    >>> evaluation_block_size({"x": Normal(0, 1)}, 65536)
+    65536
+    >>> evaluation_block_size({"noise": IID(Normal(0, 1), 16224)}, 65536)
+    517
+    """
+    width = sum(max(1, d.dim) for d in dists.values())
+    return max(1, min(block_size, BLOCK_BYTES // (8 * max(1, width))))
 
 
 def iter_blocks(

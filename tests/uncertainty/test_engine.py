@@ -1,0 +1,180 @@
+"""One engine for every model: named outputs, streamed moments, wide inputs, bounded memory."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from mtmc.errors import InputError
+from mtmc.uncertainty.distributions import IID, Normal, Uniform, parse_distribution
+from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.results import Moments, MonteCarloResult, MonteCarloResults
+from mtmc.uncertainty.sampling import (
+    MAX_SEED_BLOCK_VALUES,
+    SEED_BLOCK_SIZE,
+    draw,
+    input_generator,
+    iter_blocks,
+    seed_block_trials,
+)
+
+INPUTS = {"x": Normal(1.0, 0.1), "y": Uniform(-1.0, 1.0)}
+
+
+def two(x, y):
+    return {"sum": x + y, "pair": np.stack([x * y, x - y, np.exp(y)], axis=1)}
+
+
+def test_iid_text_round_trip_and_moments():
+    d = parse_distribution("iid(uniform(0, 2), 5)")
+    assert isinstance(d, IID) and d.dim == 5
+    assert parse_distribution(str(d)) == d
+    assert d.std.tolist() == pytest.approx([2 / np.sqrt(12)] * 5)
+    z = d.sample(np.random.default_rng(3), 40_000)
+    assert z.shape == (40_000, 5)
+    # 200 000 values of U(0, 2): standard error of the mean 0.0013
+    assert abs(z.mean() - 1.0) < 0.006
+    with pytest.raises(Exception, match="scalar distribution"):
+        IID(IID(Normal(0, 1), 2), 3)
+    with pytest.raises(Exception, match="k >= 1"):
+        parse_distribution("iid(normal(0, 1), 0)")
+
+
+def test_seed_block_rule_keeps_narrow_inputs_and_bounds_wide_ones():
+    assert seed_block_trials(0) == seed_block_trials(64) == SEED_BLOCK_SIZE
+    assert seed_block_trials(65) == MAX_SEED_BLOCK_VALUES // 65
+    assert seed_block_trials(10**7) == 1
+    # a narrow input: still the first values of its seed block's generator
+    x = draw({"x": Normal(0, 1)}, 10, seed=9)["x"]
+    np.testing.assert_array_equal(x, input_generator(9, 0, "x").standard_normal(10))
+    # a wide input: seed block k of its own size, row by row
+    w = IID(Normal(0, 1), 300)
+    s = seed_block_trials(300)
+    got = draw({"w": w}, s + 5, seed=9)["w"]
+    ref1 = input_generator(9, 1, "w").standard_normal(s * 300).reshape(s, 300)[:5]
+    np.testing.assert_array_equal(got[s:], ref1)
+
+
+@pytest.mark.parametrize("block_size", [1, 97, 4096, 100_000])
+def test_wide_input_draws_do_not_depend_on_block_size(block_size):
+    inputs = {"w": IID(Normal(0, 1), 500), "x": Normal(0, 1)}
+    ref = draw(inputs, 5000, seed=4)
+    got = {
+        k: np.concatenate([s[k] for _, _, s in iter_blocks(inputs, 5000, 4, block_size)])
+        for k in inputs
+    }
+    for k in inputs:
+        np.testing.assert_array_equal(got[k], ref[k])
+
+
+def test_wide_input_run_memory_is_bounded():
+    """10 trials of a 16 224-component input: a few MiB, not 16 384 x 16 224 x 8 B = 2 GiB."""
+    inputs = {"noise": IID(Normal(0, 0.004), 16_224)}
+    tracemalloc.start()
+    r = monte_carlo(lambda noise: noise.std(axis=1), inputs, trials=10, seed=1)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 64 * 2**20
+    # each trial's std of 16 224 N(0, 0.004²) values is 0.004 to ±2 %
+    assert np.all(np.abs(r.samples / 0.004 - 1) < 0.02)
+
+
+def test_named_outputs_match_single_output_runs():
+    r = monte_carlo(two, INPUTS, trials=30_000, seed=11)
+    assert isinstance(r, MonteCarloResults)
+    assert list(r) == ["sum", "pair"] and len(r) == 2 and r.trials == 30_000
+    alone = monte_carlo(lambda x, y: x + y, INPUTS, trials=30_000, seed=11)
+    np.testing.assert_array_equal(r["sum"].samples, alone.samples)
+    assert r["pair"].dim == 3 and r["sum"].dim == 0
+    with pytest.raises(InputError, match="no output 'nope'"):
+        r["nope"]
+
+
+def test_moments_only_equal_the_sample_summaries():
+    full = monte_carlo(two, INPUTS, trials=50_000, seed=2)
+    light = monte_carlo(two, INPUTS, trials=50_000, seed=2, keep=False)
+    for name in ("sum", "pair"):
+        a, b = full[name], light[name]
+        assert not b.kept and b.m == a.m
+        np.testing.assert_allclose(b.estimate, a.estimate, rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(b.u, a.u, rtol=1e-11)
+        np.testing.assert_allclose(b.cov, a.cov, rtol=1e-10, atol=1e-16)
+    with pytest.raises(InputError, match="not kept"):
+        light["sum"].coverage_interval(0.95)
+    some = monte_carlo(two, INPUTS, trials=1000, seed=2, keep=["pair"])
+    assert some["pair"].kept and not some["sum"].kept
+    with pytest.raises(InputError, match="keep names other"):
+        monte_carlo(two, INPUTS, trials=1000, seed=2, keep=["other"])
+
+
+@pytest.mark.parametrize(
+    ("block_size", "workers", "executor"),
+    [(1000, 1, "thread"), (7777, 2, "thread"), (30_000, 2, "process")],
+)
+def test_streamed_summaries_are_bit_identical_whatever_the_blocks(block_size, workers, executor):
+    ref = monte_carlo(_module_model, INPUTS, trials=70_000, seed=5, keep=False)
+    got = monte_carlo(
+        _module_model,
+        INPUTS,
+        trials=70_000,
+        seed=5,
+        keep=False,
+        block_size=block_size,
+        workers=workers,
+        executor=executor,
+    )
+    for name in ref:
+        np.testing.assert_array_equal(got[name].estimate, ref[name].estimate)
+        np.testing.assert_array_equal(got[name].cov, ref[name].cov)
+
+
+def _module_model(x, y):
+    return two(x, y)
+
+
+def test_nan_omitted_from_every_output_alike():
+    def model(x, y):
+        return {"a": np.where(y > 0.9, np.nan, x), "b": y}
+
+    r = monte_carlo(model, INPUTS, trials=20_000, seed=3, nan_policy="omit")
+    assert r.omitted == r["a"].omitted > 0
+    assert r["a"].m == r["b"].m == 20_000 - r.omitted
+    assert r["b"].samples.max() <= 0.9
+    with pytest.raises(InputError, match="output 'a' is not finite"):
+        monte_carlo(model, INPUTS, trials=20_000, seed=3)
+
+
+def test_runs_that_cannot_fit_are_refused_before_they_start():
+    with pytest.raises(InputError, match=r"needs 7.45e\+03 GiB, more than half"):
+        monte_carlo(lambda x, y: x, INPUTS, trials=10**12, seed=1)
+
+
+def test_contradictory_calls_are_refused():
+    with pytest.raises(InputError, match="adaptive=True"):
+        monte_carlo(lambda x, y: x, INPUTS, trials=1000, seed=1, adaptive=True)
+    with pytest.raises(TypeError):
+        monte_carlo(lambda x, y: x, INPUTS, 1000, 1, False)  # options are keyword-only
+    with pytest.raises(InputError, match="keep"):
+        monte_carlo(lambda x, y: x, INPUTS, trials=1000, seed=1, keep="x")
+
+
+def test_moments_merge_is_the_moments_of_the_union():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(1001, 4)) * [1, 10, 100, 1e-3] + 5
+    m = Moments.of(x[:10]).merge(Moments.of(x[10:600])).merge(Moments.of(x[600:]))
+    assert m.n == 1001
+    np.testing.assert_allclose(m.mean, x.mean(axis=0), rtol=1e-14)
+    np.testing.assert_allclose(m.cov, np.cov(x, rowvar=False), rtol=1e-12, atol=1e-15)
+
+
+def test_vector_summaries_are_read_only():
+    r = monte_carlo(two, INPUTS, trials=2000, seed=1)
+    for arr in (r["pair"].estimate, r["pair"].u, r["pair"].cov, r["pair"].samples):
+        with pytest.raises(ValueError, match="read-only"):
+            arr[0] = 99.0
+    light = MonteCarloResult(
+        samples=None, moments=Moments.of(np.ones((3, 1)) * [[1], [2], [3]]), trials=3, seed=None
+    )
+    assert light.estimate == 2.0 and light.u == 1.0
