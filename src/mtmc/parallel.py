@@ -11,10 +11,17 @@ and the results are put back in trial order. This module is the one place that d
   its random-number fills, so threads scale for large blocks);
 * ``executor="process"``: a process pool (the model must be picklable: a module-level
   function, not a lambda);
-* any :class:`concurrent.futures.Executor` given by the caller, e.g. a Dask
-  ``distributed`` client's executor, for a cluster.
+* ``executor="dask"``: a Dask cluster (the optional extra ``mtmc[distributed]``):
+  with ``scheduler=None`` a :class:`distributed.LocalCluster` of ``workers`` worker
+  processes started for the call and closed after it; with ``scheduler`` a running
+  cluster, by the address of its scheduler (``"tcp://host:8786"``) or a
+  :class:`distributed.Client`. Each block of trials is one Dask task, submitted with
+  ``pure=False`` a few blocks ahead per worker; a block lost with its worker is
+  computed again by the scheduler, and gives the same numbers;
+* any :class:`concurrent.futures.Executor` given by the caller.
 
-Whichever is used, the numbers are the same.
+Whichever is used, the numbers are the same: the random numbers of a block depend only
+on the seed and the trial indices, and the blocks' results are merged in trial order.
 
 Examples
 --------
@@ -27,7 +34,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import pickle
 from collections.abc import Callable, Iterable, Iterator
-from typing import Literal, TypeVar
+from typing import Any, Literal, TypeVar
 
 from mtmc.errors import InputError
 
@@ -35,7 +42,64 @@ __all__ = ["ExecutorKind", "map_blocks"]
 
 T = TypeVar("T")
 R = TypeVar("R")
-ExecutorKind = Literal["thread", "process"]
+ExecutorKind = Literal["thread", "process", "dask"]
+
+#: Blocks submitted ahead per Dask worker (bounds the memory of results in flight).
+DASK_AHEAD: int = 4
+
+
+def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:
+    """A ``distributed.Client`` for ``scheduler`` (or a new local cluster) and what to close."""
+    try:
+        import distributed
+    except ImportError:
+        raise InputError(
+            "executor='dask' needs Dask's distributed scheduler: pip install 'mtmc[distributed]'",
+            field="executor",
+        ) from None
+    if scheduler is None:
+        cluster = distributed.LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=":0",
+        )
+        client = distributed.Client(cluster)
+        return client, (client, cluster)
+    if isinstance(scheduler, distributed.Client):
+        return scheduler, ()
+    if not isinstance(scheduler, str) or not scheduler:
+        raise InputError(
+            f"expected a scheduler address such as 'tcp://127.0.0.1:8786' or a "
+            f"distributed.Client, got {scheduler!r}",
+            field="scheduler",
+        )
+    try:
+        client = distributed.Client(scheduler, timeout="5s")
+    except (OSError, TimeoutError) as exc:
+        raise InputError(
+            f"cannot reach the Dask scheduler at {scheduler}: {exc}", field="scheduler"
+        ) from None
+    return client, (client,)
+
+
+def _dask_map(fn: Callable[[T], R], tasks: list[T], client: Any) -> Iterator[R]:
+    """Submit ``fn(task)`` as Dask tasks a few ahead of the one awaited; yield in order."""
+    ahead = DASK_AHEAD * max(1, len(client.scheduler_info().get("workers", {})))
+    pending: list[Any] = []
+    it = iter(tasks)
+    for task in it:
+        pending.append(client.submit(fn, task, pure=False))
+        if len(pending) >= ahead:
+            break
+    while pending:
+        fut = pending.pop(0)
+        yield fut.result()
+        fut.release()
+        nxt = next(it, None)
+        if nxt is not None:
+            pending.append(client.submit(fn, nxt, pure=False))
 
 
 def map_blocks(
@@ -44,6 +108,7 @@ def map_blocks(
     *,
     workers: int = 1,
     executor: ExecutorKind | cf.Executor = "thread",
+    scheduler: Any = None,
 ) -> Iterator[R]:
     """Apply ``fn`` to each task and yield the results in task order.
 
@@ -56,9 +121,13 @@ def map_blocks(
         The tasks (for Monte Carlo: trial ranges with what is needed to draw them).
     workers : int, default 1
         Number of workers; ``1`` runs in this process, in order, without a pool.
-    executor : {"thread", "process"} or concurrent.futures.Executor
-        The kind of local pool for ``workers > 1``, or an executor to use as is
-        (``workers`` is then ignored and the executor is not shut down).
+    executor : {"thread", "process", "dask"} or concurrent.futures.Executor
+        The kind of local pool for ``workers > 1``, a Dask cluster, or an executor to
+        use as is (``workers`` is then ignored and the executor is not shut down).
+    scheduler : str or distributed.Client, optional
+        With ``executor="dask"``: the running cluster to use (its scheduler's address or
+        a client, which is not closed); ``None`` starts a local cluster of ``workers``
+        worker processes for this call.
 
     Yields
     ------
@@ -68,18 +137,32 @@ def map_blocks(
     Raises
     ------
     InputError
-        For ``workers < 1``, an unknown executor name, or (process pool) a function or
-        task that cannot be pickled.
+        For ``workers < 1``, an unknown executor name, (process pool) a function or
+        task that cannot be pickled, Dask not installed, or a scheduler that cannot be
+        reached (the message names its address).
     """
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError(f"expected an integer >= 1, got {workers!r}", field="workers")
     if isinstance(executor, cf.Executor):
         yield from executor.map(fn, tasks)
         return
-    if executor not in ("thread", "process"):
+    if executor not in ("thread", "process", "dask"):
         raise InputError(
-            f"expected 'thread', 'process' or an Executor, got {executor!r}", field="executor"
+            f"expected 'thread', 'process', 'dask' or an Executor, got {executor!r}",
+            field="executor",
         )
+    if scheduler is not None and executor != "dask":
+        raise InputError(
+            f"a scheduler ({scheduler!r}) is used with executor='dask' only", field="scheduler"
+        )
+    if executor == "dask":
+        client, to_close = _dask_client(scheduler, workers)
+        try:
+            yield from _dask_map(fn, list(tasks), client)
+        finally:
+            for obj in to_close:
+                obj.close()
+        return
     if workers == 1:
         for task in tasks:
             yield fn(task)

@@ -40,6 +40,60 @@ PROGRESS_OPTION: Any = typer.Option(
 )
 
 
+#: ``--workers N``: blocks of trials (or grid points) evaluated at once.
+WORKERS_OPTION: Any = typer.Option(
+    1, "--workers", "-w", min=1, help="Workers that evaluate blocks of trials at once."
+)
+
+#: ``--executor``: where the workers run.
+EXECUTOR_OPTION: Any = typer.Option(
+    "thread",
+    "--executor",
+    help="thread, process, or dask (a local Dask cluster of --workers processes, or the "
+    "cluster of --scheduler). The numbers do not depend on it.",
+)
+
+#: ``--scheduler ADDRESS``: a running Dask cluster.
+SCHEDULER_OPTION: Any = typer.Option(
+    None,
+    "--scheduler",
+    help="Address of a running Dask scheduler, e.g. tcp://127.0.0.1:8786 (implies "
+    "--executor dask).",
+)
+
+
+def parallel_options(workers: int, executor: str, scheduler: str | None) -> dict[str, Any]:
+    """The ``workers``, ``executor`` and ``scheduler`` arguments of a run, checked.
+
+    Parameters
+    ----------
+    workers : int
+        ``--workers``.
+    executor : str
+        ``--executor``: ``thread``, ``process`` or ``dask``.
+    scheduler : str or None
+        ``--scheduler``; it implies ``--executor dask``.
+
+    Returns
+    -------
+    dict
+        Keyword arguments for :func:`mtmc.uncertainty.monte_carlo`, ``run_graph`` or
+        ``sweep``.
+
+    Raises
+    ------
+    InputError
+        For an unknown executor.
+    """
+    from mtmc.errors import InputError
+
+    if executor not in ("thread", "process", "dask"):
+        raise InputError(f"expected thread, process or dask, got {executor!r}", field="--executor")
+    if scheduler is not None:
+        executor = "dask"
+    return {"workers": workers, "executor": executor, "scheduler": scheduler}
+
+
 def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
     """Print a one-line error on stderr and stop the subcommand with status ``code``.
 

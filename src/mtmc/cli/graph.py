@@ -15,7 +15,17 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import PROGRESS_OPTION, fail, print_json, progress_bar, write_output
+from mtmc.cli.common import (
+    EXECUTOR_OPTION,
+    PROGRESS_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    fail,
+    parallel_options,
+    print_json,
+    progress_bar,
+    write_output,
+)
 from mtmc.errors import MtmcError
 from mtmc.graph.model import Graph
 from mtmc.graph.units import place_dimension
@@ -116,6 +126,9 @@ def run_cmd(
     seed: int | None = typer.Option(None, "--seed", help="Seed (default: fresh, printed)."),
     place: list[str] | None = typer.Option(None, "--place", "-p", help="Only these places."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Run FILE by Monte Carlo and print each place's estimate and standard uncertainty.
@@ -129,7 +142,14 @@ def run_cmd(
     try:
         plan = check(_read(file))
         with progress_bar(f"{file.name}: Monte Carlo", progress) as bar:
-            res = run_graph(plan, trials, seed, outputs=place or None, progress=bar)
+            res = run_graph(
+                plan,
+                trials,
+                seed,
+                outputs=place or None,
+                progress=bar,
+                **parallel_options(workers, executor, scheduler),
+            )
     except MtmcError as exc:
         fail(exc)
     if as_json:
@@ -195,6 +215,9 @@ def sweep_cmd(
     csv: Path | None = typer.Option(None, "--csv", help="Write the grid as CSV here."),
     no_intercept: bool = typer.Option(False, "--no-intercept", help="Fit without c0."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Run FILE on a grid and fit the surrogate U^2 = c0 + sum c_i sigma_i^2 (seed 000 eq. 31)."""
@@ -209,7 +232,15 @@ def sweep_cmd(
             ranges[key.strip()] = parse_range(rng, field=key.strip())
         g = _read(file)
         with progress_bar(f"{file.name}: sweep", progress) as bar:
-            res = sweep(g, ranges, output, trials=trials, seed=seed, progress=bar)
+            res = sweep(
+                g,
+                ranges,
+                output,
+                trials=trials,
+                seed=seed,
+                progress=bar,
+                **parallel_options(workers, executor, scheduler),
+            )
         fit = res.fit(intercept=not no_intercept)
     except MtmcError as exc:
         fail(exc)

@@ -13,7 +13,16 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import PROGRESS_OPTION, fail, print_json, progress_bar
+from mtmc.cli.common import (
+    EXECUTOR_OPTION,
+    PROGRESS_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    fail,
+    parallel_options,
+    print_json,
+    progress_bar,
+)
 from mtmc.errors import InputError, MtmcError
 from mtmc.uncertainty.distributions import Distribution, parse_distribution
 from mtmc.uncertainty.expression import Expression, expression
@@ -85,6 +94,9 @@ def propagate(
     with_gum: bool = typer.Option(False, "--gum", help="Also the GUM and §8 validation."),
     p: float = typer.Option(0.95, "--p", help="Coverage probability."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Propagate input distributions through EXPR by Monte Carlo (JCGM 101)."""
@@ -102,6 +114,7 @@ def propagate(
                 adaptive=adaptive,
                 p=p,
                 progress=bar,
+                **parallel_options(workers, executor, scheduler),
             )
         if mc.dim != 0:
             raise InputError(

@@ -550,6 +550,7 @@ def run_graph(
     progress: Callable[[int, int | None], None] | None = None,
     workers: int = 1,
     executor: ExecutorKind | Any = "thread",
+    scheduler: Any = None,
     nan_policy: NanPolicy = "raise",
 ) -> GraphResult:
     """Monte Carlo over a measurement graph (JCGM 101 with Stryczek's graph as the model).
@@ -585,8 +586,10 @@ def run_graph(
         change any number.
     workers : int, default 1
         Local workers (see :mod:`mtmc.parallel`); the numbers do not depend on it.
-    executor : {"thread", "process"} or concurrent.futures.Executor
-        Where the blocks run when ``workers > 1``.
+    executor : {"thread", "process", "dask"} or concurrent.futures.Executor
+        Where the blocks run when ``workers > 1`` (see :mod:`mtmc.parallel`).
+    scheduler : str or distributed.Client, optional
+        With ``executor="dask"``, a running Dask cluster to use.
     nan_policy : {"raise", "omit"}
         As :func:`~mtmc.uncertainty.monte_carlo`.
 
@@ -630,6 +633,7 @@ def run_graph(
         progress=progress,
         workers=workers,
         executor=executor,
+        scheduler=scheduler,
         nan_policy=nan_policy,
     )
     places = {n: PlaceSummary(n, plan.types[n], res[n]) for n in summ}

@@ -29,6 +29,7 @@ import io
 import itertools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -38,6 +39,7 @@ from mtmc.errors import GraphError, InputError
 from mtmc.graph.model import Graph, check
 from mtmc.graph.places import ProbeDefaults
 from mtmc.graph.run import run_graph
+from mtmc.parallel import ExecutorKind, map_blocks
 from mtmc.uncertainty.sampling import resolve_seed
 
 __all__ = [
@@ -310,6 +312,22 @@ class SweepResult:
         return buf.getvalue()
 
 
+@dataclass(frozen=True)
+class _SweepPoint:
+    """One grid point of a sweep: a run of the graph (picklable, for workers)."""
+
+    output: str
+    trials: int
+    seed: int
+
+    def __call__(
+        self, graph: Graph, progress: Callable[[int, int | None], None] | None = None
+    ) -> tuple[float, float]:
+        res = run_graph(graph, self.trials, self.seed, outputs=[self.output], progress=progress)
+        summary = res.places[self.output]
+        return float(summary.u), float(summary.estimate)
+
+
 def sweep(
     graph: Graph,
     vary: Mapping[str, npt.ArrayLike],
@@ -318,6 +336,9 @@ def sweep(
     trials: int = 1000,
     seed: int | None | np.random.SeedSequence = None,
     progress: Callable[[int, int | None], None] | None = None,
+    workers: int = 1,
+    executor: ExecutorKind | Any = "thread",
+    scheduler: Any = None,
 ) -> SweepResult:
     """Run a graph on the grid of all combinations of the varied parameters.
 
@@ -337,8 +358,15 @@ def sweep(
     progress : callable, optional
         ``progress(done, total)`` with ``total = n·trials`` for the ``n`` grid points,
         called after each block of each grid point with the trials done so far over the
-        whole sweep (increasing, the last call with ``done == total``). It does not
-        change any number.
+        whole sweep (increasing, the last call with ``done == total``; after each grid
+        point when they run on workers). It does not change any number.
+    workers : int, default 1
+        Grid points run on this many workers at once (each point one task; see
+        :mod:`mtmc.parallel`); the numbers do not depend on it.
+    executor : {"thread", "process", "dask"} or concurrent.futures.Executor
+        Where the grid points run when ``workers > 1``.
+    scheduler : str or distributed.Client, optional
+        With ``executor="dask"``, a running Dask cluster to use.
 
     Returns
     -------
@@ -366,20 +394,33 @@ def sweep(
     axes = [np.asarray(v, dtype=np.float64).reshape(-1) for v in vary.values()]
     seed_i = resolve_seed(seed)
     grid = np.array(list(itertools.product(*axes)), dtype=np.float64).reshape(-1, len(names))
-    us, est = [], []
-    total = grid.shape[0] * int(trials)
-    for i, row in enumerate(grid):
+    graphs = []
+    for row in grid:
         g = graph
         for key, val in zip(names, row, strict=True):
             g = apply_setting(g, key, float(val))
-        step = None
-        if progress is not None:
-            done_before = i * int(trials)
+        graphs.append(g)
+    trials = int(trials)
+    total = grid.shape[0] * trials
+    point = _SweepPoint(output, trials, seed_i)
+    us, est = [], []
+    if workers == 1 and executor in ("thread", "process"):
+        for i, g in enumerate(graphs):
+            step = None
+            if progress is not None:
+                done_before = i * trials
 
-            def step(done: int, _total: int | None, _before: int = done_before) -> None:
-                progress(_before + done, total)
+                def step(done: int, _total: int | None, _before: int = done_before) -> None:
+                    progress(_before + done, total)
 
-        res = run_graph(g, trials, seed_i, outputs=[output], progress=step)
-        us.append(res.places[output].u)
-        est.append(res.places[output].estimate)
+            u, e = point(g, step)
+            us.append(u)
+            est.append(e)
+    else:
+        results = map_blocks(point, graphs, workers=workers, executor=executor, scheduler=scheduler)
+        for i, (u, e) in enumerate(results):
+            us.append(u)
+            est.append(e)
+            if progress is not None:
+                progress((i + 1) * trials, total)
     return SweepResult(names, grid, np.array(us), np.array(est), output, int(trials), seed_i)

@@ -124,19 +124,97 @@ def _evaluate(
     return out
 
 
+@dataclass
+class _Digest:
+    """What one evaluation block hands back, in this process or from a worker.
+
+    ``rows``: the finite rows of the kept outputs. ``pieces``: for each seed block the
+    evaluation block touches (in order), ``(k, complete, {output: part})`` where a part
+    is the :class:`Moments` of the whole seed block when the evaluation block holds all
+    of it (``complete``), else the ``(d, rows)`` values of the piece it holds, which the
+    collector joins with the neighbouring pieces. Either way the moments of a seed block
+    come from the same C-ordered array, so they are the same bits wherever computed.
+    """
+
+    start: int
+    m: int
+    shapes: dict[str, tuple[int, ...]]
+    rows: dict[str, NDArray[np.float64]]
+    omitted: int
+    first_bad: int | None
+    bad_outputs: tuple[str, ...]
+    pieces: list[tuple[int, bool, dict[str, Any]]]
+
+
+def _block_array(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
+    """One new C-ordered ``(d, rows)`` array from the pieces of a seed block."""
+    if len(parts) > 1:
+        return np.ascontiguousarray(np.concatenate(parts, axis=1))
+    return np.array(parts[0], order="C")
+
+
+def _digest(start: int, outs: Outputs, keep: bool | frozenset[str], total: int) -> _Digest:
+    """Reduce the outputs of trials ``start..start+m-1`` of a run of ``total`` trials."""
+    m = next(iter(outs.values())).shape[0]
+    ok = np.ones(m, dtype=np.bool_)
+    for arr in outs.values():
+        # the sum of finite values is finite (but for an overflow, which then takes the
+        # row-by-row check): one pass, no temporary, in the common case
+        if not np.isfinite(arr.sum()):
+            fin = np.isfinite(arr)
+            ok &= fin if fin.ndim == 1 else fin.all(axis=1)
+    nbad = m - int(np.count_nonzero(ok))
+    bad: tuple[str, ...] = ()
+    if nbad:
+        bad = tuple(n for n, arr in outs.items() if not np.isfinite(arr).all())
+    kept = [n for n in outs if keep is True or (keep is not False and n in keep)]
+    rows = {n: (outs[n][ok] if nbad else outs[n]) for n in kept}
+    s = SEED_BLOCK_SIZE
+    pieces: list[tuple[int, bool, dict[str, Any]]] = []
+    lo = 0
+    while lo < m:
+        k = (start + lo) // s
+        hi = min(m, (k + 1) * s - start)
+        complete = start + lo == k * s and start + hi == min((k + 1) * s, total)
+        sel = ok[lo:hi]
+        part: dict[str, Any] = {}
+        for n, arr in outs.items():
+            if n in rows:
+                continue
+            x = arr[lo:hi].reshape(hi - lo, -1).T  # (d, rows)
+            x = x[:, sel] if nbad else x
+            part[n] = (
+                (Moments.of_columns(_block_array([x])) if x.shape[1] else None) if complete else x
+            )
+        pieces.append((k, complete, part))
+        lo = hi
+    return _Digest(
+        start=start,
+        m=m,
+        shapes={n: arr.shape[1:] for n, arr in outs.items()},
+        rows=rows,
+        omitted=nbad,
+        first_bad=start + int(np.argmin(ok)) if nbad else None,
+        bad_outputs=bad,
+        pieces=pieces,
+    )
+
+
 @dataclass(frozen=True)
 class _BlockJob:
-    """Draw and evaluate one trial range; picklable when the model is."""
+    """Draw, evaluate and reduce one trial range; picklable when the model is."""
 
     model: Callable[..., Any]
     dists: dict[str, Distribution]
     seed: int
     method: NormalMethod
+    keep: bool | frozenset[str]
+    total: int
 
-    def __call__(self, span: tuple[int, int]) -> Outputs:
+    def __call__(self, span: tuple[int, int]) -> _Digest:
         a, b = span
         samples = _BlockSource(self.dists, self.seed, self.method).trials(a, b)
-        return _evaluate(self.model, samples, a, b)
+        return _digest(a, _evaluate(self.model, samples, a, b), self.keep, self.total)
 
 
 def _memory_bytes() -> int:
@@ -152,18 +230,16 @@ def _gib(nbytes: float) -> str:
 
 
 class _Collector:
-    """Receives the outputs of consecutive trial ranges, in trial order.
+    """Merges the digests of consecutive trial ranges, in trial order.
 
     Keeps the samples of the outputs named in ``keep`` (preallocated, after a memory
     check) and, for the others, the moments of each fixed block of
     :data:`SEED_BLOCK_SIZE` trials merged in order (:class:`Moments`), so that no number
-    depends on the evaluation block size or the number of workers.
+    depends on the evaluation block size, the number of workers or where they ran.
     """
 
-    def __init__(
-        self, total: int, keep: bool | frozenset[str], nan_policy: NanPolicy, base: int = 0
-    ) -> None:
-        self.total, self.keep, self.nan_policy, self.base = total, keep, nan_policy, base
+    def __init__(self, total: int, keep: bool | frozenset[str], nan_policy: NanPolicy) -> None:
+        self.total, self.keep, self.nan_policy = total, keep, nan_policy
         self.shapes: dict[str, tuple[int, ...]] | None = None
         self.kept: dict[str, NDArray[np.float64]] = {}
         self.filled = 0  # rows written to the kept arrays
@@ -173,18 +249,20 @@ class _Collector:
         self.buffer: dict[str, list[NDArray[np.float64]]] = {}
         self.moments: dict[str, Moments] = {}
 
-    def _setup(self, outs: Outputs) -> None:
-        self.shapes = {n: a.shape[1:] for n, a in outs.items()}
+    def _setup(self, shapes: dict[str, tuple[int, ...]]) -> None:
+        self.shapes = shapes
         if self.keep is not True and self.keep is not False:
-            unknown = sorted(set(self.keep) - set(outs))
+            unknown = sorted(set(self.keep) - set(shapes))
             if unknown:
                 raise InputError(
                     f"keep names {', '.join(unknown)}, which the model does not return; "
-                    f"its outputs are {', '.join(outs) or 'unnamed'}",
+                    f"its outputs are {', '.join(shapes) or 'unnamed'}",
                     field="keep",
                 )
-        keep = [n for n in outs if self.keep is True or (self.keep is not False and n in self.keep)]
-        need = sum(8 * self.total * max(1, math.prod(self.shapes[n])) for n in keep)
+        keep = [
+            n for n in shapes if self.keep is True or (self.keep is not False and n in self.keep)
+        ]
+        need = sum(8 * self.total * max(1, math.prod(shapes[n])) for n in keep)
         limit = _memory_bytes() // 2
         if need > limit:
             raise InputError(
@@ -194,68 +272,49 @@ class _Collector:
                 field="trials",
             )
         for n in keep:
-            self.kept[n] = np.empty((self.total, *self.shapes[n]))
-        for n in outs:
+            self.kept[n] = np.empty((self.total, *shapes[n]))
+        for n in shapes:
             if n not in self.kept:
                 self.buffer[n] = []
-                width = max(1, math.prod(self.shapes[n]))
+                width = max(1, math.prod(shapes[n]))
                 self.moments[n] = Moments(
                     0, np.zeros(width), np.zeros((width, width) if width <= MAX_COV_DIM else width)
                 )
 
-    def add(self, start: int, outs: Outputs) -> None:
+    def add(self, d: _Digest) -> None:
         if self.shapes is None:
-            self._setup(outs)
+            self._setup(d.shapes)
         assert self.shapes is not None
-        shapes = {n: a.shape[1:] for n, a in outs.items()}
-        if shapes != self.shapes:
+        if d.shapes != self.shapes:
             raise InputError(
-                f"the model returned outputs of shapes {_shape_text(shapes)} for trials from "
-                f"{start} but {_shape_text(self.shapes)} before; expected the same outputs and "
-                "shapes for every block",
+                f"the model returned outputs of shapes {_shape_text(d.shapes)} for trials from "
+                f"{d.start} but {_shape_text(self.shapes)} before; expected the same outputs "
+                "and shapes for every block",
                 field="model",
             )
-        m = next(iter(outs.values())).shape[0]
-        ok = np.ones(m, dtype=np.bool_)
-        for a in outs.values():
-            # the sum of finite values is finite (but for an overflow, which then takes
-            # the row-by-row check): one pass, no temporary, in the common case
-            if not np.isfinite(a.sum()):
-                fin = np.isfinite(a)
-                ok &= fin if fin.ndim == 1 else fin.all(axis=1)
-        nbad = m - int(np.count_nonzero(ok))
-        if nbad and self.nan_policy == "raise":
-            if self.first_bad is None:
-                self.first_bad = start + int(np.argmin(ok))
-            self.bad_outputs.update(n for n, a in outs.items() if not np.isfinite(a).all())
-        self.omitted += nbad
-        good = m - nbad
+        if d.omitted and self.nan_policy == "raise" and self.first_bad is None:
+            self.first_bad = d.first_bad
+        self.bad_outputs.update(d.bad_outputs)
+        self.omitted += d.omitted
+        good = d.m - d.omitted
         for n, kept in self.kept.items():
-            kept[self.filled : self.filled + good] = outs[n][ok] if nbad else outs[n]
+            kept[self.filled : self.filled + good] = d.rows[n]
         self.filled += good
-        # moments of the fixed blocks of SEED_BLOCK_SIZE trials, merged in trial order
         s = SEED_BLOCK_SIZE
-        lo = 0
-        while lo < m:
-            hi = min(m, lo + (s - (start + lo) % s))
-            sel = ok[lo:hi]
-            for n, buf in self.buffer.items():
-                x = outs[n][lo:hi].reshape(hi - lo, -1).T  # (k, rows)
-                buf.append(x[:, sel] if nbad else x)
-            if (start + hi) % s == 0 or start + hi == self.base + self.total:
+        for k, complete, part in d.pieces:
+            for n, value in part.items():
+                if complete:
+                    if value is not None:
+                        self.moments[n] = self.moments[n].merge(value)
+                else:
+                    self.buffer[n].append(value)
+            if not complete and d.start + d.m >= min((k + 1) * s, self.total):
                 self._close()
-            lo = hi
 
     def _close(self) -> None:
         for n, buf in self.buffer.items():
             if buf:
-                # a new C-ordered (k, rows) array of the block, however its rows arrived:
-                # the same summation order, hence the same bits, for any evaluation
-                # block size or number of workers
-                if len(buf) > 1:
-                    x = np.ascontiguousarray(np.concatenate(buf, axis=1))
-                else:
-                    x = np.array(buf[0], order="C")
+                x = _block_array(buf)
                 if x.shape[1]:
                     self.moments[n] = self.moments[n].merge(Moments.of_columns(x))
                 buf.clear()
@@ -309,35 +368,44 @@ class _Runner:
         block_size: int,
         workers: int,
         executor: ExecutorKind | Any,
+        scheduler: Any = None,
     ) -> None:
-        self.model, self.block_size = model, evaluation_block_size(dists, block_size)
-        self.workers, self.executor = workers, executor
-        self.job = _BlockJob(model, dists, seed, method)
+        self.model, self.dists, self.seed, self.method = model, dists, seed, method
+        self.block_size = evaluation_block_size(dists, block_size)
+        self.workers, self.executor, self.scheduler = workers, executor, scheduler
         self.source = _BlockSource(dists, seed, method)
-
-    def _serial(self, span: tuple[int, int]) -> Outputs:
-        return _evaluate(self.model, self.source.trials(*span), *span)
 
     def run(
         self,
         start: int,
         stop: int,
-        sink: Callable[[int, Outputs], None],
+        collector: _Collector,
         progress: ProgressFn | None = None,
     ) -> None:
-        """Evaluate trials ``start..stop-1`` and hand each block to ``sink`` in order.
+        """Evaluate trials ``start..stop-1``, handing each block's digest on in order.
 
         ``progress(b, stop)`` is called after each block, ``b`` the end of the block.
         """
-        spans = [(a, min(a + self.block_size, stop)) for a in range(start, stop, self.block_size)]
-        serial = self.workers == 1 and not hasattr(self.executor, "map")
-        fn = self._serial if serial else self.job
-        for (a, b), outs in zip(
+        bs = self.block_size
+        spans = [(a, min(a + bs, stop)) for a in range(start, stop, bs)]
+        keep, total = collector.keep, start + collector.total
+        serial = self.workers == 1 and self.executor in ("thread", "process")
+        if serial:
+
+            def fn(span: tuple[int, int]) -> _Digest:
+                outs = _evaluate(self.model, self.source.trials(*span), *span)
+                return _digest(span[0], outs, keep, total)
+
+        else:
+            fn = _BlockJob(self.model, self.dists, self.seed, self.method, keep, total)
+        for (_, b), digest in zip(
             spans,
-            map_blocks(fn, spans, workers=self.workers, executor=self.executor),
+            map_blocks(
+                fn, spans, workers=self.workers, executor=self.executor, scheduler=self.scheduler
+            ),
             strict=True,
         ):
-            sink(a, outs)
+            collector.add(digest)
             if progress is not None:
                 progress(b, stop)
 
@@ -374,6 +442,7 @@ def monte_carlo(
     kind: Literal["shortest", "symmetric"] = "shortest",
     max_trials: int = 10**8,
     executor: ExecutorKind | Any = "thread",
+    scheduler: Any = None,
     progress: ProgressFn | None = None,
     keep: bool | Iterable[str] = True,
 ) -> Any:
@@ -426,8 +495,13 @@ def monte_carlo(
     max_trials : int, default 10**8, keyword-only
         The adaptive procedure gives up with :class:`~mtmc.errors.ConvergenceError`
         beyond this number of trials.
-    executor : {"thread", "process"} or concurrent.futures.Executor, keyword-only
-        Where the blocks run when ``workers > 1`` (or an executor used as is).
+    executor : {"thread", "process", "dask"} or concurrent.futures.Executor, keyword-only
+        Where the blocks run when ``workers > 1`` (or an executor used as is);
+        ``"dask"``: a Dask cluster, see :func:`mtmc.parallel.map_blocks`.
+    scheduler : str or distributed.Client, optional, keyword-only
+        With ``executor="dask"``, a running cluster (its scheduler's address, e.g.
+        ``"tcp://127.0.0.1:8786"``, or a client); ``None`` starts a local cluster of
+        ``workers`` processes for the call.
     progress : callable, optional, keyword-only
         ``progress(done, total)``, called in this process after each block with the
         number of trials evaluated so far (non-decreasing). A fixed run passes
@@ -498,7 +572,7 @@ def monte_carlo(
     if kind not in ("shortest", "symmetric"):
         raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
     keep_set = _check_keep(keep)
-    runner = _Runner(model, dists, seed_int, method, block_size, workers, executor)
+    runner = _Runner(model, dists, seed_int, method, block_size, workers, executor, scheduler)
 
     if adaptive:
         if trials is not None:
@@ -521,7 +595,7 @@ def monte_carlo(
         )
     m_total = _check_int(10**6 if trials is None else trials, "trials", 2)
     collector = _Collector(m_total, keep_set, nan_policy)
-    runner.run(0, m_total, collector.add, progress)
+    runner.run(0, m_total, collector, progress)
     collector.check()
     good = m_total - collector.omitted
     if good < 2:
@@ -592,8 +666,8 @@ def _adaptive(
             )
         for i in range(ahead):  # blocks n..n+ahead-1, evaluated together
             start = (n + i) * h
-            block = _Collector(h, True, nan_policy, base=start)
-            runner.run(start, start + h, block.add)
+            block = _Collector(h, True, nan_policy)
+            runner.run(start, start + h, block)
             block.check()
             if h - block.omitted < 2:
                 raise InputError(

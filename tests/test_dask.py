@@ -1,0 +1,169 @@
+"""The engine on a real Dask cluster: two worker processes on loopback, same numbers."""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtmc.errors import InputError
+from mtmc.graph import load_graph, run_graph
+from mtmc.graph.sweep import sweep
+from mtmc.uncertainty.montecarlo import monte_carlo
+
+distributed = pytest.importorskip("distributed")
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "graphs"
+INPUTS = {"x": "normal(1, 0.1)", "y": "uniform(-1, 1)"}
+
+
+def model(x, y):
+    return {"sum": x + y, "pair": np.stack([x * y, np.exp(y)], axis=1)}
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        scheduler_port=0,
+        dashboard_address=":0",
+    )
+    with distributed.Client(cluster) as c:
+        yield c
+    cluster.close()
+
+
+@pytest.mark.parametrize("keep", [True, False])
+def test_monte_carlo_on_a_cluster_is_bit_identical(client, keep):
+    ref = monte_carlo(model, INPUTS, trials=100_000, seed=7, keep=keep)
+    got = monte_carlo(
+        model,
+        INPUTS,
+        trials=100_000,
+        seed=7,
+        keep=keep,
+        executor="dask",
+        scheduler=client,
+        block_size=20_000,
+    )
+    for name in ref:
+        np.testing.assert_array_equal(got[name].estimate, ref[name].estimate)
+        np.testing.assert_array_equal(got[name].cov, ref[name].cov)
+        if keep:
+            np.testing.assert_array_equal(got[name].samples, ref[name].samples)
+
+
+def test_graph_and_sweep_through_a_scheduler_address(client):
+    graph = load_graph(EXAMPLES / "bcs_origin.toml")
+    ref = run_graph(graph, trials=30_000, seed=3, outputs=["d_ac"])
+    got = run_graph(
+        graph,
+        trials=30_000,
+        seed=3,
+        outputs=["d_ac"],
+        executor="dask",
+        scheduler=client.scheduler.address,
+        block_size=16_384,
+    )
+    assert got.places["d_ac"].u == ref.places["d_ac"].u
+    vary = {"probe.u_probe": [0.001, 0.002], "probe.u_axis": [0.002, 0.004]}
+    a = sweep(graph, vary, "d_ac", trials=500, seed=5)
+    b = sweep(graph, vary, "d_ac", trials=500, seed=5, executor="dask", scheduler=client)
+    np.testing.assert_array_equal(a.u, b.u)
+
+
+def test_a_worker_killed_mid_run_changes_nothing(client):
+    def slow(x):
+        time.sleep(0.05)
+        return np.sin(x)
+
+    inputs = {"x": "normal(0, 1)"}
+    ref = monte_carlo(slow, inputs, trials=60 * 1000, seed=2, block_size=1000)
+    pids = list(client.run(os.getpid).values())
+    killed = threading.Event()
+
+    def kill(done, _total):
+        if done >= 10_000 and not killed.is_set():
+            killed.set()
+            os.kill(pids[0], signal.SIGKILL)
+
+    got = monte_carlo(
+        slow,
+        inputs,
+        trials=60 * 1000,
+        seed=2,
+        block_size=1000,
+        executor="dask",
+        scheduler=client,
+        progress=kill,
+    )
+    assert killed.is_set()
+    np.testing.assert_array_equal(got.samples, ref.samples)
+    client.wait_for_workers(2, timeout=60)
+
+
+def test_local_cluster_started_for_the_call():
+    ref = monte_carlo(model, INPUTS, trials=40_000, seed=1, keep=False)
+    got = monte_carlo(
+        model,
+        INPUTS,
+        trials=40_000,
+        seed=1,
+        keep=False,
+        executor="dask",
+        workers=2,
+        block_size=16_384,
+    )
+    np.testing.assert_array_equal(got["pair"].cov, ref["pair"].cov)
+
+
+def test_unreachable_scheduler_is_one_line_naming_it():
+    with pytest.raises(InputError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+        monte_carlo(
+            model, INPUTS, trials=1000, seed=1, executor="dask", scheduler="tcp://127.0.0.1:9"
+        )
+
+
+def test_without_dask_the_option_says_what_to_install(monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)
+    with pytest.raises(InputError, match=r"pip install 'mtmc\[distributed\]'"):
+        monte_carlo(model, INPUTS, trials=1000, seed=1, executor="dask", workers=2)
+    with pytest.raises(InputError, match="executor='dask' only"):
+        monte_carlo(model, INPUTS, trials=1000, seed=1, scheduler="tcp://127.0.0.1:9")
+
+
+def test_cli_runs_on_the_cluster_with_the_same_numbers(client, capsys):
+    import json
+
+    from mtmc.cli.main import main
+
+    args = [
+        "propagate",
+        "a * b",
+        "-i",
+        "a=normal(2, 0.1)",
+        "-i",
+        "b=uniform(2.5, 3.5)",
+        "--trials",
+        "40000",
+        "--seed",
+        "3",
+        "--json",
+    ]
+    assert main(args) == 0
+    ref = json.loads(capsys.readouterr().out)
+    assert main([*args, "--scheduler", client.scheduler.address]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert got["u"] == ref["u"] and got["shortest"] == ref["shortest"]
+    assert main([*args, "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "tcp://127.0.0.1:9" in err[0]
