@@ -23,48 +23,102 @@ from mtmc.errors import GraphError, MtmcError, ParseError
 from mtmc.graph.model import Graph, check
 from mtmc.graph.places import Place, ProbeDefaults, Transition
 
-__all__ = ["load", "loads", "dump", "dumps"]
+__all__ = ["KeyPath", "key_lines", "load", "loads", "dump", "dumps"]
 
 _TOP_KEYS = ("title", "units", "probe", "place", "transition")
 _PLACE_KEYS = ("name", "type", "value", "u", "dist", "unit", "pos")
 _PROBE_KEYS = ("u_axis", "u_probe", "u_perp")
-_HEADER = re.compile(r"^\s*(\[\[?)\s*([A-Za-z_][A-Za-z0-9_]*)\s*\]\]?\s*(#.*)?$")
-_KEY = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_\-]*|\"[^\"]*\")\s*=")
+_HEADER = re.compile(r"""^\s*(\[\[?)\s*([A-Za-z0-9_\-."' ]+?)\s*\]\]?\s*(#.*)?$""")
+_KEY = re.compile(r"^\s*((?:[A-Za-z0-9_\-]+|\"[^\"]*\")(?:\s*\.\s*(?:[A-Za-z0-9_\-]+|\"[^\"]*\"))*)\s*=")
+_PART = re.compile(r'"([^"]*)"|([A-Za-z0-9_\-]+)')
+
+#: A key path of a TOML document: table and key names, with the 0-based index of an
+#: entry of an array of tables, e.g. ``("place", 2, "name")``.
+KeyPath = tuple[str | int, ...]
+
+
+def _parts(text: str) -> list[str]:
+    return [m.group(1) if m.group(1) is not None else m.group(2) for m in _PART.finditer(text)]
+
+
+def key_lines(text: str) -> dict[KeyPath, int]:
+    """The 1-based line of every table header and key of a TOML text, by key path.
+
+    :mod:`tomllib` gives no lines, so the text is scanned: ``[a.b]`` headers, ``[[name]]``
+    entries (numbered from 0 in order) and ``key =`` lines (dotted and quoted keys
+    included); the lines inside a multi-line array are skipped. The first line wins
+    when a path repeats.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text (valid or not: what cannot be read is left out).
+
+    Returns
+    -------
+    dict
+        Key path (a tuple of names, with an ``int`` for the entry of an array of
+        tables) to line number.
+
+    Examples
+    --------
+    >>> lines = key_lines('title = "x"\n[run]\ntrials = 10\n[[place]]\nname = "a"\n')
+    >>> lines[("run", "trials")], lines[("place", 0)], lines[("place", 0, "name")]
+    (3, 4, 5)
+    """
+    out: dict[KeyPath, int] = {}
+    counts: dict[tuple[str, ...], int] = {}
+    prefix: KeyPath = ()
+    depth = 0
+    for n, raw in enumerate(text.splitlines(), start=1):
+        stripped = raw.strip()
+        if depth > 0:  # inside a multi-line array
+            depth += stripped.count("[") - stripped.count("]")
+            continue
+        h = _HEADER.match(raw)
+        if h:
+            names = tuple(_parts(h.group(2)))
+            if h.group(1) == "[[":
+                i = counts.get(names, 0)
+                counts[names] = i + 1
+                prefix = (*names, i)
+            else:
+                prefix = names
+            out.setdefault(prefix, n)
+            continue
+        k = _KEY.match(raw)
+        if k:
+            out.setdefault((*prefix, *_parts(k.group(1))), n)
+            rest = raw[k.end() :].split("#", 1)[0]
+            depth = max(0, rest.count("[") - rest.count("]"))
+    return out
 
 
 class _Lines:
-    """Lines of the headers and keys of a TOML text, by table."""
+    """Lines of the headers and keys of a graph file, by table (from :func:`key_lines`)."""
 
     def __init__(self, text: str) -> None:
-        self.top: dict[str, int] = {}
-        self.probe: dict[str, int] = {}
-        self.probe_line: int | None = None
-        self.entries: dict[str, list[tuple[int, dict[str, int]]]] = {"place": [], "transition": []}
-        current: dict[str, int] = self.top
-        depth = 0
-        for n, raw in enumerate(text.splitlines(), start=1):
-            stripped = raw.strip()
-            if depth > 0:  # inside a multi-line array
-                depth += stripped.count("[") - stripped.count("]")
-                continue
-            h = _HEADER.match(raw)
-            if h:
-                name = h.group(2)
-                if h.group(1) == "[[" and name in self.entries:
-                    keys: dict[str, int] = {}
-                    self.entries[name].append((n, keys))
-                    current = keys
-                elif name == "probe":
-                    self.probe_line = n
-                    current = self.probe
-                else:
-                    current = {}
-                continue
-            k = _KEY.match(raw)
-            if k:
-                current.setdefault(k.group(1).strip('"'), n)
-                rest = raw[k.end() :].split("#", 1)[0]
-                depth = max(0, rest.count("[") - rest.count("]"))
+        lines = key_lines(text)
+        self.top: dict[str, int] = {
+            str(p[0]): n for p, n in lines.items() if len(p) == 1 and isinstance(p[0], str)
+        }
+        self.probe: dict[str, int] = {
+            str(p[1]): n for p, n in lines.items() if len(p) == 2 and p[0] == "probe"
+        }
+        self.probe_line: int | None = lines.get(("probe",))
+        self.entries: dict[str, list[tuple[int, dict[str, int]]]] = {}
+        for table in ("place", "transition"):
+            entries = []
+            i = 0
+            while (table, i) in lines:
+                keys = {
+                    str(p[2]): n
+                    for p, n in lines.items()
+                    if len(p) == 3 and p[0] == table and p[1] == i
+                }
+                entries.append((lines[(table, i)], keys))
+                i += 1
+            self.entries[table] = entries
 
 
 def _where(e: tomllib.TOMLDecodeError) -> tuple[int | None, int | None]:
