@@ -19,7 +19,27 @@ from mtmc.uncertainty import *  # noqa: F403
 
 __version__ = "0.1.0"
 
-__all__ = ["__version__", "errors"]
+# Imported after the version, which the result folders record. ``mtmc.report`` is the
+# function that renders a result (the module stays importable as ``mtmc.report``).
+from mtmc.report import report  # noqa: E402
+from mtmc.study import (  # noqa: E402
+    StudyResult,
+    load_study,
+    loads_study,
+    register_kind,
+    study_kinds,
+    write_result,
+)
+
+__all__ = ["__version__", "errors", "report"]
+__all__ += [
+    "StudyResult",
+    "load_study",
+    "loads_study",
+    "register_kind",
+    "study_kinds",
+    "write_result",
+]
 for _mod in ("errors", "uncertainty", "geometry", "graph", "kinematics"):
     __all__ += list(__import__(f"mtmc.{_mod}", fromlist=["__all__"]).__all__)
 del _mod

@@ -7,10 +7,12 @@ parser did (one line naming the command, and ``--help`` for more); 130 on Ctrl-C
 
 from __future__ import annotations
 
+import sys
+
 import typer
 
 from mtmc import __version__
-from mtmc.cli import graph, kinematics, propagate
+from mtmc.cli import graph, kinematics, propagate, run
 
 app = typer.Typer(
     name="mtmc",
@@ -20,6 +22,9 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 app.command("propagate")(propagate.propagate)
+app.command("run")(run.run_cmd)
+app.command("report")(run.report_cmd)
+app.command("demo")(run.demo_cmd)
 app.add_typer(graph.app, name="graph")
 app.add_typer(kinematics.app, name="kinematics")
 
@@ -77,7 +82,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # standalone_mode=False: the parser raises instead of exiting, and a typer.Exit
         # raised by a subcommand (cli.common.fail) comes back as its exit code.
-        rv = app(args=argv, prog_name="mtmc", standalone_mode=False)
+        args = sys.argv[1:] if argv is None else list(argv)
+        rv = app(args=args, prog_name="mtmc", standalone_mode=False, obj={"argv": ["mtmc", *args]})
     except typer.Exit as exc:
         return int(exc.exit_code)
     except typer.Abort:

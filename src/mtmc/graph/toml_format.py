@@ -29,7 +29,9 @@ _TOP_KEYS = ("title", "units", "probe", "place", "transition")
 _PLACE_KEYS = ("name", "type", "value", "u", "dist", "unit", "pos")
 _PROBE_KEYS = ("u_axis", "u_probe", "u_perp")
 _HEADER = re.compile(r"""^\s*(\[\[?)\s*([A-Za-z0-9_\-."' ]+?)\s*\]\]?\s*(#.*)?$""")
-_KEY = re.compile(r"^\s*((?:[A-Za-z0-9_\-]+|\"[^\"]*\")(?:\s*\.\s*(?:[A-Za-z0-9_\-]+|\"[^\"]*\"))*)\s*=")
+_KEY = re.compile(
+    r"^\s*((?:[A-Za-z0-9_\-]+|\"[^\"]*\")(?:\s*\.\s*(?:[A-Za-z0-9_\-]+|\"[^\"]*\"))*)\s*="
+)
 _PART = re.compile(r'"([^"]*)"|([A-Za-z0-9_\-]+)')
 
 #: A key path of a TOML document: table and key names, with the 0-based index of an
@@ -62,7 +64,8 @@ def key_lines(text: str) -> dict[KeyPath, int]:
 
     Examples
     --------
-    >>> lines = key_lines('title = "x"\n[run]\ntrials = 10\n[[place]]\nname = "a"\n')
+    >>> text = chr(10).join(['title = "x"', '[run]', 'trials = 10', '[[place]]', 'name = "a"'])
+    >>> lines = key_lines(text)
     >>> lines[("run", "trials")], lines[("place", 0)], lines[("place", 0, "name")]
     (3, 4, 5)
     """

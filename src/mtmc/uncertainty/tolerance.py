@@ -24,7 +24,7 @@ import math
 
 from mtmc.errors import InputError
 
-__all__ = ["numerical_tolerance", "significant_decomposition"]
+__all__ = ["numerical_tolerance", "round_to_uncertainty", "significant_decomposition"]
 
 
 def significant_decomposition(u: float, ndig: int = 2) -> tuple[int, int]:
@@ -101,3 +101,54 @@ def numerical_tolerance(u: float, ndig: int = 2) -> float:
     _, exp10 = significant_decomposition(u, ndig)
     # 0.5 * 10**l computed from a decimal string so that it is the nearest float.
     return float(f"5e{exp10 - 1}")
+
+
+def round_to_uncertainty(y: float, U: float, ndig: int = 2) -> tuple[str, str]:
+    """An estimate and its (expanded) uncertainty as the GUM says to state them.
+
+    JCGM 100 §7.2.6: the uncertainty is given with at most ``ndig`` (usually two)
+    significant digits, and the estimate is rounded to the last digit of the
+    uncertainty. Both are rounded to nearest (ties to even, on the decimal value of the
+    float).
+
+    Parameters
+    ----------
+    y : float
+        The estimate.
+    U : float
+        Its standard or expanded uncertainty (same unit), positive and finite.
+    ndig : int, default 2
+        Significant digits of ``U``.
+
+    Returns
+    -------
+    y_text, U_text : str
+        The two numbers as decimal text, with the same last decimal place.
+
+    Raises
+    ------
+    InputError
+        If ``U`` is not a positive finite number or ``y`` is not finite.
+
+    Examples
+    --------
+    JCGM 100 §7.2.2: m_s = 100.021 47 g with u = 0.35 mg.
+
+    >>> round_to_uncertainty(100.02147, 0.00035)
+    ('100.02147', '0.00035')
+    >>> round_to_uncertainty(1.234123, 0.075412)  # JCGM 101 §9.3, mg
+    ('1.234', '0.075')
+    >>> round_to_uncertainty(12345.6, 234.0)
+    ('12350', '230')
+    """
+    c, exp10 = significant_decomposition(U, ndig)
+    yf = float(y)
+    if not math.isfinite(yf):
+        raise InputError(f"expected a finite estimate, got {y!r}", field="y")
+    if exp10 >= 0:
+        return f"{round(yf / 10**exp10) * 10**exp10:d}", f"{c * 10**exp10:d}"
+    places = -exp10
+    y_text = f"{yf:.{places}f}"
+    if float(y_text) == 0.0:
+        y_text = y_text.lstrip("-")
+    return y_text, f"{c * 10.0**exp10:.{places}f}"

@@ -1,0 +1,198 @@
+"""The HTML report of a result folder, drawn from its files alone.
+
+:func:`render` reads ``result.json`` and ``provenance.json`` of a result folder
+(``docs/results-format.md``) and writes ``report.html`` beside them: one static,
+self-contained page (the plots inline as SVG, no script or style from the network) from
+the Jinja2 template ``templates/report.html.j2``, readable on screen and printed.
+:func:`render_index` writes a page linking several reports (``mtmc demo``). The report
+knows nothing of how a result was computed: it shows what the files hold.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from mtmc.errors import InputError
+from mtmc.io import write_text_atomic
+from mtmc.report import plots
+
+__all__ = ["fmt", "html", "render", "render_index", "report"]
+
+
+def fmt(x: Any, digits: int = 6) -> str:
+    """A number as the report prints it: ``digits`` significant digits; None as a dash.
+
+    Examples
+    --------
+    >>> fmt(0.07541234), fmt(None), fmt(True), fmt(3)
+    ('0.0754123', '—', 'yes', '3')
+    """
+    if x is None:
+        return "—"
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, int):
+        return str(x)
+    if isinstance(x, float):
+        if not math.isfinite(x):
+            return "∞" if x > 0 else ("−∞" if x < 0 else "NaN")
+        return f"{x:.{digits}g}"
+    return str(x)
+
+
+def _env() -> Any:
+    import jinja2
+
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("mtmc.report", "templates"),
+        autoescape=jinja2.select_autoescape(["html", "j2"]),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+    env.filters["fmt"] = fmt
+    env.filters["pct"] = lambda x: "—" if x is None else f"{100 * x:.1f} %"
+    env.globals["display_unit"] = plots.display_unit
+    env.globals["repr"] = repr
+    return env
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(
+            f"cannot read {path.name}: {exc.strerror or exc}", file=str(path)
+        ) from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON: {exc.msg}", file=str(path), line=exc.lineno) from None
+    if not isinstance(data, dict):
+        raise InputError("expected a JSON object", file=str(path))
+    return data
+
+
+def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None) -> str:
+    """The report page of a result, as HTML text.
+
+    Parameters
+    ----------
+    result : mapping
+        The content of ``result.json``.
+    provenance : mapping, optional
+        The content of ``provenance.json``.
+
+    Returns
+    -------
+    str
+        A self-contained HTML document.
+
+    Raises
+    ------
+    InputError
+        If ``result`` is not an mtmc result (no ``format`` ``mtmc-result/...``).
+    """
+    if not str(result.get("format", "")).startswith("mtmc-result/"):
+        raise InputError(
+            f"expected an mtmc result (format mtmc-result/1), got format {result.get('format')!r}",
+            field="format",
+        )
+    figs: dict[str, str] = {}
+    for q in result.get("quantities", []):
+        figs[f"histogram:{q['name']}"] = plots.histogram_svg(q)
+        figs[f"convergence:{q['name']}"] = plots.convergence_svg(q)
+    for r in result.get("regions", []):
+        figs[f"region:{r['name']}"] = plots.region_svg(r)
+    graph = result.get("graph")
+    if graph:
+        figs["graph"] = plots.graph_svg(graph["toml"], graph.get("file"))
+    if result.get("sweep"):
+        figs["sweep"] = plots.sweep_svg(result["sweep"])
+    template = _env().get_template("report.html.j2")
+    return str(template.render(r=result, prov=provenance or {}, figs=figs))
+
+
+def render(folder: str | Path) -> Path:
+    """Write ``report.html`` of a result folder from its ``result.json`` and ``provenance.json``.
+
+    Parameters
+    ----------
+    folder : str or Path
+        The result folder.
+
+    Returns
+    -------
+    pathlib.Path
+        The report file.
+
+    Raises
+    ------
+    InputError
+        If the folder holds no readable ``result.json``.
+    """
+    d = Path(folder)
+    if not (d / "result.json").is_file():
+        raise InputError(f"{d} is not a result folder: it has no result.json", file=str(d))
+    result = _read_json(d / "result.json")
+    prov = _read_json(d / "provenance.json") if (d / "provenance.json").is_file() else None
+    return write_text_atomic(d / "report.html", html(result, prov))
+
+
+def report(source: Any, path: str | Path | None = None) -> Any:
+    """Render a result: a result folder, or a result object (anything with ``to_dict()``).
+
+    Parameters
+    ----------
+    source : path-like, mapping or result
+        A result folder (its ``report.html`` is written), the content of a
+        ``result.json``, or a result whose ``to_dict()`` gives it.
+    path : path-like, optional
+        Where to write the page for a mapping or result (default: return the text).
+
+    Returns
+    -------
+    pathlib.Path or str
+        The file written, or the HTML text.
+    """
+    if isinstance(source, str | Path):
+        return render(source)
+    doc = source.to_dict() if hasattr(source, "to_dict") else source
+    text = html(doc)
+    if path is None:
+        return text
+    return write_text_atomic(path, text)
+
+
+def render_index(
+    entries: Sequence[tuple[str, str | Path]], path: str | Path, title: str = "mtmc demo"
+) -> Path:
+    """Write a page linking reports: one row per result folder, with its headline numbers.
+
+    Parameters
+    ----------
+    entries : sequence of (label, folder)
+        The result folders, relative to the page's folder or absolute.
+    path : str or Path
+        The page (``index.html``).
+    title : str
+        Its title.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    base = Path(path).parent
+    rows = []
+    for label, folder in entries:
+        f = Path(folder)
+        full = f if f.is_absolute() else base / f
+        result = _read_json(full / "result.json")
+        prov = _read_json(full / "provenance.json") if (full / "provenance.json").is_file() else {}
+        rows.append(
+            {"label": label, "href": f"{f.as_posix()}/report.html", "r": result, "prov": prov}
+        )
+    template = _env().get_template("index.html.j2")
+    return write_text_atomic(path, str(template.render(title=title, rows=rows)))

@@ -1,0 +1,224 @@
+"""The plots of the report, as inline SVG text, drawn from the entries of ``result.json``.
+
+Each function takes the JSON-ready dictionaries of a result folder (a quantity, a region,
+a sweep) and returns one ``<svg>`` element as text (Matplotlib, no pyplot, fonts left to
+the browser). Lengths in mm are drawn in µm and angles in rad in µrad, as deviations from
+the estimate.
+"""
+
+from __future__ import annotations
+
+import io
+import itertools
+import re
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+__all__ = [
+    "convergence_svg",
+    "display_unit",
+    "graph_svg",
+    "histogram_svg",
+    "region_svg",
+    "sweep_svg",
+]
+
+_SALT = itertools.count()
+
+
+def display_unit(unit: str) -> tuple[float, str]:
+    """The factor and unit a value in ``unit`` is shown in: mm → µm, rad → µrad.
+
+    Examples
+    --------
+    >>> display_unit("mm"), display_unit("mg")
+    ((1000.0, 'µm'), (1.0, 'mg'))
+    """
+    if unit == "mm":
+        return 1e3, "µm"
+    if unit == "rad":
+        return 1e6, "µrad"
+    return 1.0, unit
+
+
+def _svg(fig: Any) -> str:
+    import matplotlib
+
+    buf = io.StringIO()
+    # a salt per figure keeps the ids of clip paths unique among the SVGs of one page
+    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": f"mtmc{next(_SALT)}"}):
+        fig.savefig(buf, format="svg", bbox_inches="tight")
+    text = buf.getvalue()
+    start = text.find("<svg")
+    return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()
+
+
+def _figure(w: float, h: float) -> Any:
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(w, h), layout="constrained")
+
+
+def histogram_svg(q: dict[str, Any]) -> str:
+    """Histogram of the Monte Carlo values, their coverage intervals and the GUM normal PDF.
+
+    Parameters
+    ----------
+    q : dict
+        A quantity of ``result.json``.
+
+    Returns
+    -------
+    str
+        One ``<svg>`` element.
+    """
+    scale, label = display_unit(q["unit"])
+    mc = q["monte_carlo"]
+    ref = mc["estimate"]
+    edges = (np.asarray(q["histogram"]["edges"]) - ref) * scale
+    density = np.asarray(q["histogram"]["density"]) / scale
+    fig = _figure(6.0, 3.3)
+    ax = fig.add_subplot(1, 1, 1)
+    ax.stairs(density, edges, fill=True, alpha=0.45, color="C0", label="Monte Carlo")
+    lo, hi = ((np.asarray(mc["shortest"]) - ref) * scale).tolist()
+    ax.axvspan(lo, hi, color="C2", alpha=0.12, label=f"shortest {100 * mc['p']:g} % interval")
+    for v in ((np.asarray(mc["symmetric"]) - ref) * scale).tolist():
+        ax.axvline(v, color="C3", ls="--", lw=1.0)
+    ax.plot([], [], color="C3", ls="--", label="symmetric interval")
+    g = q.get("gum")
+    if g and g["u"] > 0:
+        x = np.linspace(edges[0], edges[-1], 400)
+        ax.plot(
+            x,
+            stats.norm.pdf(x, (g["estimate"] - ref) * scale, g["u"] * scale),
+            "k-",
+            lw=1.1,
+            label="GUM: normal PDF",
+        )
+    unit = f" / {label}" if label not in ("", "1") else ""
+    ax.set_xlabel(f"{q['name']} − estimate{unit}")
+    ax.set_ylabel(f"density{' / ' + label + '⁻¹' if unit else ''}")
+    ax.legend(fontsize=7, loc="upper right")
+    return _svg(fig)
+
+
+def convergence_svg(q: dict[str, Any]) -> str:
+    """The estimate and ``u`` from the first ``m`` trials, against ``m`` (log scale)."""
+    scale, label = display_unit(q["unit"])
+    c = q["convergence"]
+    m = np.asarray(c["m"])
+    est = (np.asarray(c["estimate"]) - q["monte_carlo"]["estimate"]) * scale
+    u = np.asarray(c["u"]) * scale
+    unit = f" / {label}" if label not in ("", "1") else ""
+    fig = _figure(6.0, 2.6)
+    a1, a2 = fig.subplots(1, 2)
+    a1.semilogx(m, est, "C0.-", ms=3, lw=0.8)
+    a1.axhline(0.0, color="k", lw=0.6)
+    a1.set_xlabel("trials m")
+    a1.set_ylabel(f"estimate − final{unit}")
+    a2.semilogx(m, u, "C1.-", ms=3, lw=0.8)
+    g = q.get("gum")
+    if g:
+        a2.axhline(g["u"] * scale, color="k", ls="--", lw=0.8, label="GUM u")
+        a2.legend(fontsize=7)
+    a2.set_xlabel("trials m")
+    a2.set_ylabel(f"u{unit}")
+    return _svg(fig)
+
+
+def region_svg(r: dict[str, Any]) -> str:
+    """A coverage ellipse (Monte Carlo and Gaussian) over the first trials as dots."""
+    from matplotlib.patches import Ellipse
+
+    scale, label = display_unit(r["unit"])
+    centre = np.asarray(r["centre"])
+    pts = (np.asarray(r["scatter"]) - centre) * scale
+    axes = np.asarray(r["axes"])
+    semi = np.asarray(r["semi_axes"]) * scale
+    angle = float(np.degrees(np.arctan2(axes[1, 1], axes[0, 1])))
+    fig = _figure(3.6, 3.4)
+    ax = fig.add_subplot(1, 1, 1)
+    ax.plot(pts[:, 0], pts[:, 1], ".", ms=2, color="C0", alpha=0.5)
+    ax.add_patch(
+        Ellipse((0, 0), 2 * semi[1], 2 * semi[0], angle=angle, fill=False, color="C3", lw=1.4)
+    )
+    gs = semi * r["k_chi2"] / r["k"]
+    ax.add_patch(
+        Ellipse((0, 0), 2 * gs[1], 2 * gs[0], angle=angle, fill=False, color="k", ls="--", lw=0.9)
+    )
+    ax.plot([], [], color="C3", label=f"Monte Carlo, k = {r['k']:.3f}")
+    ax.plot([], [], color="k", ls="--", label=f"Gaussian, k = {r['k_chi2']:.3f}")
+    ext = 1.15 * max(float(semi.max()), float(np.abs(pts).max()) if pts.size else 0.0, 1e-300)
+    ax.set_xlim(-ext, ext)
+    ax.set_ylim(-ext, ext)
+    ax.set_aspect("equal")
+    unit = f" / {label}" if label not in ("", "1") else ""
+    ax.set_xlabel(f"{r['labels'][0]}{unit}")
+    ax.set_ylabel(f"{r['labels'][1]}{unit}")
+    ax.legend(fontsize=6, loc="upper right")
+    return _svg(fig)
+
+
+def graph_svg(toml_text: str, name: str | None = None) -> str:
+    """The drawing of a measurement graph (:func:`mtmc.graph.draw.draw`) from its TOML text."""
+    import tempfile
+    from pathlib import Path
+
+    from mtmc.graph.draw import draw
+    from mtmc.graph.toml_format import loads
+
+    graph = loads(toml_text, file=name)
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "graph.svg"
+        draw(graph, path)
+        text = path.read_text(encoding="utf-8")
+    start = text.find("<svg")
+    return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()
+
+
+def sweep_svg(sw: dict[str, Any]) -> str:
+    """The swept standard uncertainty over a two-parameter grid with the surrogate surface.
+
+    Monte Carlo values as dots, the fitted surrogate ``U = √(c0 + Σ cᵢσᵢ²)`` as a
+    surface (Stryczek Fig. 14–15), both in µm over σ in µm; with one varied parameter,
+    a curve.
+    """
+    grid = np.asarray(sw["grid"]) * 1e3
+    scale, label = display_unit(sw["unit"])
+    u = np.asarray(sw["u"]) * scale
+    s = sw["surrogate"]
+    coef = np.asarray(s["coefficients"])
+    names = sw["names"]
+
+    def surrogate(sig_um: np.ndarray) -> np.ndarray:
+        sig = sig_um / 1e3
+        return np.sqrt(np.clip(s["c0"] + (sig**2) @ coef, 0.0, None)) * scale
+
+    if grid.shape[1] == 2:
+        fig = _figure(6.4, 4.6)
+        ax = fig.add_subplot(1, 1, 1, projection="3d")
+        a = np.linspace(grid[:, 0].min(), grid[:, 0].max(), 30)
+        b = np.linspace(grid[:, 1].min(), grid[:, 1].max(), 30)
+        aa, bb = np.meshgrid(a, b, indexing="ij")
+        zz = surrogate(np.column_stack([aa.ravel(), bb.ravel()])).reshape(aa.shape)
+        ax.plot_surface(aa, bb, zz, cmap="viridis", alpha=0.55, linewidth=0)
+        ax.scatter(grid[:, 0], grid[:, 1], u, color="C3", s=12, label="Monte Carlo")
+        ax.set_xlabel(f"{names[0]} / µm", fontsize=8)
+        ax.set_ylabel(f"{names[1]} / µm", fontsize=8)
+        ax.set_zlabel(f"u({sw['output']}) / {label}", fontsize=8)
+        ax.legend(fontsize=7, loc="upper left")
+    else:
+        fig = _figure(6.0, 3.4)
+        ax = fig.add_subplot(1, 1, 1)
+        x = grid[:, 0]
+        xs = np.linspace(x.min(), x.max(), 200)
+        full = np.repeat(grid[:1], 200, axis=0)
+        full[:, 0] = xs
+        ax.plot(xs, surrogate(full), "k-", lw=1.0, label="surrogate")
+        ax.plot(x, u, "C3o", ms=4, label="Monte Carlo")
+        ax.set_xlabel(f"{names[0]} / µm")
+        ax.set_ylabel(f"u({sw['output']}) / {label}")
+        ax.legend(fontsize=7)
+    return _svg(fig)

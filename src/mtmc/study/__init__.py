@@ -1,0 +1,42 @@
+"""Study files: TOML → validated study → run → result folder with provenance.
+
+A study file names its ``kind`` and its parameters (``docs/study-format.md``);
+:func:`load_study` validates all of it before anything runs, and every error names the
+file, the line and the field. ``load_study(path).run()`` returns a frozen
+:class:`StudyResult`; :func:`write_result` writes the result folder
+(``docs/results-format.md``) with its HTML report. Kinds register themselves with
+:func:`register_kind`: ``propagate``, ``graph``, ``sweep``.
+"""
+
+from mtmc.study import graph as _graph  # noqa: F401  (registers graph and sweep)
+from mtmc.study import propagate as _propagate  # noqa: F401  (registers propagate)
+from mtmc.study.base import Quantity, Region, Study, StudyResult, Table
+from mtmc.study.spec import (
+    Fields,
+    RunSettings,
+    Source,
+    StudyKind,
+    load_study,
+    loads_study,
+    register_kind,
+    study_kinds,
+)
+from mtmc.study.write import provenance, write_result
+
+__all__ = [
+    "Fields",
+    "Quantity",
+    "Region",
+    "RunSettings",
+    "Source",
+    "Study",
+    "StudyKind",
+    "StudyResult",
+    "Table",
+    "load_study",
+    "loads_study",
+    "provenance",
+    "register_kind",
+    "study_kinds",
+    "write_result",
+]

@@ -1,0 +1,637 @@
+"""What every study returns: a frozen :class:`StudyResult` of quantities, regions and tables.
+
+A study's runner turns the Monte Carlo values of each scalar output quantity, with the GUM
+result of the same model beside them, into a :class:`Quantity`: the estimate, ``u``, the
+expanded uncertainty with ``k`` and ``p``, the symmetric and shortest coverage intervals
+(JCGM 101 §7.7), the GUM result and the JCGM 101 §8 verdict, the uncertainty budget
+(JCGM 100 §5.1.3: ``u_i(y) = |c_i| u(x_i)``, shares of ``u²(y)``), the histogram and the
+convergence of the estimate and of ``u`` over the trials. Two-dimensional outputs (a point
+seen in a coordinate plane, an axis location and direction) get a :class:`Region`: the
+JCGM 102 §7.7 coverage ellipse. :meth:`StudyResult.to_dict` is the ``result.json`` of a
+result folder (``docs/results-format.md``); the report is drawn from that alone.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mtmc.study.spec import RunSettings, Source
+from mtmc.uncertainty.gum import GumResult, validate
+from mtmc.uncertainty.results import MonteCarloResult
+from mtmc.uncertainty.sampling import resolve_seed
+from mtmc.uncertainty.tolerance import round_to_uncertainty
+
+__all__ = [
+    "RESULT_FORMAT",
+    "Quantity",
+    "Region",
+    "Study",
+    "StudyResult",
+    "Table",
+    "convergence",
+    "endpoint_std_error",
+    "quantity",
+    "region",
+]
+
+#: The ``format`` of ``result.json``.
+RESULT_FORMAT = "mtmc-result/1"
+
+#: Bins of the histograms kept in a result.
+HISTOGRAM_BINS = 60
+#: Points of the convergence curves kept in a result.
+CONVERGENCE_POINTS = 60
+#: Trials drawn as dots in the plots of a coverage region.
+SCATTER_POINTS = 400
+
+ProgressFn = Callable[[int, int | None], None]
+
+
+def _ro(a: Any) -> NDArray[np.float64]:
+    arr = np.array(a, dtype=np.float64)
+    arr.setflags(write=False)
+    return arr
+
+
+def _plain(obj: Any) -> Any:
+    """NumPy values (nested in dicts, lists, tuples) as plain JSON types."""
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _plain(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def convergence(
+    samples: NDArray[np.float64], points: int = CONVERGENCE_POINTS
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """The estimate and ``u`` from the first ``m`` trials, for ``m`` up to ``M``.
+
+    Parameters
+    ----------
+    samples : ndarray, shape (M,)
+        Model values in trial order.
+    points : int
+        Number of values of ``m``, spaced evenly on a log scale from 10 (or 2) to ``M``.
+
+    Returns
+    -------
+    m : ndarray of int, shape (n,)
+    estimate, u : ndarray, shape (n,)
+        Mean and standard deviation (divisor ``m - 1``, JCGM 101 eq. (13)) of the first
+        ``m`` values. Running sums of the deviations from the first value's neighbourhood
+        keep the cancellation small.
+
+    Examples
+    --------
+    >>> m, est, u = convergence(np.arange(1.0, 101.0), points=3)
+    >>> m.tolist(), est.tolist()
+    ([10, 31, 100], [5.5, 16.0, 50.5])
+    >>> bool(np.isclose(u[-1], np.arange(1.0, 101.0).std(ddof=1)))
+    True
+    """
+    x = np.asarray(samples, dtype=np.float64)
+    big_m = x.shape[0]
+    start = min(10, big_m)
+    m = np.unique(np.round(np.geomspace(max(start, 2), big_m, points)).astype(np.int64))
+    shift = float(np.mean(x[: min(big_m, 100)]))
+    d = x - shift
+    s1 = np.cumsum(d)[m - 1]
+    s2 = np.cumsum(d * d)[m - 1]
+    est = shift + s1 / m
+    var = np.clip((s2 - s1 * s1 / m) / (m - 1), 0.0, None)
+    return m, est, np.sqrt(var)
+
+
+def endpoint_std_error(u: float, m: int, p: float) -> float:
+    """Standard error of an endpoint of a Monte Carlo ``100p %`` interval, normal output.
+
+    The ``α = (1 - p)/2`` quantile of ``M`` draws from a PDF ``g`` has the asymptotic
+    variance ``α(1 - α) / (M g(η_α)²)`` (order statistics); for a normal output of
+    standard deviation ``u``, ``g(η_α) = φ(z_α)/u``. The JCGM 101 §8 comparison is only
+    as sharp as this: where ``d_low`` or ``d_high`` exceeds δ by less than three of
+    these, the verdict may be Monte Carlo noise.
+
+    Examples
+    --------
+    >>> round(endpoint_std_error(1.0, 10**6, 0.95), 5)
+    0.00299
+    """
+    from scipy.stats import norm
+
+    a = (1.0 - p) / 2.0
+    return float(u * math.sqrt(a * (1.0 - a) / m) / norm.pdf(norm.ppf(a)))
+
+
+@dataclass(frozen=True)
+class Table:
+    """A table of a result: a title, column names (with units) and rows of numbers or text.
+
+    Written as ``NAME.csv`` and shown in the report.
+    """
+
+    name: str
+    title: str
+    columns: tuple[str, ...]
+    rows: tuple[tuple[Any, ...], ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {
+            "name": self.name,
+            "title": self.title,
+            "columns": list(self.columns),
+            "rows": _plain([list(r) for r in self.rows]),
+        }
+
+    def to_csv(self) -> str:
+        """The table as CSV text (header first; floats as ``repr``, i.e. exactly)."""
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(self.columns)
+        for r in self.rows:
+            w.writerow([repr(float(v)) if isinstance(v, float | np.floating) else v for v in r])
+        return buf.getvalue()
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """The uncertainty statement of one scalar output quantity.
+
+    Attributes
+    ----------
+    name : str
+        The output (``d_ac``, ``p.x``, ``axis_c.direction.y``).
+    unit : str
+        Its unit (``mm``, ``rad``, ``1``, or what a study file says).
+    mc : dict
+        ``estimate``, ``u``, ``U`` (half-length of the shortest interval), ``k = U/u``,
+        ``p``, ``shortest``, ``symmetric`` (JCGM 101 §7.6–7.7), ``trials``.
+    gum : dict or None
+        ``estimate``, ``u``, ``k``, ``U``, ``dof``, ``interval``, ``method`` (JCGM 100).
+    validation : dict or None
+        ``d_low``, ``d_high``, ``delta``, ``passed``, ``kind``, ``ndig`` (JCGM 101 §8.2),
+        ``endpoint_std_error`` (:func:`endpoint_std_error`) and ``verdict``: "validated",
+        "not validated", or "not validated within Monte Carlo noise" (a ``d`` above δ by
+        less than three endpoint standard errors).
+    budget : tuple of dict
+        Per input: ``name``, ``estimate``, ``u``, ``sensitivity``, ``contribution``,
+        ``share`` (the shares sum to 1 for uncorrelated inputs).
+    histogram : dict
+        ``edges`` and ``density`` of the Monte Carlo values.
+    convergence : dict
+        ``m``, ``estimate``, ``u`` from the first ``m`` trials.
+    reported : dict
+        ``estimate`` and ``U`` as text, rounded as JCGM 100 §7.2.6 says (two significant
+        digits on ``U``, the estimate to the same decimal place).
+    """
+
+    name: str
+    unit: str
+    mc: dict[str, Any]
+    gum: dict[str, Any] | None
+    validation: dict[str, Any] | None
+    budget: tuple[dict[str, Any], ...]
+    histogram: dict[str, Any] = field(repr=False)
+    convergence: dict[str, Any] = field(repr=False)
+    reported: dict[str, str]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (the entry of ``quantities`` in ``result.json``)."""
+        return _plain(
+            {
+                "name": self.name,
+                "unit": self.unit,
+                "monte_carlo": self.mc,
+                "gum": self.gum,
+                "validation": self.validation,
+                "budget": list(self.budget),
+                "reported": self.reported,
+                "histogram": self.histogram,
+                "convergence": self.convergence,
+            }
+        )
+
+
+def quantity(
+    name: str,
+    unit: str,
+    mc: MonteCarloResult,
+    gum_result: GumResult | None,
+    settings: RunSettings,
+) -> Quantity:
+    """The :class:`Quantity` of a scalar Monte Carlo result, with the GUM beside it.
+
+    Parameters
+    ----------
+    name, unit : str
+        The output and its unit.
+    mc : MonteCarloResult
+        Scalar Monte Carlo values (JCGM 101).
+    gum_result : GumResult or None
+        The GUM result of the same model and inputs (scalar), or None.
+    settings : RunSettings
+        ``p``, the interval of the §8 comparison and ``ndig``.
+
+    Returns
+    -------
+    Quantity
+    """
+    p = settings.p
+    lo_s, hi_s = mc.coverage_interval(p, "shortest")
+    lo_y, hi_y = mc.coverage_interval(p, "symmetric")
+    u = float(mc.u)
+    big_u = 0.5 * (hi_s - lo_s)
+    mc_d = {
+        "estimate": float(mc.estimate),
+        "u": u,
+        "U": big_u,
+        "k": big_u / u if u > 0 else None,
+        "p": p,
+        "shortest": [lo_s, hi_s],
+        "symmetric": [lo_y, hi_y],
+        "trials": mc.trials,
+    }
+    gum_d = val_d = None
+    budget: list[dict[str, Any]] = []
+    if gum_result is not None:
+        gk = float(gum_result.k)
+        gu = float(gum_result.u)
+        gum_d = {
+            "estimate": float(gum_result.estimate),
+            "u": gu,
+            "k": gk,
+            "U": gk * gu,
+            "dof": float(gum_result.dof),
+            "interval": [float(gum_result.interval[0]), float(gum_result.interval[1])],
+            "method": gum_result.method,
+        }
+        v = validate(gum_result, mc, p=p, ndig=settings.ndig, kind=settings.interval)  # type: ignore[arg-type]
+        noise = endpoint_std_error(u, mc.m, p)
+        if v.passed:
+            verdict = "validated"
+        elif max(v.d_low, v.d_high) > v.delta + 3.0 * noise:
+            verdict = "not validated"
+        else:
+            verdict = "not validated within Monte Carlo noise"
+        val_d = {
+            "d_low": v.d_low,
+            "d_high": v.d_high,
+            "delta": v.delta,
+            "passed": v.passed,
+            "kind": v.kind,
+            "ndig": v.ndig,
+            "endpoint_std_error": noise,
+            "verdict": verdict,
+        }
+        for e in gum_result.budget:
+            budget.append(
+                {
+                    "name": e.name,
+                    "estimate": float(np.asarray(e.estimate).reshape(-1)[0]),
+                    "u": float(np.asarray(e.u).reshape(-1)[0]),
+                    "sensitivity": float(np.asarray(e.sensitivity).reshape(-1)[0]),
+                    "contribution": float(e.contribution),
+                    "share": float(e.share),
+                }
+            )
+    hist = mc.histogram(bins=HISTOGRAM_BINS)
+    m, est, us = convergence(np.asarray(mc.samples))
+    if big_u > 0:
+        y_txt, u_txt = round_to_uncertainty(float(mc.estimate), big_u, settings.ndig)
+    else:
+        y_txt, u_txt = f"{float(mc.estimate):.6g}", "0"
+    return Quantity(
+        name=name,
+        unit=unit,
+        mc=mc_d,
+        gum=gum_d,
+        validation=val_d,
+        budget=tuple(budget),
+        histogram={"edges": hist.edges, "density": hist.density},
+        convergence={"m": m, "estimate": est, "u": us},
+        reported={"estimate": y_txt, "U": u_txt},
+    )
+
+
+@dataclass(frozen=True)
+class Region:
+    """A 95 % (or ``p``) coverage ellipse of a two-component output (JCGM 102 §7.7).
+
+    Attributes
+    ----------
+    name : str
+        What it is (``"p: x, y"``, ``"axis_c: location normal to the axis"``).
+    labels : tuple of str
+        The two coordinates.
+    unit : str
+        Their unit.
+    centre : ndarray, shape (2,)
+    cov : ndarray, shape (2, 2)
+    k, k_chi2 : float
+        Scale of the Monte Carlo region (JCGM 102 §7.7.2) and of the Gaussian one
+        (``k² = χ²₂(p)``, JCGM 102 §6.5.2.3).
+    p : float
+    semi_axes : ndarray, shape (2,)
+        ``k sqrt(λ_i)``, ascending.
+    axes : ndarray, shape (2, 2)
+        Unit eigenvectors, as columns.
+    scatter : ndarray, shape (n, 2)
+        The first trials, for the plot.
+    """
+
+    name: str
+    labels: tuple[str, str]
+    unit: str
+    centre: NDArray[np.float64]
+    cov: NDArray[np.float64]
+    k: float
+    k_chi2: float
+    p: float
+    semi_axes: NDArray[np.float64]
+    axes: NDArray[np.float64]
+    scatter: NDArray[np.float64] = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (an entry of ``regions`` in ``result.json``)."""
+        return _plain(
+            {
+                "name": self.name,
+                "labels": list(self.labels),
+                "unit": self.unit,
+                "centre": self.centre,
+                "cov": self.cov,
+                "k": self.k,
+                "k_chi2": self.k_chi2,
+                "p": self.p,
+                "semi_axes": self.semi_axes,
+                "axes": self.axes,
+                "scatter": self.scatter,
+            }
+        )
+
+
+def region(
+    name: str, labels: tuple[str, str], unit: str, samples: NDArray[np.float64], p: float
+) -> Region | None:
+    """The coverage ellipse of ``(M, 2)`` values (None where their covariance is singular)."""
+    from mtmc.errors import InputError
+
+    res = MonteCarloResult.from_samples(samples, seed=None)
+    try:
+        ell = res.coverage_ellipsoid(p, method="mc")
+        chi = res.coverage_ellipsoid(p, method="chi2")
+    except InputError:
+        return None
+    return Region(
+        name=name,
+        labels=labels,
+        unit=unit,
+        centre=_ro(ell.centre),
+        cov=_ro(ell.cov),
+        k=float(ell.k),
+        k_chi2=float(chi.k),
+        p=p,
+        semi_axes=_ro(ell.semi_axes),
+        axes=_ro(ell.axes),
+        scatter=_ro(samples[:SCATTER_POINTS]),
+    )
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """The frozen result of a study run: what ``result.json`` holds, and the samples.
+
+    Attributes
+    ----------
+    kind, title : str
+        The study's kind and title.
+    study_file : str
+        The study file as named when it was read.
+    study_sha256 : str
+        SHA-256 of its text.
+    seed : int
+        The seed of the run (every Monte Carlo run of the study uses it).
+    trials : int
+        Monte Carlo trials ``M``.
+    p : float
+        Coverage probability.
+    quantities : tuple of Quantity
+        One per scalar output.
+    regions : tuple of Region
+        Coverage ellipses of two-component outputs.
+    tables : tuple of Table
+        Further tables of the kind (inputs, a sweep grid, ...).
+    inputs : tuple of dict
+        The input quantities: ``name``, ``distribution`` (text), ``estimate``, ``u``.
+    extra : dict
+        Kind-specific JSON-ready data (a sweep and its surrogate, the graph's text).
+    samples : dict of str to ndarray
+        The model values by output, when the study asked to keep them (not in JSON).
+    """
+
+    kind: str
+    title: str
+    study_file: str
+    study_sha256: str
+    seed: int
+    trials: int
+    p: float
+    quantities: tuple[Quantity, ...]
+    regions: tuple[Region, ...] = ()
+    tables: tuple[Table, ...] = ()
+    inputs: tuple[dict[str, Any], ...] = ()
+    extra: Mapping[str, Any] = field(default_factory=dict)
+    samples: Mapping[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
+
+    def quantity(self, name: str) -> Quantity:
+        """The quantity called ``name``."""
+        for q in self.quantities:
+            if q.name == name:
+                return q
+        raise KeyError(f"no quantity {name!r}; the result has {[q.name for q in self.quantities]}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """``result.json``: every summary, JSON-ready (``docs/results-format.md``)."""
+        return _plain(
+            {
+                "format": RESULT_FORMAT,
+                "kind": self.kind,
+                "title": self.title,
+                "study_file": self.study_file,
+                "study_sha256": self.study_sha256,
+                "seed": self.seed,
+                "trials": self.trials,
+                "p": self.p,
+                "inputs": list(self.inputs),
+                "quantities": [q.to_dict() for q in self.quantities],
+                "regions": [r.to_dict() for r in self.regions],
+                "tables": [t.to_dict() for t in self.tables],
+                **{k: v for k, v in self.extra.items()},
+            }
+        )
+
+    def summary_table(self) -> Table:
+        """One row per quantity: estimate, u, U, k, intervals, GUM u, §8 verdict."""
+        rows = []
+        for q in self.quantities:
+            mc, g, v = q.mc, q.gum or {}, q.validation or {}
+            rows.append(
+                (
+                    q.name,
+                    q.unit,
+                    mc["estimate"],
+                    mc["u"],
+                    mc["U"],
+                    mc["k"] if mc["k"] is not None else "",
+                    mc["p"],
+                    mc["shortest"][0],
+                    mc["shortest"][1],
+                    mc["symmetric"][0],
+                    mc["symmetric"][1],
+                    g.get("u", ""),
+                    g.get("k", ""),
+                    "" if not v else v["verdict"],
+                )
+            )
+        return Table(
+            "quantities",
+            "Output quantities",
+            (
+                "quantity",
+                "unit",
+                "estimate",
+                "u",
+                "U",
+                "k",
+                "p",
+                "shortest_low",
+                "shortest_high",
+                "symmetric_low",
+                "symmetric_high",
+                "gum_u",
+                "gum_k",
+                "gum_validated",
+            ),
+            tuple(rows),
+        )
+
+    def csv_tables(self) -> dict[str, str]:
+        """The CSV files of the result folder: file name to text."""
+        out = {"quantities.csv": self.summary_table().to_csv()}
+        budget_rows = [
+            (
+                q.name,
+                b["name"],
+                b["estimate"],
+                b["u"],
+                b["sensitivity"],
+                b["contribution"],
+                b["share"],
+            )
+            for q in self.quantities
+            for b in q.budget
+        ]
+        if budget_rows:
+            out["budget.csv"] = Table(
+                "budget",
+                "Uncertainty budget",
+                ("quantity", "input", "estimate", "u", "sensitivity", "contribution", "share"),
+                tuple(budget_rows),
+            ).to_csv()
+        for t in self.tables:
+            out[f"{t.name}.csv"] = t.to_csv()
+        return out
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study, ready to run: the common part of every kind.
+
+    Attributes
+    ----------
+    title : str
+        What the study is.
+    source : Source
+        The study file.
+    settings : RunSettings
+        Trials, seed, coverage probability.
+    """
+
+    kind: ClassVar[str] = ""
+    title: str
+    source: Source
+    settings: RunSettings
+
+    def run(
+        self,
+        *,
+        trials: int | None = None,
+        seed: int | None = None,
+        samples: bool | None = None,
+        progress: ProgressFn | None = None,
+    ) -> StudyResult:
+        """Run the study.
+
+        Parameters
+        ----------
+        trials : int, optional
+            Overrides ``[run] trials``.
+        seed : int, optional
+            Overrides ``[run] seed``; with neither, fresh entropy is drawn and recorded.
+        samples : bool, optional
+            Overrides ``[run] samples`` (keep the model values in the result).
+        progress : callable, optional
+            ``progress(done, total)`` after each block of trials.
+
+        Returns
+        -------
+        StudyResult
+        """
+        s = self.settings
+        t = s.trials if trials is None else int(trials)
+        if t < 2:
+            from mtmc.errors import InputError
+
+            raise InputError(f"expected at least 2 trials, got {t}", field="trials")
+        chosen = s.seed if seed is None else seed
+        settings = RunSettings(
+            trials=t,
+            seed=resolve_seed(chosen),
+            p=s.p,
+            interval=s.interval,
+            ndig=s.ndig,
+            samples=s.samples if samples is None else bool(samples),
+        )
+        return self.execute(settings, progress)
+
+    def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
+        """Run with resolved settings (the seed an int); each kind implements it."""
+        raise NotImplementedError
+
+    def _result(self, settings: RunSettings, **kw: Any) -> StudyResult:
+        assert settings.seed is not None
+        return StudyResult(
+            kind=self.kind,
+            title=self.title,
+            study_file=self.source.file,
+            study_sha256=self.source.sha256,
+            seed=settings.seed,
+            trials=settings.trials,
+            p=settings.p,
+            **kw,
+        )

@@ -1,0 +1,418 @@
+"""Study kinds ``graph`` and ``sweep``: a measurement graph (Stryczek) run by Monte Carlo.
+
+``graph``: each output place of the graph is a model of the graph's random inputs
+(:func:`mtmc.graph_model`), run by :func:`mtmc.monte_carlo` and by :func:`mtmc.gum`
+component by component, with the JCGM 101 §8 comparison. Points get their coverage
+ellipses in the coordinate planes; an axis (a ``line`` place) gets the ellipse of its
+location in the plane normal to it and of its direction (JCGM 102 §7.7; Stryczek Fig. 1).
+
+``sweep`` (or a ``[sweep]`` table in a ``graph`` study): the standard uncertainty of one
+scalar place on a grid of probe or place uncertainties (:func:`mtmc.sweep_graph`) and
+the surrogate ``U² = c0 + Σ cᵢ σᵢ²`` fitted to it (Stryczek Fig. 14–15, eq. 31), with and
+without the constant ``c0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mtmc.errors import MtmcError
+from mtmc.graph.model import Graph, Plan, check
+from mtmc.graph.run import PARTS, graph_model, random_inputs
+from mtmc.graph.sweep import Surrogate, apply_setting, sweep
+from mtmc.graph.toml_format import load
+from mtmc.graph.units import place_dimension
+from mtmc.study.base import (
+    ProgressFn,
+    Quantity,
+    Region,
+    Study,
+    StudyResult,
+    Table,
+    quantity,
+    region,
+)
+from mtmc.study.spec import Fields, RunSettings, check_number, register_kind
+from mtmc.uncertainty.gum import gum
+from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.results import MonteCarloResult
+
+__all__ = ["GraphStudy", "SweepSpec", "SweepStudy", "component_names", "normal_plane_basis"]
+
+_SCALAR = ("x", "y", "z", "real")
+
+
+def component_names(place: str, type_: str) -> list[tuple[str, str]]:
+    """Names of the scalar components of a place, with the part each belongs to.
+
+    Parameters
+    ----------
+    place : str
+        The place.
+    type_ : str
+        Its type.
+
+    Returns
+    -------
+    list of (name, part)
+        In the layout of :func:`mtmc.graph.run.flatten`: ``[("d_ac", "value")]`` for a
+        scalar, ``[("p.x", "value"), ...]`` for a point, ``[("axis.point.x", "point"),
+        ..., ("axis.direction.z", "direction")]`` for a line.
+
+    Examples
+    --------
+    >>> component_names("s", "sphere")[-1]
+    ('s.radius', 'radius')
+    """
+    out: list[tuple[str, str]] = []
+    for part, size in PARTS[type_]:
+        base = place if part == "value" else f"{place}.{part}"
+        if size == 1:
+            out.append((base, part))
+        elif size == 3:
+            out += [(f"{base}.{c}", part) for c in "xyz"]
+        else:  # a rotation matrix, row by row
+            out += [(f"{base}.r{i}{j}", part) for i in (1, 2, 3) for j in (1, 2, 3)]
+    return out
+
+
+def _unit(plan: Plan, place: str, part: str) -> str:
+    length, angle = place_dimension(plan, place, part)
+    names = []
+    if length:
+        names.append("mm" + (f"^{length}" if length != 1 else ""))
+    if angle:
+        names.append("rad" + (f"^{angle}" if angle != 1 else ""))
+    return "·".join(names) or "1"
+
+
+def normal_plane_basis(direction: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Two orthonormal columns spanning the plane normal to ``direction``, shape (3, 2).
+
+    The first column is the unit vector of the coordinate axis least aligned with
+    ``direction``, made normal to it; the second completes a right-handed set
+    ``(e1, e2, d)``.
+
+    Examples
+    --------
+    >>> normal_plane_basis(np.array([0.0, 0.0, 1.0])).T
+    array([[1., 0., 0.],
+           [0., 1., 0.]])
+    """
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    e = np.zeros(3)
+    e[int(np.argmin(np.abs(d)))] = 1.0
+    e1 = e - d * (e @ d)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(d, e1)
+    return np.column_stack([e1, e2])
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A sweep of a graph: the varied keys and their values, the output, the trials.
+
+    Attributes
+    ----------
+    output : str
+        A scalar place.
+    vary : dict of str to ndarray
+        Keys of :func:`mtmc.graph.sweep.apply_setting` and their values, in the graph's
+        units; the grid is their Cartesian product.
+    trials : int
+        Trials per grid point (Stryczek: 1000).
+    intercept : bool
+        Fit ``c0`` too.
+    """
+
+    output: str
+    vary: dict[str, NDArray[np.float64]]
+    trials: int
+    intercept: bool
+
+
+def _surrogate_dict(fit: Surrogate) -> dict[str, Any]:
+    return {
+        "names": list(fit.names),
+        "c0": fit.c0,
+        "coefficients": fit.coefficients,
+        "rel_errors": fit.rel_errors,
+        "max_rel_error": fit.max_rel_error,
+        "formula": fit.formula(),
+    }
+
+
+@dataclass(frozen=True)
+class GraphStudy(Study):
+    """A measurement graph with the places to report (kind ``graph``).
+
+    Attributes
+    ----------
+    graph : Graph
+        The graph (checked).
+    graph_text : str
+        The text of the graph file (kept in the result, for the drawing).
+    outputs : tuple of str
+        The places to run by Monte Carlo and the GUM.
+    sweep : SweepSpec or None
+        An optional sweep of one scalar place.
+    """
+
+    kind = "graph"
+    graph: Graph
+    graph_text: str
+    outputs: tuple[str, ...]
+    sweep: SweepSpec | None
+
+    def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
+        """Monte Carlo and GUM of every output, then the sweep (module docstring)."""
+        plan = check(self.graph)
+        quantities: list[Quantity] = []
+        regions: list[Region] = []
+        samples: dict[str, NDArray[np.float64]] = {}
+        n_grid = 0
+        if self.sweep is not None:
+            n_grid = int(np.prod([len(v) for v in self.sweep.vary.values()]))
+        total = settings.trials * len(self.outputs) + n_grid * (
+            self.sweep.trials if self.sweep else 0
+        )
+        for i, out in enumerate(self.outputs):
+            model, inputs = graph_model(plan, out)
+            step = _offset(progress, i * settings.trials, total)
+            mc = monte_carlo(
+                model, inputs, trials=settings.trials, seed=settings.seed, progress=step
+            )
+            vals = np.asarray(mc.samples).reshape(mc.m, -1)
+            if settings.samples:
+                samples[out] = mc.samples
+            for j, (name, part) in enumerate(component_names(out, plan.types[out])):
+                comp = _component(model, vals.shape[1], j)
+                g = gum(comp, inputs, p=settings.p)
+                q_mc = MonteCarloResult(
+                    samples=vals[:, j], trials=mc.trials, seed=mc.seed, omitted=mc.omitted
+                )
+                quantities.append(quantity(name, _unit(plan, out, part), q_mc, g, settings))
+            regions += self._regions(plan, out, vals, settings.p)
+        extra: dict[str, Any] = {
+            "graph": {"file": self.graph.file, "title": self.graph.title, "toml": self.graph_text}
+        }
+        tables: list[Table] = []
+        if self.sweep is not None:
+            step = _offset(progress, settings.trials * len(self.outputs), total)
+            sweep_d, table = self._sweep(settings.seed, step)
+            extra["sweep"] = sweep_d
+            tables.append(table)
+        in_list = tuple(
+            {"name": n, "distribution": str(d), "estimate": float(d.mean), "u": float(d.std)}
+            for n, d in random_inputs(plan).items()
+        )
+        return self._result(
+            settings,
+            quantities=tuple(quantities),
+            regions=tuple(regions),
+            tables=tuple(tables),
+            inputs=in_list,
+            extra=extra,
+            samples=samples,
+        )
+
+    def _regions(self, plan: Plan, out: str, vals: NDArray[np.float64], p: float) -> list[Region]:
+        type_ = plan.types[out]
+        found: list[Region | None] = []
+        if type_ in ("point", "vector"):
+            unit = _unit(plan, out, "value")
+            for a, b in ((0, 1), (0, 2), (1, 2)):
+                la, lb = "xyz"[a], "xyz"[b]
+                found.append(region(f"{out}: {la}, {lb}", (la, lb), unit, vals[:, [a, b]], p))
+        elif type_ in ("line", "circle"):
+            first, second = ("point", "direction") if type_ == "line" else ("centre", "normal")
+            d_mean = vals[:, 3:6].mean(axis=0)
+            basis = normal_plane_basis(d_mean)
+            loc = vals[:, 0:3] @ basis
+            found.append(
+                region(
+                    f"{out}: {first} in the plane normal to the axis",
+                    ("e1", "e2"),
+                    _unit(plan, out, first),
+                    loc,
+                    p,
+                )
+            )
+            found.append(
+                region(
+                    f"{out}: {second} (its tilt in the plane normal to it)",
+                    ("e1", "e2"),
+                    "rad",
+                    vals[:, 3:6] @ basis,
+                    p,
+                )
+            )
+        return [r for r in found if r is not None]
+
+    def _sweep(self, seed: int | None, progress: ProgressFn | None) -> tuple[dict[str, Any], Table]:
+        spec = self.sweep
+        assert spec is not None
+        sw = sweep(
+            self.graph, spec.vary, spec.output, trials=spec.trials, seed=seed, progress=progress
+        )
+        fit = sw.fit(intercept=spec.intercept)
+        fit0 = sw.fit(intercept=False)
+        pred = fit.predict(sw.grid)
+        plan = check(self.graph)
+        factor = self.graph.factor
+        d = {
+            "output": sw.output,
+            "unit": _unit(plan, sw.output, "value"),
+            "names": list(sw.names),
+            "grid_unit": "mm" if factor == 1.0 else "mm (converted from the graph's um)",
+            "grid": sw.grid * factor,
+            "u": sw.u,
+            "estimate": sw.estimate,
+            "u_surrogate": pred,
+            "trials": sw.trials,
+            "seed": sw.seed,
+            "surrogate": _surrogate_dict(fit),
+            "surrogate_no_intercept": _surrogate_dict(fit0),
+        }
+        rows = tuple(
+            (
+                *(float(x) for x in sw.grid[i] * factor),
+                float(sw.estimate[i]),
+                float(sw.u[i]),
+                float(pred[i]),
+                float(fit.rel_errors[i]),
+            )
+            for i in range(len(sw.u))
+        )
+        table = Table(
+            "sweep",
+            f"u({sw.output}) on the grid, {sw.trials} trials per point, and the surrogate",
+            (*sw.names, "estimate", "u", "u_surrogate", "rel_error"),
+            rows,
+        )
+        return d, table
+
+
+@dataclass(frozen=True)
+class SweepStudy(GraphStudy):
+    """A sweep of a graph without a full Monte Carlo run of its places (kind ``sweep``)."""
+
+    kind = "sweep"
+
+
+def _component(model: Any, width: int, j: int) -> Any:
+    """Component ``j`` of a model returning ``(m, width)`` values, as a scalar model."""
+
+    def comp(**arrays: Any) -> NDArray[np.float64]:
+        return np.asarray(model(**arrays)).reshape(-1, width)[:, j]
+
+    return comp
+
+
+def _offset(progress: ProgressFn | None, before: int, total: int) -> ProgressFn | None:
+    if progress is None:
+        return None
+
+    def step(done: int, _total: int | None) -> None:
+        progress(before + done, total)
+
+    return step
+
+
+def _read_sweep(top: Fields, graph: Graph, plan: Plan) -> SweepSpec:
+    from mtmc.graph.sweep import parse_range
+
+    t = top.table("sweep")
+    assert t is not None
+    t.only(("output", "vary", "trials", "intercept"))
+    output = t.text("output")
+    if output not in plan.types:
+        raise t.error(f"the graph has no place {output!r}", "output")
+    if plan.types[output] not in _SCALAR:
+        raise t.error(
+            f"a sweep needs a scalar place (x, y, z or real); {output} is a {plan.types[output]}",
+            "output",
+        )
+    vt = t.table("vary")
+    assert vt is not None
+    if not vt.data:
+        raise vt.error('expected at least one key, e.g. "probe.u_probe" = "0.001:0.005:5"')
+    vary: dict[str, NDArray[np.float64]] = {}
+    for key, value in vt.data.items():
+        try:
+            if isinstance(value, str):
+                vals = parse_range(value, field=key)
+            elif isinstance(value, list) and value:
+                vals = np.array(
+                    [check_number(v, partial(vt.error, key=key), low=0.0) for v in value]
+                )
+            else:
+                raise vt.error(
+                    f'expected "LOW:HIGH:N" or a non-empty array of numbers, got {value!r}', key
+                )
+            if not np.all(np.isfinite(vals)) or np.any(vals < 0):
+                raise vt.error(f"expected standard uncertainties >= 0, got {value!r}", key)
+            apply_setting(graph, key, float(vals[0]))
+        except MtmcError as exc:
+            if exc.file == top.source.file:
+                raise
+            raise vt.error(exc.message, key) from None
+        vary[key] = vals
+    return SweepSpec(
+        output=output,
+        vary=vary,
+        trials=t.integer("trials", 1000, minimum=2),
+        intercept=t.flag("intercept", True),
+    )
+
+
+def _load(top: Fields, kind: str) -> GraphStudy:
+    top.only(("kind", "title", "graph", "outputs", "run", "sweep"))
+    path = top.source.resolve(top.text("graph"), ("graph",))
+    try:
+        graph = load(path)
+    except MtmcError as exc:
+        raise top.error(f"{exc}", "graph") from None
+    plan = check(graph)
+    if kind == "graph":
+        outputs = top.texts("outputs")
+    else:
+        outputs = top.texts("outputs", ())
+    for name in outputs:
+        if name not in plan.types:
+            raise top.error(
+                f"the graph {graph.file} has no place {name!r}; its places: "
+                f"{', '.join(plan.types)}",
+                "outputs",
+            )
+    spec = None
+    if kind == "sweep" or top.has("sweep"):
+        spec = _read_sweep(top, graph, plan)
+    cls = GraphStudy if kind == "graph" else SweepStudy
+    return cls(
+        title=top.text("title", graph.title or path.stem),
+        source=top.source,
+        settings=RunSettings.read(top),
+        graph=graph,
+        graph_text=path.read_text(encoding="utf-8"),
+        outputs=tuple(outputs),
+        sweep=spec,
+    )
+
+
+@register_kind("graph", "a measurement graph: Monte Carlo and GUM of its places")
+def load_graph_study(top: Fields) -> GraphStudy:
+    """Validate a ``graph`` study file (see ``docs/study-format.md``)."""
+    return _load(top, "graph")
+
+
+@register_kind("sweep", "a measurement graph on a grid of uncertainties, with a surrogate")
+def load_sweep_study(top: Fields) -> GraphStudy:
+    """Validate a ``sweep`` study file (see ``docs/study-format.md``)."""
+    return _load(top, "sweep")

@@ -1,0 +1,133 @@
+"""The report shows what the result holds: every number in the HTML is the one in result.json."""
+
+from __future__ import annotations
+
+import json
+import re
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+from mtmc.report import fmt, html, render
+from mtmc.study import load_study, write_result
+
+ROOT = Path(__file__).resolve().parents[2]
+STUDIES = ROOT / "examples" / "studies"
+
+
+class _Cells(HTMLParser):
+    """Collects (data-key, data-value, text) of every element carrying a data-key, and plots."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.cells: list[tuple[str, str, str]] = []
+        self.plots: dict[str, int] = {}
+        self._open: list[tuple[str, str, str, list[str]]] = []
+        self._plot: str | None = None
+        self.urls: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        for k in ("src", "href"):
+            if k in a and a[k] is not None:
+                self.urls.append(a[k])
+        if "data-key" in a:
+            self._open.append((tag, a["data-key"], a["data-value"], []))
+        if tag == "figure" and "data-plot" in a:
+            self._plot = a["data-plot"]
+            self.plots[self._plot] = 0
+        if tag in ("path", "use") and self._plot is not None:
+            self.plots[self._plot] += 1
+
+    def handle_endtag(self, tag):
+        if self._open and self._open[-1][0] == tag:
+            t, key, value, text = self._open.pop()
+            self.cells.append((key, value, "".join(text).strip()))
+        if tag == "figure":
+            self._plot = None
+
+    def handle_data(self, data):
+        for item in self._open:
+            item[3].append(data)
+
+
+def _lookup(doc, key):
+    cur = doc
+    for name, index in re.findall(r"([A-Za-z_0-9]+)|\[(\d+)\]", key):
+        cur = cur[name] if name else cur[int(index)]
+    return cur
+
+
+@pytest.fixture(scope="module", params=["mass_calibration", "bcs_origin", "axis_c"])
+def folder(request, tmp_path_factory):
+    study = load_study(STUDIES / f"{request.param}.toml")
+    out = tmp_path_factory.mktemp("rep") / request.param
+    write_result(study.run(trials=4000, seed=5), out, study_text=study.source.text)
+    return out
+
+
+def test_every_number_shown_is_the_one_in_result_json(folder):
+    doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    parser = _Cells()
+    parser.feed((folder / "report.html").read_text(encoding="utf-8"))
+    assert len(parser.cells) > 10 * len(doc["quantities"])
+    keys = set()
+    for key, value, text in parser.cells:
+        want = _lookup(doc, key)
+        keys.add(key)
+        if isinstance(want, str):
+            assert value == want and text == want, key
+        else:
+            assert float(value) == want, key
+            if "share" in key or "max_rel_error" in key:
+                assert text == f"{100 * want:.1f} %", key
+            elif "shortest" in key or "symmetric" in key:
+                assert text in (fmt(want), fmt(want, 8)), key
+            else:
+                assert text == fmt(want), key
+    # every quantity's statement is there
+    for i, q in enumerate(doc["quantities"]):
+        for k in ("reported.estimate", "reported.U", "monte_carlo.u", "monte_carlo.k"):
+            assert f"quantities[{i}].{k}" in keys
+        if q["gum"]:
+            assert f"quantities[{i}].gum.u" in keys
+            assert f"quantities[{i}].validation.d_low" in keys
+            shown = [k for k in keys if k.startswith(f"quantities[{i}].budget[")]
+            nonzero = [b for b in q["budget"] if b["share"] > 0]
+            assert len({k.split("]")[1] for k in shown}) == len(nonzero)
+
+
+def test_every_plot_is_inline_and_nothing_is_fetched(folder):
+    doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    text = (folder / "report.html").read_text(encoding="utf-8")
+    parser = _Cells()
+    parser.feed(text)
+    expected = {f"{k}:{q['name']}" for q in doc["quantities"] for k in ("histogram", "convergence")}
+    expected |= {f"region:{r['name']}" for r in doc["regions"]}
+    if doc.get("graph"):
+        expected.add("graph")
+    if doc.get("sweep"):
+        expected.add("sweep")
+    assert set(parser.plots) == expected
+    assert all(n > 0 for n in parser.plots.values()), parser.plots
+    assert all(u.startswith("#") for u in parser.urls), parser.urls
+    assert "<link" not in text and "@import" not in text
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", text)
+
+
+def test_render_refuses_what_is_not_a_result(tmp_path):
+    from mtmc.errors import InputError
+
+    with pytest.raises(InputError, match="no result.json"):
+        render(tmp_path)
+    with pytest.raises(InputError, match="mtmc-result/1"):
+        html({"format": "other"})
+
+
+def test_report_of_a_result_object_equals_the_folder(folder):
+    from mtmc import report
+
+    doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    page = report(doc)
+    assert page.count("<svg") == (folder / "report.html").read_text().count("<svg")

@@ -1,0 +1,178 @@
+"""Broken study files: one line naming file, line and field; nothing runs, nothing is written."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from mtmc.cli.main import main
+from mtmc.errors import MtmcError
+from mtmc.study import load_study, loads_study, study_kinds
+
+ROOT = Path(__file__).resolve().parents[2]
+STUDIES = ROOT / "examples" / "studies"
+
+GOOD_PROPAGATE = """\
+kind = "propagate"
+title = "sum"
+model = "a + b"
+output = "y"
+unit = "mm"
+
+[inputs]
+a = "normal(1, 0.1)"
+b = 2.0
+
+[run]
+trials = 1000
+seed = 3
+"""
+
+# (replace this, with this, expected line, expected field, words in the message)
+CASES = [
+    ('kind = "propagate"', 'kind = "spline"', 1, "kind", "expected one of graph, propagate"),
+    ('kind = "propagate"', "kind = 3", 1, "kind", "expected a string"),
+    ('kind = "propagate"\n', "", 1, "kind", "missing kind"),
+    ('model = "a + b"', 'model = "a + "', 3, "model", ""),
+    ('model = "a + b"', 'model = "a + c"', 3, "model", "c have no input"),
+    ('a = "normal(1, 0.1)"', 'a = "normal(1, -0.1)"', 8, "inputs.a", ">= 0"),
+    ('a = "normal(1, 0.1)"', 'a = "normal(nan, 0.1)"', 8, "inputs.a", ""),
+    ("b = 2.0", "b = nan", 9, "inputs.b", "finite"),
+    ("b = 2.0", "b = [1, 2]", 9, "inputs.b", "expected a distribution text or a number"),
+    ("b = 2.0", "b = 2.0\nc = 1.0", 10, "inputs.c", "not a variable of the model"),
+    ("trials = 1000", 'trials = "many"', 12, "run.trials", "expected an integer"),
+    ("trials = 1000", "trials = 1", 12, "run.trials", ">= 2"),
+    ("trials = 1000", "trials = 1e4", 12, "run.trials", "expected an integer"),
+    ("seed = 3", "seed = -1", 13, "run.seed", ">= 0"),
+    ("seed = 3", "seed = 3\np = nan", 14, "run.p", "finite"),
+    ("seed = 3", "seed = 3\np = 1.5", 14, "run.p", "in (0, 1)"),
+    ("seed = 3", 'seed = 3\ninterval = "widest"', 14, "run.interval", "'shortest'"),
+    ("seed = 3", "seed = 3\ncolour = 1", 14, "run.colour", "unknown key"),
+    ('title = "sum"', 'title = "sum"\nauthor = "x"', 3, "author", "unknown key"),
+    ('[inputs]\na = "normal(1, 0.1)"\nb = 2.0', "inputs = 3", 7, "inputs", "expected a table"),
+    ('unit = "mm"', "unit = 1", 5, "unit", "expected a string"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "line", "field", "words"), CASES)
+def test_broken_propagate_file_names_file_line_and_field(old, new, line, field, words):
+    text = GOOD_PROPAGATE.replace(old, new, 1)
+    assert text != GOOD_PROPAGATE
+    with pytest.raises(MtmcError) as info:
+        loads_study(text, file="broken.toml")
+    err = info.value
+    assert err.file == "broken.toml"
+    assert err.line == line
+    assert err.field == field
+    assert words in err.message
+    assert "\n" not in str(err)
+
+
+def test_the_good_file_loads_and_runs():
+    r = loads_study(GOOD_PROPAGATE, file="good.toml").run()
+    assert r.quantity("y").mc["estimate"] == pytest.approx(3.0, abs=0.02)
+
+
+GOOD_GRAPH = """\
+kind = "graph"
+graph = "{graph}"
+outputs = ["d_ac"]
+
+[run]
+trials = 500
+
+[sweep]
+output = "d_ac"
+
+[sweep.vary]
+"probe.u_probe" = "0.001:0.002:2"
+"""
+
+GRAPH_CASES = [
+    ('outputs = ["d_ac"]', 'outputs = ["nowhere"]', 3, "outputs", "has no place 'nowhere'"),
+    ('outputs = ["d_ac"]', 'outputs = "d_ac"', 3, "outputs", "array of strings"),
+    ('outputs = ["d_ac"]', "", 1, "outputs", "missing outputs"),
+    ('graph = "{graph}"', 'graph = "missing.toml"', 2, "graph", "expected an existing file"),
+    ('output = "d_ac"', 'output = "p_o"', 9, "sweep.output", "scalar place"),
+    ('"probe.u_probe"', '"probe.u_nothing"', 12, "sweep.vary.probe.u_nothing", "u_axis"),
+    ('"0.001:0.002:2"', '"0.001:0.002"', 12, "sweep.vary.probe.u_probe", "LOW:HIGH:N"),
+    ('"0.001:0.002:2"', "[0.001, -0.002]", 12, "sweep.vary.probe.u_probe", ">= 0"),
+    ('"0.001:0.002:2"', "[0.001, nan]", 12, "sweep.vary.probe.u_probe", "finite"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "line", "field", "words"), GRAPH_CASES)
+def test_broken_graph_file_names_file_line_and_field(old, new, line, field, words):
+    graph = (ROOT / "examples" / "graphs" / "bcs_origin.toml").as_posix()
+    good = GOOD_GRAPH.replace("{graph}", graph)
+    text = good.replace(old.replace("{graph}", graph), new, 1)
+    assert text != good
+    with pytest.raises(MtmcError) as info:
+        loads_study(text, file="g.toml", folder=ROOT)
+    err = info.value
+    assert (err.file, err.line, err.field) == ("g.toml", line, field)
+    assert words in err.message
+
+
+BAD_VALUES = ['"junk"', "nan", "-1", "-1.5", "[]", "{}", "true", "1e400", '["a", 1]']
+
+
+def _fuzzed(text: str):
+    """Every key line of a valid study with its value replaced by each bad value."""
+    lines = text.splitlines()
+    for i, raw in enumerate(lines):
+        m = re.match(r'^(\s*[A-Za-z_"][A-Za-z0-9_."]*\s*=\s*)(.*)$', raw)
+        if not m:
+            continue
+        for bad in BAD_VALUES:
+            yield i + 1, "\n".join([*lines[:i], m.group(1) + bad, *lines[i + 1 :]]) + "\n"
+
+
+@pytest.mark.parametrize("name", ["mass_calibration", "bcs_origin"])
+def test_fuzzed_shipped_studies_fail_on_the_line_changed(name):
+    path = STUDIES / f"{name}.toml"
+    text = path.read_text(encoding="utf-8")
+    n_err = 0
+    for line, broken in _fuzzed(text):
+        try:
+            study = loads_study(broken, file=path.name, folder=path.parent)
+        except MtmcError as exc:
+            n_err += 1
+            assert exc.file == path.name, (line, broken)
+            assert exc.line == line, (exc, line)
+            assert exc.field, exc
+            assert "\n" not in str(exc)
+        else:  # still valid (a title of "junk"): it must then run
+            assert study.title
+    assert n_err > 40
+
+
+def test_unknown_kind_lists_the_known_ones():
+    with pytest.raises(MtmcError, match="expected one of " + ", ".join(study_kinds())):
+        loads_study('kind = "nope"\n', file="k.toml")
+
+
+def test_not_toml_gives_line_and_column():
+    with pytest.raises(MtmcError) as info:
+        loads_study('kind = "graph"\nx = = 3\n', file="t.toml")
+    assert (info.value.file, info.value.line) == ("t.toml", 2)
+
+
+@pytest.mark.parametrize(("old", "new"), [(c[0], c[1]) for c in CASES[:8]])
+def test_cli_prints_one_line_and_leaves_no_folder(tmp_path, capsys, old, new):
+    study = tmp_path / "broken.toml"
+    study.write_text(GOOD_PROPAGATE.replace(old, new, 1), encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["run", str(study), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith(f"mtmc: error: {study}:")
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.toml"]
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(MtmcError, match="cannot read the study file"):
+        load_study(tmp_path / "none.toml")
