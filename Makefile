@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[dev]"
 	touch $(STAMP)
 
-## demo: run the worked examples on built-in defaults and print their result tables
+## demo: run the shipped studies into mtmc-demo/ (index.html links each report)
 demo: $(STAMP)
 	$(BIN)/python -m mtmc.demo
 

@@ -88,13 +88,13 @@ def test_every_number_shown_is_the_one_in_result_json(folder):
                 assert text == fmt(want), key
     # every quantity's statement is there
     for i, q in enumerate(doc["quantities"]):
-        for k in ("reported.estimate", "reported.U", "monte_carlo.u", "monte_carlo.k"):
+        for k in ("reported.estimate", "reported.U", "monte_carlo.u", "monte_carlo.symmetric[1]"):
             assert f"quantities[{i}].{k}" in keys
         if q["gum"]:
             assert f"quantities[{i}].gum.u" in keys
             assert f"quantities[{i}].validation.d_low" in keys
             shown = [k for k in keys if k.startswith(f"quantities[{i}].budget[")]
-            nonzero = [b for b in q["budget"] if b["share"] > 0]
+            nonzero = [b for b in q["budget"] if b["share"] >= 1e-4]
             assert len({k.split("]")[1] for k in shown}) == len(nonzero)
 
 
