@@ -100,7 +100,7 @@ def convergence(
     --------
     >>> m, est, u = convergence(np.arange(1.0, 101.0), points=3)
     >>> m.tolist(), est.tolist()
-    ([10, 31, 100], [5.5, 16.0, 50.5])
+    ([10, 32, 100], [5.5, 16.5, 50.5])
     >>> bool(np.isclose(u[-1], np.arange(1.0, 101.0).std(ddof=1)))
     True
     """
@@ -129,7 +129,7 @@ def endpoint_std_error(u: float, m: int, p: float) -> float:
     Examples
     --------
     >>> round(endpoint_std_error(1.0, 10**6, 0.95), 5)
-    0.00299
+    0.00267
     """
     from scipy.stats import norm
 
