@@ -23,8 +23,11 @@ import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
-__all__ = ["atomic_path", "write_bytes_atomic", "write_text_atomic"]
+import numpy as np
+
+__all__ = ["atomic_path", "to_jsonable", "write_bytes_atomic", "write_text_atomic"]
 
 
 @contextlib.contextmanager
@@ -83,3 +86,37 @@ def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
     return Path(path)
+
+
+def to_jsonable(obj: Any, *, nonfinite_as_null: bool = False) -> Any:
+    """NumPy scalars and arrays (nested in dicts, lists, tuples) as plain JSON types.
+
+    Parameters
+    ----------
+    obj : any
+        The value.
+    nonfinite_as_null : bool
+        Write NaN and infinities as ``None`` (strict JSON) instead of keeping them.
+
+    Returns
+    -------
+    any
+        Dicts (with string keys), lists, floats, ints, strings, booleans and None.
+
+    Examples
+    --------
+    >>> value = {"a": np.arange(2), "b": (np.float64(1.5), float("inf"))}
+    >>> to_jsonable(value, nonfinite_as_null=True)
+    {'a': [0, 1], 'b': [1.5, None]}
+    """
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v, nonfinite_as_null=nonfinite_as_null) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v, nonfinite_as_null=nonfinite_as_null) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist(), nonfinite_as_null=nonfinite_as_null)
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if nonfinite_as_null and isinstance(obj, float) and not np.isfinite(obj):
+        return None
+    return obj

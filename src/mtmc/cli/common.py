@@ -15,7 +15,6 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, NoReturn
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import (
@@ -28,7 +27,7 @@ from rich.progress import (
 )
 
 from mtmc.errors import MtmcError
-from mtmc.io import write_bytes_atomic, write_text_atomic
+from mtmc.io import to_jsonable, write_bytes_atomic, write_text_atomic
 from mtmc.uncertainty.montecarlo import ProgressFn
 
 #: The ``--progress/--no-progress`` option of the long-running subcommands.
@@ -114,19 +113,6 @@ def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
     msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
     typer.echo(f"mtmc: error: {msg}", err=True)
     raise typer.Exit(code)
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Convert NumPy scalars and arrays (nested in dicts/lists) to plain JSON types."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, np.generic):
-        return obj.item()
-    return obj
 
 
 def print_json(obj: Any) -> None:

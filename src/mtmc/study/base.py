@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.io import to_jsonable
 from mtmc.study.spec import RunSettings, Source
 from mtmc.uncertainty.gum import GumResult, validate
 from mtmc.uncertainty.results import MonteCarloResult
@@ -62,18 +63,7 @@ def _ro(a: Any) -> NDArray[np.float64]:
 
 
 def _plain(obj: Any) -> Any:
-    """NumPy values (nested in dicts, lists, tuples) as plain JSON types."""
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
+    return to_jsonable(obj, nonfinite_as_null=True)
 
 
 def convergence(
