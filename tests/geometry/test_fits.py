@@ -81,8 +81,8 @@ def _sphere_points(
     )
 
 
-def _seed003_patch(radius: float) -> np.ndarray:
-    """30 points on a 6 mm x 6 mm patch of a ball (seed 003 §2), as seen from +z."""
+def _wang2022_patch(radius: float) -> np.ndarray:
+    """30 points on a 6 mm x 6 mm patch of a ball (Wang, Cheung and Kong 2022, §2), from +z."""
     x, y = np.meshgrid(np.linspace(-3, 3, 6), np.linspace(-3, 3, 5))
     x, y = x.ravel(), y.ravel()
     return np.column_stack([x, y, np.sqrt(radius**2 - x**2 - y**2)])
@@ -298,10 +298,10 @@ def test_batch_equals_one_at_a_time_for_noisy_points() -> None:
 
 def test_sphere_fit_agrees_with_scipy_least_squares() -> None:
     rng = _rng(3)
-    radius = 9.997 / 2  # the calibrated fiducial of seed 003
+    radius = 9.997 / 2  # the calibrated fiducial of Wang, Cheung and Kong 2022
     m = 10
     centres = rng.normal(scale=50, size=(m, 3))
-    pts = centres[:, None, :] + _seed003_patch(radius) + rng.normal(scale=0.5e-3, size=(m, 30, 3))
+    pts = centres[:, None, :] + _wang2022_patch(radius) + rng.normal(scale=0.5e-3, size=(m, 30, 3))
     free = fit_sphere(pts)
     known = fit_sphere(pts, radius)
     for i in range(m):
@@ -326,11 +326,11 @@ def test_sphere_fit_agrees_with_scipy_least_squares() -> None:
 
 
 def test_sphere_covariance_matches_monte_carlo_spread() -> None:
-    # Radial noise of sigma on the seed 003 patch: the covariance s^2 (J^T J)^{-1}
+    # Radial noise of sigma on the Wang, Cheung and Kong 2022 patch: the covariance s^2 (J^T J)^{-1}
     # averaged over trials must match the spread of the fitted parameters.
     rng = _rng(7)
     radius, sigma, m = 5.0, 1e-3, 4000
-    nominal = _seed003_patch(radius)
+    nominal = _wang2022_patch(radius)
     normal = nominal / radius
     pts = nominal + rng.normal(scale=sigma, size=(m, 30, 1)) * normal
     for kwargs, k in (({}, 4), ({"radius": radius}, 3)):
@@ -354,7 +354,7 @@ def test_sphere_covariance_mean_is_closed_form_with_unbiased_variance() -> None:
     # (chi^2_{n-k} / (n - k), relative standard deviation sqrt(2 / ((n - k) M))).
     rng = _rng(17)
     radius, sigma, m = 5.0, 1e-3, 4000
-    nominal = _seed003_patch(radius)
+    nominal = _wang2022_patch(radius)
     normal = nominal / radius
     pts = nominal + rng.normal(scale=sigma, size=(m, 30, 1)) * normal
     for kwargs, k in (({}, 4), ({"radius": radius}, 3)):
@@ -428,7 +428,7 @@ def test_collinear_coplanar_coincident() -> None:
 
 
 def test_no_convergence_and_bad_input() -> None:
-    pts = _seed003_patch(5.0) + _rng(1).normal(scale=1e-3, size=(30, 3))
+    pts = _wang2022_patch(5.0) + _rng(1).normal(scale=1e-3, size=(30, 3))
     with pytest.raises(
         ConvergenceError,
         match=r"the sphere fit did not converge in 1 Gauss-Newton iterations in 1 of 1 trials",

@@ -35,7 +35,7 @@ def test_batch_of_one_broadcasts_against_batch_of_m() -> None:
 
 
 def test_plane_offset_is_eq_29() -> None:
-    # D = -I x1 - J y1 - K z1 (seed 000 eq. 29) for the plane x + y + z = 1.
+    # D = -I x1 - J y1 - K z1 (Stryczek eq. 29) for the plane x + y + z = 1.
     plane = Plane([1, 0, 0], [1, 1, 1])
     assert_allclose(plane.offset, [-1 / math.sqrt(3)], rtol=1e-15)
     assert_allclose(plane.normal, [[1 / math.sqrt(3)] * 3], rtol=1e-15)

@@ -151,7 +151,7 @@ def test_small_angle_rotation_is_first_order() -> None:
         assert np.max(np.abs(S - exact)) < 2.0 * np.sum(e**2)
     # S^T S = I + O(e^2)
     assert np.max(np.abs(S[0].T @ S[0] - np.eye(3))) < 2.0 * np.sum(e**2)
-    # seed 004 eq. 12 prints the transpose (passive form)
+    # Aguado et al. 2016, eq. 12 prints the transpose (passive form)
     ea, eb, ec = 1e-4, 2e-4, 3e-4
     eq12 = np.array([[1, ec, -eb], [-ec, 1, ea], [eb, -ea, 1]])
     np.testing.assert_array_equal(small_angle_rotation(ea, eb, ec).T, eq12)

@@ -1,4 +1,4 @@
-"""The assertion database of seed 000 (Table 1): import, export, errors."""
+"""The assertion database of Stryczek (Table 1): import, export, errors."""
 
 from __future__ import annotations
 
@@ -14,10 +14,10 @@ from mtmc.graph.files import read_graph
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
 
-# The ball-centre graph of seed 000 Fig. 6 written as Table 1 facts (typographic quotes as
+# The ball-centre graph of Stryczek, Fig. 6 written as Table 1 facts (typographic quotes as
 # printed), with the probe extension: x1, x2, y1, y2, z1 probed, r1 the radius.
 FIG6 = """
-% seed 000, Fig. 6: ball centre by 4 + 1 points
+% Stryczek, Fig. 6: ball centre by 4 + 1 points
 probe(0.002, 0.001, 0.0005).
 p(1, 20, 20, „x”, -12.7, 0, 0).   p(2, 20, 60, „x”, 12.7, 0, 0).
 p(3, 20, 100, „y”, 0, -12.7, 0).  p(4, 20, 140, „y”, 0, 12.7, 0).

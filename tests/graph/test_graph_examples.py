@@ -19,7 +19,7 @@ from mtmc.uncertainty import gum, validate
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
 U1, U2, U3 = 0.002, 0.001, 0.0005  # the [probe] of every example
-U_DIR = math.sqrt(U1**2 + U2**2 + U3**2)  # seed 000 eq. 1, along the probing direction
+U_DIR = math.sqrt(U1**2 + U2**2 + U3**2)  # Stryczek eq. 1, along the probing direction
 U_R1 = 0.0005  # u of the ball radius
 R_BALL = 12.7
 
@@ -36,7 +36,7 @@ def test_ball_centre_closed_form():
 
 
 def test_ball_centre_box_muller():
-    """The same closed form with normals made by Box-Muller (seed 000 eq. 6)."""
+    """The same closed form with normals made by Box-Muller (Stryczek eq. 6)."""
     g = load_graph(EXAMPLES / "ball_centre.toml")
     r = run_graph(g, 100_000, seed=11, normal_method="box-muller", outputs=["p"])
     np.testing.assert_allclose(r.places["p"].u[:2], U_DIR / math.sqrt(2), rtol=0.012)
@@ -86,7 +86,7 @@ def ball_centres(rng, m, centres, dr):
 
 
 def paper_axis(p1, p2, p3, alpha):
-    """Seed 000 eqs. 8-19 (eq. 14 read as X4 - X1) and eqs. 20-27 (eq. 22 sign corrected)."""
+    """Stryczek eqs. 8-19 (eq. 14 read as X4 - X1) and eqs. 20-27 (eq. 22 sign corrected)."""
     p4 = (p2 + p3) / 2
     big_r = np.linalg.norm(p3 - p4, axis=1) / np.sin(alpha)
     v1 = (p4 - p1) / np.linalg.norm(p4 - p1, axis=1)[:, None]

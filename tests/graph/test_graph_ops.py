@@ -1,4 +1,4 @@
-"""Ops registry, type binding and the rotary-axis construction (seed 000 eqs. 8-19)."""
+"""Ops registry, type binding and the rotary-axis construction (Stryczek eqs. 8-19)."""
 
 from __future__ import annotations
 

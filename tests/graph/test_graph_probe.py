@@ -1,4 +1,4 @@
-"""The touch-probe model of meas (seed 000 eq. 1) against its closed-form covariance."""
+"""The touch-probe model of meas (Stryczek eq. 1) against its closed-form covariance."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ def test_oblique_direction_covariance():
     sd = np.sqrt((np.outer(np.diag(want), np.diag(want)) + want**2) / M)
     assert np.all(np.abs(cov - want) < 5 * sd)
     np.testing.assert_allclose(r.places["q"].mean, [10, 20, 30], atol=5 * 0.004 / math.sqrt(M))
-    # along d: u = sqrt(u1^2 + u2^2 + u3^2) (seed 000 eq. 1)
+    # along d: u = sqrt(u1^2 + u2^2 + u3^2) (Stryczek eq. 1)
     np.testing.assert_allclose(
         math.sqrt(d @ cov @ d), math.sqrt(0.002**2 + 0.003**2 + 0.001**2), rtol=0.012
     )

@@ -1,4 +1,4 @@
-"""Sweeps over a graph and the surrogate of seed 000 eq. 31 (general form)."""
+"""Sweeps over a graph and the surrogate of Stryczek eq. 31 (general form)."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ def test_fit_surrogate_recovers_exact_coefficients():
     np.testing.assert_allclose(fit.c0, 0.25, rtol=1e-9)
     assert fit.max_rel_error < 1e-12
     np.testing.assert_allclose(fit.predict(sig), u, rtol=1e-12)
-    # the seed's eq. 31 is this form with c_i = 0.05999^2 / 845 and 0.05999^2 / 868, no c0
+    # Stryczek's eq. 31 is this form with c_i = 0.05999^2 / 845 and 0.05999^2 / 868, no c0
     paper = np.sqrt(0.05999**2 * (sig[:, 0] ** 2 / 845 + sig[:, 1] ** 2 / 868))
     fit31 = fit_surrogate(sig, paper, intercept=False)
     np.testing.assert_allclose(fit31.coefficients, [0.05999**2 / 845, 0.05999**2 / 868], rtol=1e-10)
@@ -44,7 +44,7 @@ def test_parse_range():
 
 
 def test_fig14_grid_and_surrogate():
-    """Seed 000 Fig. 14: 25 points x 1000 trials of the A-C distance; eq. 31 form within 5 %."""
+    """Stryczek, Fig. 14: 25 points x 1000 trials of the A-C distance; eq. 31 form within 5 %."""
     g = load_graph(EXAMPLES / "bcs_origin.toml")
     grid = {
         "probe.u_probe": np.linspace(0.001, 0.005, 5),

@@ -176,7 +176,7 @@ def test_constant():
 
 
 def test_box_muller_is_the_transform_of_uniform_pairs():
-    # independent recomputation of seed 000 eq. 6 from the same uniform stream
+    # independent recomputation of Stryczek eq. 6 from the same uniform stream
     z = standard_normal(np.random.default_rng(3), 7, "box-muller")
     u = np.random.default_rng(3).random((4, 2))
     r = np.sqrt(-2 * np.log(1 - u[:, 0]))

@@ -106,7 +106,7 @@ def test_histogram_density_integrates_to_one():
     assert float(np.sum(h.density * np.diff(h.edges))) == pytest.approx(1.0, rel=1e-12)
 
 
-def test_u_is_seed000_eq5():
+def test_u_is_stryczek_eq5():
     x = np.random.default_rng(2).normal(0, 1, 3000)
     r = MonteCarloResult.from_samples(x, seed=2)
     mu = sum(x) / len(x)

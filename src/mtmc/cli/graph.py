@@ -1,4 +1,4 @@
-"""``mtmc graph``: check, draw, export, run and sweep a measurement graph (seed 000).
+"""``mtmc graph``: check, draw, export, run and sweep a measurement graph (Stryczek).
 
 A thin shell: it reads the file, calls :mod:`mtmc.graph` and prints. Errors print one
 line (``mtmc: error: FILE:LINE: field F: ...``) and exit with status 2; files are
@@ -31,7 +31,7 @@ from mtmc.graph.model import Graph
 from mtmc.graph.units import place_dimension
 
 app = typer.Typer(
-    help="Measurement graphs (seed 000): check, draw, run, sweep.", no_args_is_help=True
+    help="Measurement graphs (Stryczek): check, draw, run, sweep.", no_args_is_help=True
 )
 
 #: Suffixes ``graph draw`` writes: Matplotlib formats, and Graphviz DOT text.
@@ -100,7 +100,7 @@ def export_cmd(
         None, "-o", "--output", help="Write to this file (default: stdout)."
     ),
 ) -> None:
-    """Print FILE as the seed's assertion database, as TOML or as DOT."""
+    """Print FILE as Stryczek's assertion database, as TOML or as DOT."""
     from mtmc.graph.assertions import dumps_assertions
     from mtmc.graph.draw import to_dot
     from mtmc.graph.toml_format import dumps
@@ -156,7 +156,7 @@ def run_cmd(
         print_json(res.to_dict())
         return
     g = plan.graph
-    table = Table(title=f"{file.name}: Monte Carlo over the graph (seed 000)")
+    table = Table(title=f"{file.name}: Monte Carlo over the graph (Stryczek)")
     for col in ("place", "type", "part"):
         table.add_column(col)
     table.add_column("estimate", justify="right")
@@ -220,7 +220,7 @@ def sweep_cmd(
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
-    """Run FILE on a grid and fit the surrogate U^2 = c0 + sum c_i sigma_i^2 (seed 000 eq. 31)."""
+    """Run FILE on a grid and fit the surrogate U^2 = c0 + sum c_i sigma_i^2 (Stryczek eq. 31)."""
     from mtmc.graph.sweep import parse_range, sweep
 
     try:

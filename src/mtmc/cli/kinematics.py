@@ -112,7 +112,7 @@ def equation_cmd(
         None, "--error", "-e", help="Keep only these errors (repeat the option)."
     ),
 ) -> None:
-    """Write out the equation of motion of a machine (seed 004 section 4.1)."""
+    """Write out the equation of motion of a machine (Aguado et al. 2016, section 4.1)."""
     from mtmc.kinematics import equation_of_motion
 
     try:

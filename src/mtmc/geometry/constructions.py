@@ -1,6 +1,6 @@
 """Batched geometric constructions: points, vectors, lines, planes, circles and frames.
 
-These are the operations of Stryczek's measurement graph (seed 000: the transitions
+These are the operations of Stryczek's measurement graph (the transitions
 ``middle``, ``vector``, ``unit_v``, ``displace``, ``line``, ``plane``, ``point``,
 ``project``, ``per_proj``, ``distance``, ``angle``, ``circle``, ``frame``). Every
 function computes a whole batch of ``M`` trials in one pass: points and vectors are
@@ -15,7 +15,7 @@ and how many trials are affected. The test is relative, with tolerance
 ``|(b - a) × (c - a)| <= RTOL |b - a| |c - a|`` (the sine of the angle at ``a``). NaN
 coordinates are not checked here: they propagate to NaN results.
 
-Where the code departs from the printed formulas of seed 000
+Where the code departs from the printed formulas of Stryczek
 ------------------------------------------------------------
 Eq. 22 prints the second component of the normal ``V_12 × V_13`` as
 ``J_0 = a_x b_z - b_x a_z``; the cofactor expansion of the determinant (20) gives
@@ -81,7 +81,7 @@ def _pair(
 
 
 def middle(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.float64]:
-    """The midpoint of the segment from ``a`` to ``b`` (transition ``middle``, seed 000).
+    """The midpoint of the segment from ``a`` to ``b`` (transition ``middle``, Stryczek).
 
     ``m = (a + b) / 2``.
 
@@ -106,7 +106,7 @@ def middle(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.float64]:
 
 
 def vector(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.float64]:
-    """The vector from ``a`` to ``b``, ``b - a`` (transition ``vector``, seed 000).
+    """The vector from ``a`` to ``b``, ``b - a`` (transition ``vector``, Stryczek).
 
     Parameters
     ----------
@@ -128,7 +128,7 @@ def vector(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.float64]:
 
 
 def unit(v: npt.ArrayLike) -> NDArray[np.float64]:
-    """The unit vector ``v / |v|`` (transition ``unit_v``, seed 000).
+    """The unit vector ``v / |v|`` (transition ``unit_v``, Stryczek).
 
     Parameters
     ----------
@@ -160,7 +160,7 @@ def unit(v: npt.ArrayLike) -> NDArray[np.float64]:
 def displace(
     p: npt.ArrayLike, v: npt.ArrayLike, length: npt.ArrayLike | None = None
 ) -> NDArray[np.float64]:
-    """Displace points by vectors (transition ``displace``, seed 000).
+    """Displace points by vectors (transition ``displace``, Stryczek).
 
     ``p + v``, or, when ``length`` is given, ``p + length * v / |v|`` (a displacement
     by a constant such as Stryczek's ``r_2``, the height of the ball centre above the
@@ -298,7 +298,7 @@ def line_from_planes(p1: Plane, p2: Plane) -> Line:
 
 
 def plane_from_points(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Plane:
-    """The plane through three points (transition ``plane``, seed 000 eqs. 20-29).
+    """The plane through three points (transition ``plane``, Stryczek eqs. 20-29).
 
     The normal is ``V_12 × V_13 / |V_12 × V_13|`` with ``V_12 = b - a`` and
     ``V_13 = c - a`` (right-handed with respect to ``a, b, c``); the plane's point is
@@ -352,7 +352,7 @@ def plane_from_point_normal(p: npt.ArrayLike, n: npt.ArrayLike) -> Plane:
         A point on each plane, mm.
     n : array_like, shape (M, 3) or (3,)
         The normals (any non-zero length), e.g. the direction of a line perpendicular
-        to the plane (the alternative ``plane`` transition of seed 000).
+        to the plane (the alternative ``plane`` transition of Stryczek).
 
     Returns
     -------
@@ -369,7 +369,7 @@ def plane_from_point_normal(p: npt.ArrayLike, n: npt.ArrayLike) -> Plane:
 
 
 def intersect_line_plane(line: Line, plane: Plane) -> NDArray[np.float64]:
-    """The point where a line meets a plane (transition ``point``, seed 000; eq. 30).
+    """The point where a line meets a plane (transition ``point``, Stryczek; eq. 30).
 
     ``x = L0 + t d`` with ``t = n · (P0 - L0) / (n · d)``.
 
@@ -571,7 +571,7 @@ def angle_between(u: npt.ArrayLike, v: npt.ArrayLike) -> NDArray[np.float64]:
 
 
 def circle_from_points(a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike) -> Circle:
-    """The circle through three points (transition ``circle``, seed 000 Fig. 7-10).
+    """The circle through three points (transition ``circle``, Stryczek, Fig. 7-10).
 
     With ``u = b - a``, ``v = c - a`` and ``w = u × v``, the centre is
     ``a + ((|u|^2 v - |v|^2 u) × w) / (2 |w|^2)`` (equidistant from the three points and
@@ -624,7 +624,7 @@ def frame_from_plane_line_point(
 ) -> NDArray[np.float64]:
     """A coordinate frame from a plane, a line and a point (transition ``frame``).
 
-    The 3-2-1 alignment of a workpiece (seed 000): the plane fixes three degrees of
+    The 3-2-1 alignment of a workpiece (Stryczek): the plane fixes three degrees of
     freedom, the line two, the point one. Convention:
 
     - z-axis: the plane's normal ``n``;

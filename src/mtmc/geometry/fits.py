@@ -19,7 +19,7 @@ the feature:
   ``rho_i - r`` (Gander, Golub & Strebel 1994, §3).
 - sphere: the algebraic sphere as a start, then Gauss-Newton on ``|p_i - c| - r``
   (free radius) or on ``|p_i - c| - R`` with the radius ``R`` known (centre only: the
-  ball-centre measurement with a calibrated ball of seed 000 and seed 003).
+  ball-centre measurement with a calibrated ball of Stryczek and Wang, Cheung and Kong 2022).
 
 The Gauss-Newton iterations of a trial stop when the step is below ``xtol`` times the
 size of its point set, or when the steps stop shrinking at the rounding floor
@@ -246,7 +246,7 @@ def fit_plane(points: npt.ArrayLike, *, orientation: npt.ArrayLike | None = None
     The plane passes through the centroid ``c`` of each set; its normal is the
     eigenvector of the smallest eigenvalue of the scatter matrix
     ``S = sum_i (p_i - c)(p_i - c)^T``, which minimises ``sum_i (n · (p_i - c))^2``
-    (the multi-point plane of seed 000; for three points it is the plane of eqs. 20-29).
+    (the multi-point plane of Stryczek; for three points it is the plane of eqs. 20-29).
 
     Parameters
     ----------
@@ -680,7 +680,7 @@ def fit_sphere(
     ``S D = -sum_i x_i |x_i|^2`` with the scatter matrix ``S``, centre ``-D / 2``. Then
     Gauss-Newton on the geometric distances ``|x_i - a| - r`` (free radius, parameters
     ``(a, r)``) or ``|x_i - a| - R`` (known radius ``R``, parameters ``a``: the centre of
-    a calibrated ball, seed 000 Fig. 5-6; seed 003 §2 probes 30 points on a
+    a calibrated ball, Stryczek, Fig. 5-6; Wang, Cheung and Kong 2022, §2 probes 30 points on a
     6 mm × 6 mm patch of a 9.997 mm ball and fits its centre by least squares).
 
     Parameters

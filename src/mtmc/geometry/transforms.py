@@ -235,7 +235,8 @@ def small_angle_rotation(
 
     Notes
     -----
-    Seed 004 eq. (12) prints the transpose, ``[[1, EC, -EB], [-EC, 1, EA], [EB, -EA, 1]]``:
+    Aguado et al. 2016, eq. (12) prints the transpose,
+    ``[[1, EC, -EB], [-EC, 1, EA], [EB, -EA, 1]]``:
     that matrix changes the coordinates of a point into a frame rotated by the errors
     (passive form). mtmc uses active rotations throughout; the transposed (passive) form
     is ``small_angle_rotation(-ea, -eb, -ec)``. See ``docs/conventions.md``.

@@ -1,11 +1,11 @@
-"""The measurement graph of seed 000 (Stryczek): places, transitions, arcs and markers.
+"""The measurement graph of Stryczek: places, transitions, arcs and markers.
 
 A directed bipartite graph G = (Π, T, E, M) whose transitions (``meas``, ``point``,
 ``middle``, ``plane``, ``axis``, ...) bind their variant by the types of their input
 places, validated before running and evaluated in topological generations over whole
 batches of Monte Carlo trials. Read from TOML (``docs/graph-format.md``) or from the
-seed's assertion database (Table 1), drawn as SVG or DOT, swept over parameter grids with
-a surrogate formula fitted to the sweep (seed 000 eq. 31). This package knows nothing of
+Stryczek's assertion database (Table 1), drawn as SVG or DOT, swept over parameter grids with
+a surrogate formula fitted to the sweep (Stryczek eq. 31). This package knows nothing of
 machines.
 
 The names exported to :mod:`mtmc` carry ``graph`` where a bare name would be ambiguous

@@ -1,6 +1,6 @@
-"""The assertion database of seed 000 (Table 1): reading and writing.
+"""The assertion database of Stryczek (Table 1): reading and writing.
 
-Seed 000 stores a graph as Prolog-like facts, one per element:
+Stryczek stores a graph as Prolog-like facts, one per element:
 
 ==================================  ==================================================
 assertion                           reading here
@@ -16,7 +16,7 @@ assertion                           reading here
 ==================================  ==================================================
 
 Type codes: ``"p"`` point, ``"v"`` unit (a directional versor ``I, J, K``), ``"d"``
-vector (the components of a section, ``d2``... of seed 000 Fig. 10), ``"x"``, ``"y"``,
+vector (the components of a section, ``d2``... of Stryczek, Fig. 10), ``"x"``, ``"y"``,
 ``"z"`` one coordinate, ``"r"`` real (``R`` the first number). Types the table does not
 list are written by their name (``"line"``, ``"plane"``, ``"circle"``, ``"sphere"``,
 ``"frame"``). The quotes may be ``"``, ``'`` or the typographic „ ” of the print.
@@ -26,7 +26,7 @@ The numbers ``X, Y, Z``:
 - of a marked place (``m(p)``): its value (one number for ``x``/``y``/``z``/``r``: the
   coordinate's own, ``X``, ``Y`` or ``Z``, and ``R`` for a real; three for the others);
 - of a place produced by ``meas``: the nominal probed point, the transition's ``at``;
-- of any other place: the expected values the seed's tool shows; they are results, not
+- of any other place: the expected values Stryczek's tool shows; they are results, not
   inputs, and are not read (write 0).
 
 The table has no field for the uncertainties or the probing direction. These extensions
@@ -212,7 +212,7 @@ def _pos(x: Any, y: Any, file: str | None, line: int) -> tuple[float, float] | N
 
 
 def loads_assertions(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
-    """Read a graph from the assertion database of seed 000 (Table 1).
+    """Read a graph from the assertion database of Stryczek (Table 1).
 
     Parameters
     ----------
@@ -433,7 +433,7 @@ def _f(v: Any) -> str:
 
 
 def dumps_assertions(graph: Graph) -> str:
-    """Write a graph as the assertion database of seed 000 (with the extensions).
+    """Write a graph as the assertion database of Stryczek (with the extensions).
 
     Every place is written, the implicit ones too, so reading the text back gives the
     same plan (types, arcs, fields) with all places declared, and writing that again
@@ -454,7 +454,7 @@ def dumps_assertions(graph: Graph) -> str:
     for s in plan.steps:
         if s.transition.op == "meas":
             at_of[s.transition.out] = s.transition.param("at")
-    lines = ["% measurement graph, assertion database (seed 000 Table 1)"]
+    lines = ["% measurement graph, assertion database (Stryczek, Table 1)"]
     if graph.title:
         lines.append(f"title({_f(graph.title)}).")
     lines.append(f"units({graph.units}).")

@@ -1,6 +1,6 @@
 """Drawing a measurement graph: places as circles, transitions as boxes, markers as dots.
 
-Seed 000 (Table 1) draws places as ○, transitions as ▭, arcs as arrows and the markers of
+Stryczek (Table 1) draws places as ○, transitions as ▭, arcs as arrows and the markers of
 M0 as ● inside their place: "a graphical character allowing for the easy assessment of
 the model completeness and cohesion". :func:`to_dot` writes Graphviz DOT text;
 :func:`draw` writes SVG (or PNG, PDF) with Matplotlib. Node positions come from the

@@ -10,7 +10,7 @@ from mtmc.graph.toml_format import load
 
 __all__ = ["read_graph", "ASSERTION_SUFFIXES"]
 
-#: Suffixes read as the assertion database of seed 000 (Table 1); the others as TOML.
+#: Suffixes read as the assertion database of Stryczek (Table 1); the others as TOML.
 ASSERTION_SUFFIXES: tuple[str, ...] = (".pl", ".db", ".facts")
 
 

@@ -1,10 +1,10 @@
-"""The measurement graph G = (Π, T, E, M) of seed 000 (eq. 7): validation and firing order.
+"""The measurement graph G = (Π, T, E, M) of Stryczek (eq. 7): validation and firing order.
 
 A :class:`Graph` holds what a graph file says. :func:`check` validates it and returns a
 :class:`Plan`: the type of every place (declared, or implied by the op that produces it),
 the variant each transition binds by the types of its inputs, and the firing order.
 
-Markers (seed 000): the places with a value are marked from the start (the set M0); a
+Markers (Stryczek): the places with a value are marked from the start (the set M0); a
 transition fires once per simulation cycle, when all its input places are marked, and
 marks its output place. The firing order is therefore a topological order of the
 bipartite graph; it is taken by generations (the transitions whose inputs are all marked
@@ -35,7 +35,7 @@ LENGTH_UNITS: dict[str, float] = {"mm": 1.0, "um": 1e-3}
 
 @dataclass(frozen=True)
 class Graph:
-    """A measurement graph as written in a file (seed 000, eq. 7).
+    """A measurement graph as written in a file (Stryczek, eq. 7).
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """The transition ops of the measurement graph and their variants, bound by input types.
 
-Seed 000 names the transitions ``meas``, ``point``, ``line``, ``aline``, ``vector``,
+Stryczek names the transitions ``meas``, ``point``, ``line``, ``aline``, ``vector``,
 ``unit_v``, ``circle``, ``middle``, ``plane``, ``frame``, ``displace``, ``ratio``,
 ``project``, ``per_proj``: "a transition variant binding in a given node results from
 the context in which it is placed in the model", i.e. from the types of its input
@@ -11,7 +11,7 @@ types of a transition's inputs, or raises naming what the op accepts.
 Every op function works on a whole batch: scalars ``(M,)``, points/vectors ``(M, 3)``,
 lines/planes/circles/spheres as :mod:`mtmc.geometry` primitives, frames ``(M, 4, 4)``;
 a constant input may be a batch of one and broadcasts. All geometry is done by
-:mod:`mtmc.geometry`; this module only adds the rotary-axis construction of seed 000
+:mod:`mtmc.geometry`; this module only adds the rotary-axis construction of Stryczek
 (eqs. 8-19), which has no counterpart there.
 
 New ops register with :func:`register` (or the :func:`variant` decorator), which refuses
@@ -325,7 +325,7 @@ def _unit_v(v: Any) -> Any:
 
 @variant("unit_v", ("line",), "unit")
 def _unit_line(line: Line) -> Any:
-    """The direction of a line (of an ``axis``: V_A, V_C of seed 000 Fig. 13)."""
+    """The direction of a line (of an ``axis``: V_A, V_C of Stryczek, Fig. 13)."""
     return line.direction
 
 
@@ -429,7 +429,7 @@ def _aline(p: Any, d: Any) -> Any:
 
 @variant("plane", ("point", "point", "point"), "plane")
 def _plane_3(a: Any, b: Any, c: Any) -> Any:
-    """The plane through three points, normal (b - a) x (c - a) (seed 000 eqs. 20-29)."""
+    """The plane through three points, normal (b - a) x (c - a) (Stryczek eqs. 20-29)."""
     return gc.plane_from_points(a, b, c)
 
 
@@ -494,7 +494,7 @@ def _frame(plane: Plane, line: Line, p: Any) -> Any:
 
 
 # --------------------------------------------------------------------------------------
-# axis: seed 000 eqs. 8-19
+# axis: Stryczek eqs. 8-19
 
 
 def _sq(v: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -508,32 +508,32 @@ def rotary_axis(
     p3: npt.ArrayLike,
     alpha: npt.ArrayLike | None = None,
 ) -> Line:
-    r"""Locate a rotary axis from three positions of a ball centre (seed 000 eqs. 8-19).
+    r"""Locate a rotary axis from three positions of a ball centre (Stryczek eqs. 8-19).
 
     A ball fixed on the rotary table is measured at the axis angles 0, +α and −α; its
     centres ``P1`` (at 0), ``P2`` (at +α) and ``P3`` (at −α) lie on a circle about the
     axis. The axis is the line through that circle's centre along its normal.
 
-    Direction (seed 000 eqs. 20-27): the unit normal of the plane of the three points,
+    Direction (Stryczek eqs. 20-27): the unit normal of the plane of the three points,
 
     .. math:: \mathbf a = \frac{(P_2 - P_1)\times(P_3 - P_1)}{|(P_2 - P_1)\times(P_3 - P_1)|},
 
     which points along the positive axis of rotation (right-hand rule) when ``P3 → P1 → P2``
-    is the order of increasing angle. Seed 000 prints the y-component of the cross product
+    is the order of increasing angle. Stryczek prints the y-component of the cross product
     (its eq. 22) as ``a_x b_z − b_x a_z``; the correct component is ``a_z b_x − a_x b_z``.
 
-    Location with α given (seed 000 eqs. 8-19): ``P4 = (P2 + P3)/2`` (eqs. 8-10) lies on
+    Location with α given (Stryczek eqs. 8-19): ``P4 = (P2 + P3)/2`` (eqs. 8-10) lies on
     the radius through ``P1`` because ``P2`` and ``P3`` are symmetric about it. The half
     chord ``|P3 P4|`` (eq. 11) equals ``R sin α``, so ``R = |P3 P4| / sin α`` (eq. 12).
     With the unit vector from ``P1`` towards ``P4``, ``v = (P4 − P1)/|P4 − P1|`` (eqs.
-    13-16), the circle centre is ``P0 = P1 + R v`` (eqs. 17-19). Seed 000 prints eq. 14
+    13-16), the circle centre is ``P0 = P1 + R v`` (eqs. 17-19). Stryczek prints eq. 14
     as ``I0 = (X4 − X3)/|P1 P4|``; by eqs. 15-16 and the construction it is
     ``(X4 − X1)/|P1 P4|``. Eq. 11 prints only the right-hand side; it is ``|P3 P4|``.
 
     Location without α: the centre of the circle through the three points
     (:func:`mtmc.geometry.circle_from_points`), which needs no assumption on the angles.
     With exact data both give the same axis; with noisy data the first uses the known
-    angle and the symmetric placement, as the seed does.
+    angle and the symmetric placement, as Stryczek does.
 
     Parameters
     ----------
@@ -601,5 +601,5 @@ def _axis3(a: Any, b: Any, c: Any) -> Any:
 
 @variant("axis", ("point", "point", "point", "real"), "line")
 def _axis4(a: Any, b: Any, c: Any, alpha: Any) -> Any:
-    """The rotary axis from ball centres at 0, +alpha, -alpha (seed 000 eqs. 8-19)."""
+    """The rotary axis from ball centres at 0, +alpha, -alpha (Stryczek eqs. 8-19)."""
     return rotary_axis(a, b, c, alpha)

@@ -1,6 +1,6 @@
 """Places, transitions and probe defaults: the small frozen objects a graph is made of.
 
-A measurement graph (seed 000, eq. 7) is the ordered four G = (Π, T, E, M): places Π,
+A measurement graph (Stryczek, eq. 7) is the ordered four G = (Π, T, E, M): places Π,
 transitions T, arcs E (here: each transition's ``inputs`` and ``out``) and markers M (here:
 the places that carry a value, ``u`` or ``dist`` are marked from the start, the set M0).
 These classes hold what a graph file says, validated field by field in ``__post_init__``;
@@ -286,7 +286,7 @@ class Transition:
 
 @dataclass(frozen=True)
 class ProbeDefaults:
-    """Standard uncertainties of the touch-probe model (seed 000, eq. 1), in the file's units.
+    """Standard uncertainties of the touch-probe model (Stryczek, eq. 1), in the file's units.
 
     Parameters
     ----------
@@ -299,7 +299,7 @@ class ProbeDefaults:
 
     Notes
     -----
-    Along the probing direction the three combine as u = √(u1² + u2² + u3²). Seed 000
+    Along the probing direction the three combine as u = √(u1² + u2² + u3²). Stryczek
     prints eq. 1 garbled (``m = a·b ∫ ρ θ dh``); its text states this root sum of squares.
     """
 

@@ -1,6 +1,6 @@
-r"""The touch-probe point model of seed 000 (transition ``meas``).
+r"""The touch-probe point model of Stryczek (transition ``meas``).
 
-Seed 000 names three components of the uncertainty of a probed point: u1 of the axis
+Stryczek names three components of the uncertainty of a probed point: u1 of the axis
 position (on every coordinate), u2 of the probe and u3 from the non-perpendicularity of
 the probing movement to the surface (both along the probing direction). Its eq. 1 is
 garbled in print; its text means

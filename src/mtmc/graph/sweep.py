@@ -1,13 +1,13 @@
-r"""Parameter sweeps over a graph and the surrogate formula fitted to them (seed 000 Fig. 14-15).
+r"""Parameter sweeps over a graph and the surrogate formula fitted to them (Stryczek, Fig. 14-15).
 
-Seed 000 runs the A-C distance graph on a 5 × 5 grid of the probe and machine standard
+Stryczek runs the A-C distance graph on a 5 × 5 grid of the probe and machine standard
 deviations (σ_p, σ_m), 1000 trials per point, and fits to the 25 standard uncertainties
 the "3-axis ellipsoid" of its eq. 31,
 
 .. math:: U = 0.05999 \sqrt{\sigma_p^2 / 845 + \sigma_m^2 / 868},
 
 with a fit error of at most 5 %. Squared, eq. 31 is ``U² = c_p σ_p² + c_m σ_m²`` with
-``c_p = 0.05999²/845`` and ``c_m = 0.05999²/868``: the seed's three constants are two
+``c_p = 0.05999²/845`` and ``c_m = 0.05999²/868``: Stryczek's three constants are two
 free ones. :func:`fit_surrogate` fits the general form
 
 .. math:: U^2 = c_0 + \sum_i c_i \sigma_i^2
@@ -148,7 +148,7 @@ def apply_setting(graph: Graph, key: str, value: float) -> Graph:
 
 @dataclass(frozen=True)
 class Surrogate:
-    """The surrogate ``U² = c0 + Σ cᵢ σᵢ²`` fitted to a sweep (seed 000 eq. 31, general form).
+    """The surrogate ``U² = c0 + Σ cᵢ σᵢ²`` fitted to a sweep (Stryczek eq. 31, general form).
 
     Parameters
     ----------
@@ -169,7 +169,7 @@ class Surrogate:
 
     @property
     def max_rel_error(self) -> float:
-        """The largest ``|U_surrogate / U - 1|`` on the grid (seed 000: at most 5 %)."""
+        """The largest ``|U_surrogate / U - 1|`` on the grid (Stryczek: at most 5 %)."""
         return float(np.max(np.abs(self.rel_errors)))
 
     def predict(self, sigmas: npt.ArrayLike) -> NDArray[np.float64]:
@@ -203,7 +203,7 @@ def fit_surrogate(
     names : sequence of str, optional
         Names of the k parameters.
     intercept : bool
-        Fit ``c0`` too (default) or force it to 0 (the seed's eq. 31 has none).
+        Fit ``c0`` too (default) or force it to 0 (Stryczek's eq. 31 has none).
 
     Returns
     -------
@@ -352,7 +352,7 @@ def sweep(
     output : str
         A scalar output place (type ``x``, ``y``, ``z`` or ``real``).
     trials : int
-        Trials per grid point (seed 000: 1000).
+        Trials per grid point (Stryczek: 1000).
     seed : int, SeedSequence or None
         One seed for every grid point (common random numbers).
     progress : callable, optional

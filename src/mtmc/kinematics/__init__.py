@@ -1,7 +1,7 @@
 """Machine kinematics with ISO 230 geometric errors.
 
 Topology strings (``wCBXfYZt``, ``XFYZ``), ISO 230-1 / 230-7 error names, error generation
-functions (seed 004 §4.3), batched forward kinematics with errors and its Jacobian, the
+functions (Aguado et al. 2016, §4.3), batched forward kinematics with errors and its Jacobian, the
 equation of motion written out with SymPy, a library of common configurations, and a
 drawing of the kinematic chain. This package knows nothing of instruments or files.
 """

@@ -1,4 +1,4 @@
-"""A drawing of the kinematic chain as SVG (the schematic of seed 004 Fig. 4).
+"""A drawing of the kinematic chain as SVG (the schematic of Aguado et al. 2016, Fig. 4).
 
 The chain is drawn left to right as it is written, from the workpiece to the tool: the
 workpiece, the part-side axes, the machine frame (a ground symbol), the tool-side axes,

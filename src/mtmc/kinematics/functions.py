@@ -1,4 +1,4 @@
-"""Error generation functions (seed 004 §4.3): an error's value along an axis's travel.
+"""Error generation functions (Aguado et al. 2016, §4.3): an error's value along an axis's travel.
 
 Each function is a frozen value object; calling it on a batch of axis positions ``q`` of
 shape ``(M,)`` returns the error values ``(M,)`` (mm for a displacement, rad for a

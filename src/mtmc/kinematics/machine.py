@@ -26,8 +26,8 @@ read along the chain from the workpiece to the tool (``docs/conventions.md``)::
 - ``S_T = T(t + d_T) R(e_T)``: the tool point ``t`` on the last tool-side body, with
   ``EXT EYT EZT`` / ``EAT EBT ECT``.
 
-``R(a, b, c)`` is the small-angle matrix ``I + [e]x`` of seed 004 eq. (12) (transposed, see
-:func:`mtmc.geometry.transforms.small_angle_rotation`) by default, or with ``exact=True``
+``R(a, b, c)`` is the small-angle matrix ``I + [e]x`` of Aguado et al. 2016, eq. (12) (transposed,
+see :func:`mtmc.geometry.transforms.small_angle_rotation`) by default, or with ``exact=True``
 the rotation ``Rz(c) Ry(b) Rx(a)``. Every error is a motion of the tool relative to the
 workpiece, so with zero errors and offsets and the rotary axes at zero the tool point is
 at the commanded linear coordinates whichever of part or tool an axis moves.
@@ -630,7 +630,7 @@ class Machine:
             (component errors). Missing errors are zero. See :meth:`error_values`.
         exact : bool
             Exact rotations ``Rz(c) Ry(b) Rx(a)`` for the error angles instead of the
-            small-angle matrices (seed 004 eq. 12).
+            small-angle matrices (Aguado et al. 2016, eq. 12).
 
         Returns
         -------

@@ -5,7 +5,7 @@ or an error generation function of the axis position); it maps a parameter vecto
 ``theta`` of shape ``(P,)`` (or ``(M, P)``, one vector per trial) to the errors that
 :meth:`Machine.tool_position` takes, back again, and gives the Jacobian of the tool
 position with respect to ``theta``, the matrix ``J`` of ``Delta p = J Delta theta``
-(seed 003 eq. 17, seed 004 identification).
+(Wang, Cheung and Kong 2022, eq. 17; the identification of Aguado et al. 2016).
 
 Examples
 --------

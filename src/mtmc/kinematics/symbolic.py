@@ -1,4 +1,4 @@
-"""The equation of motion of a machine written out with SymPy (seed 004 §4.1).
+"""The equation of motion of a machine written out with SymPy (Aguado et al. 2016, §4.1).
 
 :func:`equation_of_motion` builds, with SymPy 4 x 4 homogeneous matrices, the position of
 the tool point in the workpiece frame as a function of the axis positions, the named
@@ -150,7 +150,7 @@ def equation_of_motion(
     errors: Sequence[str] | None = None,
     first_order: bool = False,
 ) -> EquationOfMotion:
-    """Write out the equation of motion of a machine (seed 004 §4.1).
+    """Write out the equation of motion of a machine (Aguado et al. 2016, §4.1).
 
     Parameters
     ----------
@@ -178,8 +178,8 @@ def equation_of_motion(
 
     Notes
     -----
-    The small-angle matrices are ``I + [e]x`` (seed 004 eq. 12 prints their transpose,
-    the passive form; see ``docs/conventions.md``). Seed 004 eq. (3) reads
+    The small-angle matrices are ``I + [e]x`` (Aguado et al. 2016, eq. 12 prints their transpose,
+    the passive form; see ``docs/conventions.md``). Aguado et al. 2016, eq. (3) reads
     ``T_t = R(z)(R(y)(R(x) T_p + X) + Y) + Z`` for a ZYXF machine; here the same
     nesting appears with our sign of the part-side motion (``+q``, since each part-side
     axis enters as the inverse of its physical motion).

@@ -8,8 +8,9 @@ the workpiece towards the tool:
 - ISO 10791 style: ``w`` (workpiece), the part-side axes, ``f`` (frame), the tool-side
   axes, ``t`` (tool). In ``wCBXfYZt`` the workpiece sits on C, C on B, B on X, X on the
   frame; Y sits on the frame, Z on Y, the tool on Z.
-- Aguado's notation (seeds 002, 004): the same without ``w`` and ``t`` and with ``F`` for
-  the frame: ``XFYZ`` is ``wXfYZt`` (X moves the part, Y and Z move the tool).
+- Aguado's notation (Aguado et al. 2017; Aguado et al. 2016): the same without ``w`` and
+  ``t`` and with ``F`` for the frame: ``XFYZ`` is ``wXfYZt`` (X moves the part, Y and Z
+  move the tool).
 
 Axis letters: linear X, Y, Z and the secondary linear U, V, W (parallel to X, Y, Z);
 rotary A, B, C about x, y, z (ISO 841).

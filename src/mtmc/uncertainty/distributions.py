@@ -17,7 +17,7 @@ Uniform(low=-1.0, high=1.0)
 True
 
 Standard normal draws come from the Generator's ziggurat sampler by default; the
-Box–Muller transform (Stryczek, seed 000 eq. 6) is available as ``normal_method=
+Box–Muller transform (Stryczek eq. 6) is available as ``normal_method=
 "box-muller"`` for reproducing that paper's figure (see :func:`standard_normal`).
 """
 
@@ -75,9 +75,9 @@ def standard_normal(
         Shape of the result; values fill it in C order.
     method : {"default", "box-muller"}
         ``"default"``: ``rng.standard_normal`` (ziggurat). ``"box-muller"``: the
-        transform of seed 000 eq. 6 on pairs ``(U1, U2)`` of uniform draws,
+        transform of Stryczek eq. 6 on pairs ``(U1, U2)`` of uniform draws,
         ``Z1 = sqrt(-2 ln U1) cos(2π U2)`` and its companion ``Z2 = sqrt(-2 ln U1)
-        sin(2π U2)`` (seed 000 prints only the cosine branch; both are independent
+        sin(2π U2)`` (Stryczek prints only the cosine branch; both are independent
         N(0, 1), so each pair gives two draws). ``U1`` is taken in (0, 1] so that the
         logarithm is finite.
 

@@ -6,7 +6,7 @@ from them, on demand:
 
 * the estimate ``y`` (the average of the values, JCGM 101 §7.6) and the standard
   uncertainty ``u(y)`` (their standard deviation with divisor ``M - 1``, JCGM 101 eq. (13);
-  seed 000 eq. (5));
+  Stryczek eq. (5));
 * the covariance matrix of a vector output (JCGM 102 §7.5, divisor ``M - 1``);
 * probabilistically symmetric and shortest coverage intervals (JCGM 101 §7.7) from the
   sorted values, with ``q = pM`` if that is an integer and ``q = ⌊pM + ½⌋`` otherwise;
@@ -607,7 +607,7 @@ class MonteCarloResult:
         """Half the length of the coverage interval: ``U_p = (y_high - y_low)/2``.
 
         JCGM 101 gives the interval itself; for a symmetric output PDF this half-length
-        is the expanded uncertainty of JCGM 100 §6. Seed 000 (p. 4) calls the whole
+        is the expanded uncertainty of JCGM 100 §6. Stryczek (p. 4) calls the whole
         length ``y_high - y_low`` "U" (4.321 µm for ``[-1.658, 2.663]``); mtmc follows
         the GUM and takes half of it.
 
@@ -629,7 +629,7 @@ class MonteCarloResult:
         return self.expanded_uncertainty(p, kind) / float(self.u)
 
     def histogram(self, bins: int | str = "auto") -> Histogram:
-        """Histogram data of a scalar output (for the plots of seed 000 Fig. 3–4).
+        """Histogram data of a scalar output (for the plots of Stryczek, Fig. 3–4).
 
         Parameters
         ----------

@@ -1,4 +1,4 @@
-"""Seed 000 (Stryczek): eq. 5, Box–Muller (eq. 6, Fig. 3) and the sum of N(0,1) and N(0.5,0.5)."""
+"""Stryczek: eq. 5, Box–Muller (eq. 6, Fig. 3) and the sum of N(0,1) and N(0.5,0.5)."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ def add(x1, x2):
 
 
 def test_sum_of_two_normals_has_u_sqrt_1_25():
-    # seed 000, Fig. 4: theory u = sqrt(1^2 + 0.5^2) = sqrt(1.25) = 1.118, y = 0.5
+    # Stryczek, Fig. 4: theory u = sqrt(1^2 + 0.5^2) = sqrt(1.25) = 1.118, y = 0.5
     m = 200_000
     for method in ("default", "box-muller"):
         r = monte_carlo(add, INPUTS, trials=m, seed=0, normal_method=method)
@@ -51,8 +51,8 @@ def test_box_muller_fig3_histogram():
     assert stats.chisquare(counts).pvalue > 1e-3
 
 
-def test_interval_width_is_what_seed000_calls_u():
-    # seed 000 p. 4: "[-1.658, 2.663] ... U equals 4.321": the printed U is the interval
+def test_interval_width_is_what_stryczek_calls_u():
+    # Stryczek, p. 4: "[-1.658, 2.663] ... U equals 4.321": the printed U is the interval
     # length; mtmc's expanded uncertainty is half of it (JCGM 100 §6)
     r = monte_carlo(add, INPUTS, trials=200_000, seed=4)
     lo, hi = r.coverage_interval(0.95, "symmetric")

@@ -1,4 +1,4 @@
-"""The seeds' printed models, typed into the tests, against mtmc's chain."""
+"""The papers' printed models, typed into the tests, against mtmc's chain."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from scipy.spatial.transform import Rotation
 from mtmc.kinematics import Machine, equation_of_motion, library_machine
 
 
-def test_seed003_wbzfxyct_eq16_and_jacobian_eq19() -> None:
-    """Seed 003 eqs. (10), (14), (16), (19) on the wBZfXYCt machine.
+def test_wang2022_wbzfxyct_eq16_and_jacobian_eq19() -> None:
+    """Wang, Cheung and Kong 2022, eqs. (10), (14), (16), (19) on the wBZfXYCt machine.
 
     The paper moves each axis by its own coordinate; ISO 841 (mtmc) moves part-side axes
     by the negative: (x, y, z_s, b_s, c) of the paper = (x, y, -z, -b, c) of mtmc.
@@ -35,8 +35,8 @@ def test_seed003_wbzfxyct_eq16_and_jacobian_eq19() -> None:
     np.testing.assert_allclose(JF[:, :, 3:], -RB, atol=1e-12)
 
 
-def test_seed002_xfyz_squareness_terms() -> None:
-    """Seed 002 eqs. (7)-(9): X = (-x + dxx, dyx, dzx), Y = (dxy - y Sxy, y + dyy, dzy),
+def test_aguado2017_xfyz_squareness_terms() -> None:
+    """Aguado et al. 2017, eqs. (7)-(9): X = (-x + dxx, dyx, dzx), Y = (dxy - y Sxy, y + dyy, dzy),
     Z = (dxz - z Sxz, dyz - z Syz, z + dzz); with Sxy = EC0Y, Sxz = -EB0Z, Syz = EA0Z
     the first-order equation of motion carries exactly these terms."""
     eq = equation_of_motion(library_machine("xfyz"), errors=["EC0Y", "EB0Z", "EA0Z"])
