@@ -148,7 +148,35 @@ def test_nan_omitted_from_every_output_alike():
 
 def test_runs_that_cannot_fit_are_refused_before_they_start():
     with pytest.raises(InputError, match=r"needs 7.45e\+03 GiB, more than half"):
-        monte_carlo(lambda x, y: x, INPUTS, trials=10**12, seed=1)
+        monte_carlo(lambda x, y: x, INPUTS, trials=10**12, seed=1, keep=True)
+
+
+def test_auto_keep_streams_past_its_size_with_a_sketch(monkeypatch):
+    import mtmc.uncertainty.montecarlo as mc
+
+    monkeypatch.setattr(mc, "KEEP_AUTO_BYTES", 8 * 100_000)  # 100 000 numbers
+    small = monte_carlo(two, INPUTS, trials=20_000, seed=4)
+    assert small["sum"].kept and small["pair"].kept
+    big = monte_carlo(two, INPUTS, trials=200_000, seed=4)
+    assert not big["sum"].kept and not big["pair"].kept
+    assert big["sum"].sketch is not None and big["pair"].sketch is None
+    exact = monte_carlo(two, INPUTS, trials=200_000, seed=4, keep=True)["sum"]
+    s = np.sort(exact.samples)
+    err = big["sum"].rank_error
+    assert 0 < err < 0.002 * 200_000
+    lo, hi = big["sum"].coverage_interval(0.95, "symmetric")
+    elo, ehi = exact.coverage_interval(0.95, "symmetric")
+    # each endpoint within the stated rank error of the exact order statistic
+    for got, ref in ((lo, elo), (hi, ehi)):
+        assert abs(np.searchsorted(s, got) - np.searchsorted(s, ref)) <= err + 1
+    # shortest: it holds q ± 2 err values, and is no longer than the exact shortest
+    # interval holding q + 2 err + 1 of them (its position on a flat-topped PDF is free)
+    lo, hi = big["sum"].coverage_interval(0.95, "shortest")
+    q = int(0.95 * 200_000)
+    inside = np.searchsorted(s, hi, "right") - np.searchsorted(s, lo, "left")
+    assert abs(inside - q) <= 2 * err + 1
+    wide = q + 2 * err + 1
+    assert hi - lo <= np.min(s[wide:] - s[:-wide]) + 1e-12
 
 
 def test_contradictory_calls_are_refused():

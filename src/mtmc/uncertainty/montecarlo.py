@@ -47,9 +47,10 @@ from mtmc.uncertainty.sampling import (
     evaluation_block_size,
     resolve_seed,
 )
+from mtmc.uncertainty.sketch import QuantileSketch
 from mtmc.uncertainty.tolerance import numerical_tolerance
 
-__all__ = ["adaptive_block_size", "monte_carlo"]
+__all__ = ["KEEP_AUTO_BYTES", "adaptive_block_size", "monte_carlo"]
 
 NanPolicy = Literal["raise", "omit"]
 
@@ -83,6 +84,9 @@ def adaptive_block_size(p: float) -> int:
 
 
 Outputs = dict[str, NDArray[np.float64]]
+
+#: ``keep="auto"`` keeps the samples of a run while they take at most this many bytes.
+KEEP_AUTO_BYTES: int = 2 * 2**30
 
 #: The name of the output of a model that returns one array rather than a mapping.
 _SINGLE = ""
@@ -153,7 +157,20 @@ def _block_array(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
     return np.array(parts[0], order="C")
 
 
-def _digest(start: int, outs: Outputs, keep: bool | frozenset[str], total: int) -> _Digest:
+def _reduce(x: NDArray[np.float64], sketch: bool) -> tuple[Moments | None, Any]:
+    """Moments (and sketch) of one seed block's ``(d, rows)`` values."""
+    if not x.shape[1]:
+        return None, None
+    return Moments.of_columns(x), (QuantileSketch.of(x[0]) if sketch else None)
+
+
+def _digest(
+    start: int,
+    outs: Outputs,
+    keep: bool | frozenset[str],
+    total: int,
+    sketch: frozenset[str] = frozenset(),
+) -> _Digest:
     """Reduce the outputs of trials ``start..start+m-1`` of a run of ``total`` trials."""
     m = next(iter(outs.values())).shape[0]
     ok = np.ones(m, dtype=np.bool_)
@@ -183,9 +200,7 @@ def _digest(start: int, outs: Outputs, keep: bool | frozenset[str], total: int) 
                 continue
             x = arr[lo:hi].reshape(hi - lo, -1).T  # (d, rows)
             x = x[:, sel] if nbad else x
-            part[n] = (
-                (Moments.of_columns(_block_array([x])) if x.shape[1] else None) if complete else x
-            )
+            part[n] = _reduce(_block_array([x]), n in sketch) if complete else x
         pieces.append((k, complete, part))
         lo = hi
     return _Digest(
@@ -210,11 +225,13 @@ class _BlockJob:
     method: NormalMethod
     keep: bool | frozenset[str]
     total: int
+    sketch: frozenset[str]
 
     def __call__(self, span: tuple[int, int]) -> _Digest:
         a, b = span
         samples = _BlockSource(self.dists, self.seed, self.method).trials(a, b)
-        return _digest(a, _evaluate(self.model, samples, a, b), self.keep, self.total)
+        outs = _evaluate(self.model, samples, a, b)
+        return _digest(a, outs, self.keep, self.total, self.sketch)
 
 
 def _memory_bytes() -> int:
@@ -238,8 +255,17 @@ class _Collector:
     depends on the evaluation block size, the number of workers or where they ran.
     """
 
-    def __init__(self, total: int, keep: bool | frozenset[str], nan_policy: NanPolicy) -> None:
+    def __init__(
+        self,
+        total: int,
+        keep: bool | frozenset[str] | Literal["auto"],
+        nan_policy: NanPolicy,
+        sketch: bool | frozenset[str] | None = None,
+    ) -> None:
         self.total, self.keep, self.nan_policy = total, keep, nan_policy
+        self.sketch_spec = sketch
+        self.sketch: frozenset[str] = frozenset()
+        self.sketches: dict[str, QuantileSketch | None] = {}
         self.shapes: dict[str, tuple[int, ...]] | None = None
         self.kept: dict[str, NDArray[np.float64]] = {}
         self.filled = 0  # rows written to the kept arrays
@@ -249,21 +275,39 @@ class _Collector:
         self.buffer: dict[str, list[NDArray[np.float64]]] = {}
         self.moments: dict[str, Moments] = {}
 
-    def _setup(self, shapes: dict[str, tuple[int, ...]]) -> None:
+    def setup(self, shapes: dict[str, tuple[int, ...]]) -> None:
         self.shapes = shapes
-        if self.keep is not True and self.keep is not False:
-            unknown = sorted(set(self.keep) - set(shapes))
-            if unknown:
-                raise InputError(
-                    f"keep names {', '.join(unknown)}, which the model does not return; "
-                    f"its outputs are {', '.join(shapes) or 'unnamed'}",
-                    field="keep",
-                )
+        for what, spec in (("keep", self.keep), ("sketch", self.sketch_spec)):
+            if isinstance(spec, frozenset):
+                unknown = sorted(spec - set(shapes))
+                if unknown:
+                    raise InputError(
+                        f"{what} names {', '.join(unknown)}, which the model does not return; "
+                        f"its outputs are {', '.join(shapes) or 'unnamed'}",
+                        field=what,
+                    )
+        limit = _memory_bytes() // 2
+        if self.keep == "auto":
+            need_all = sum(8 * self.total * max(1, math.prod(sh)) for sh in shapes.values())
+            self.keep = need_all <= min(KEEP_AUTO_BYTES, limit)
+            if self.keep is False and self.sketch_spec is None:
+                self.sketch_spec = frozenset(n for n, sh in shapes.items() if not sh)
         keep = [
             n for n in shapes if self.keep is True or (self.keep is not False and n in self.keep)
         ]
+        spec = self.sketch_spec
+        self.sketch = frozenset(
+            n
+            for n in shapes
+            if n not in keep and (spec is True or (isinstance(spec, frozenset) and n in spec))
+        )
+        wide = sorted(n for n in self.sketch if shapes[n])
+        if wide:
+            raise InputError(
+                f"quantile sketches are for scalar outputs; {', '.join(wide)} are vectors",
+                field="sketch",
+            )
         need = sum(8 * self.total * max(1, math.prod(shapes[n])) for n in keep)
-        limit = _memory_bytes() // 2
         if need > limit:
             raise InputError(
                 f"keeping the samples of {self.total} trials needs {_gib(need)}, more than half "
@@ -280,10 +324,19 @@ class _Collector:
                 self.moments[n] = Moments(
                     0, np.zeros(width), np.zeros((width, width) if width <= MAX_COV_DIM else width)
                 )
+                self.sketches[n] = None
+
+    def _merge(self, n: str, reduced: tuple[Moments | None, Any]) -> None:
+        mom, sk = reduced
+        if mom is not None:
+            self.moments[n] = self.moments[n].merge(mom)
+        if sk is not None:
+            prev = self.sketches[n]
+            self.sketches[n] = sk if prev is None else prev.merge(sk)
 
     def add(self, d: _Digest) -> None:
         if self.shapes is None:
-            self._setup(d.shapes)
+            self.setup(d.shapes)
         assert self.shapes is not None
         if d.shapes != self.shapes:
             raise InputError(
@@ -304,8 +357,7 @@ class _Collector:
         for k, complete, part in d.pieces:
             for n, value in part.items():
                 if complete:
-                    if value is not None:
-                        self.moments[n] = self.moments[n].merge(value)
+                    self._merge(n, value)
                 else:
                     self.buffer[n].append(value)
             if not complete and d.start + d.m >= min((k + 1) * s, self.total):
@@ -314,9 +366,7 @@ class _Collector:
     def _close(self) -> None:
         for n, buf in self.buffer.items():
             if buf:
-                x = _block_array(buf)
-                if x.shape[1]:
-                    self.moments[n] = self.moments[n].merge(Moments.of_columns(x))
+                self._merge(n, _reduce(_block_array(buf), n in self.sketch))
                 buf.clear()
 
     def check(self) -> None:
@@ -345,6 +395,7 @@ class _Collector:
                 out[n] = MonteCarloResult(
                     samples=None,
                     moments=self.moments[n],
+                    sketch=self.sketches[n],
                     scalar=len(shape) == 0,
                     omitted=self.omitted,
                     **run,
@@ -388,16 +439,28 @@ class _Runner:
         """
         bs = self.block_size
         spans = [(a, min(a + bs, stop)) for a in range(start, stop, bs)]
-        keep, total = collector.keep, start + collector.total
+        total = start + collector.total
+        if collector.shapes is None:
+            # the first block runs here: its outputs' names and shapes settle what the
+            # workers keep, sketch or reduce
+            a, b = spans.pop(0)
+            outs = _evaluate(self.model, self.source.trials(a, b), a, b)
+            collector.setup({n: arr.shape[1:] for n, arr in outs.items()})
+            assert collector.keep != "auto"
+            collector.add(_digest(a, outs, collector.keep, total, collector.sketch))
+            if progress is not None:
+                progress(b, stop)
+        keep, sketch = collector.keep, collector.sketch
+        assert keep != "auto"
         serial = self.workers == 1 and self.executor in ("thread", "process")
         if serial:
 
             def fn(span: tuple[int, int]) -> _Digest:
                 outs = _evaluate(self.model, self.source.trials(*span), *span)
-                return _digest(span[0], outs, keep, total)
+                return _digest(span[0], outs, keep, total, sketch)
 
         else:
-            fn = _BlockJob(self.model, self.dists, self.seed, self.method, keep, total)
+            fn = _BlockJob(self.model, self.dists, self.seed, self.method, keep, total, sketch)
         for (_, b), digest in zip(
             spans,
             map_blocks(
@@ -410,17 +473,18 @@ class _Runner:
                 progress(b, stop)
 
 
-def _check_keep(keep: Any) -> bool | frozenset[str]:
-    if isinstance(keep, bool):
-        return keep
-    if isinstance(keep, str) or not isinstance(keep, Iterable):
+def _check_names(value: Any, field: str, allowed: tuple[Any, ...]) -> Any:
+    if value in allowed and not isinstance(value, int | float) or isinstance(value, bool):
+        return value
+    if isinstance(value, str) or not isinstance(value, Iterable):
         raise InputError(
-            f"expected True, False or a list of output names, got {keep!r}", field="keep"
+            f"expected {' or '.join(map(repr, allowed))} or a list of output names, got {value!r}",
+            field=field,
         )
-    names = frozenset(keep)
+    names = frozenset(value)
     if not all(isinstance(n, str) for n in names):
         raise InputError(
-            f"expected output names as strings, got {sorted(map(repr, names))}", field="keep"
+            f"expected output names as strings, got {sorted(map(repr, names))}", field=field
         )
     return names
 
@@ -444,7 +508,8 @@ def monte_carlo(
     executor: ExecutorKind | Any = "thread",
     scheduler: Any = None,
     progress: ProgressFn | None = None,
-    keep: bool | Iterable[str] = True,
+    keep: bool | Literal["auto"] | Iterable[str] = "auto",
+    sketch: bool | Iterable[str] | None = None,
 ) -> Any:
     """Propagate the input distributions through a vectorised model (JCGM 101 §7).
 
@@ -508,15 +573,23 @@ def monte_carlo(
         ``total = trials`` and ends with ``done == total``; an adaptive run passes
         ``total = None`` after each block of ``h`` trials and, once it stops,
         ``(n·h, n·h)``. It does not change any number.
-    keep : bool or iterable of str, default True, keyword-only
+    keep : "auto", bool or iterable of str, default "auto", keyword-only
         Which outputs keep all their samples (coverage intervals, histograms, ellipsoids
-        need them): all (``True``), none (``False``), or those named. The others keep
-        their estimate and covariance only, from the moments of fixed blocks of
+        need them): all (``True``), none (``False``), those named, or (``"auto"``) all
+        while they take at most :data:`KEEP_AUTO_BYTES` (and half the machine's
+        memory), else none, with a quantile sketch of every scalar output. The others
+        keep their estimate and covariance only, from the moments of fixed blocks of
         :data:`~mtmc.uncertainty.sampling.SEED_BLOCK_SIZE` trials merged in trial order
         (:class:`~mtmc.uncertainty.results.Moments`): memory independent of ``M``, and
-        the same numbers whatever ``block_size`` and ``workers``. An adaptive run keeps
-        every output. A run whose kept samples would take more than half of the
-        machine's memory is refused before it starts.
+        the same numbers whatever ``block_size`` and ``workers``. Each result says
+        whether it kept its samples (``kept``). An adaptive run keeps every output. A
+        run asked to keep samples that would take more than half of the machine's
+        memory is refused before it starts, with the size it would need.
+    sketch : bool or iterable of str, optional, keyword-only
+        Scalar outputs that are not kept but get a mergeable quantile sketch
+        (:class:`~mtmc.uncertainty.sketch.QuantileSketch`), from which their coverage
+        intervals are read with a stated rank error (``rank_error`` of the result); by
+        default none, except with ``keep="auto"`` past its size.
 
     Returns
     -------
@@ -571,7 +644,8 @@ def monte_carlo(
         raise InputError(f"expected 'raise' or 'omit', got {nan_policy!r}", field="nan_policy")
     if kind not in ("shortest", "symmetric"):
         raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
-    keep_set = _check_keep(keep)
+    keep_set = _check_names(keep, "keep", (True, False, "auto"))
+    sketch_set = _check_names(sketch, "sketch", (True, False, None))
     runner = _Runner(model, dists, seed_int, method, block_size, workers, executor, scheduler)
 
     if adaptive:
@@ -594,7 +668,7 @@ def monte_carlo(
             progress=progress,
         )
     m_total = _check_int(10**6 if trials is None else trials, "trials", 2)
-    collector = _Collector(m_total, keep_set, nan_policy)
+    collector = _Collector(m_total, keep_set, nan_policy, sketch_set)
     runner.run(0, m_total, collector, progress)
     collector.check()
     good = m_total - collector.omitted

@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from scipy import stats
 
 from mtmc.errors import InputError
+from mtmc.uncertainty.sketch import QuantileSketch
 
 __all__ = [
     "MAX_COV_DIM",
@@ -344,6 +345,10 @@ class MonteCarloResult:
     scalar : bool
         With ``samples=None``: whether the output is a scalar (``(M,)``) rather than a
         vector of one component (``(M, 1)``).
+    sketch : QuantileSketch or None
+        With ``samples=None``, for a scalar output: a mergeable quantile sketch of the
+        values, from which coverage intervals are read (each endpoint within
+        ``sketch.rank_error`` ranks of the exact order statistic; :attr:`rank_error`).
     """
 
     samples: NDArray[np.float64] | None = field(repr=False)
@@ -357,6 +362,7 @@ class MonteCarloResult:
     normal_method: str = "default"
     moments: Moments | None = field(default=None, repr=False)
     scalar: bool = True
+    sketch: QuantileSketch | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if self.block_trials == 0:
@@ -506,6 +512,11 @@ class MonteCarloResult:
         c.setflags(write=False)
         return c
 
+    @property
+    def rank_error(self) -> int:
+        """Bound on the rank error of the coverage-interval endpoints (0: exact)."""
+        return 0 if self.sketch is None or self.samples is not None else self.sketch.rank_error
+
     @cached_property
     def _sorted(self) -> NDArray[np.float64]:
         self._require_scalar("coverage intervals")
@@ -593,8 +604,14 @@ class MonteCarloResult:
         >>> r.coverage_interval(0.9, "symmetric")
         (5.0, 95.0)
         """
-        s = self._sorted
         q, r = coverage_indices(self.m, p)
+        if self.samples is None and self.sketch is not None and self.dim == 0:
+            if kind == "symmetric":
+                return self.sketch.value_at_rank(r), self.sketch.value_at_rank(r + q)
+            if kind == "shortest":
+                return self.sketch.shortest(q)
+            raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
+        s = self._sorted
         if kind == "symmetric":
             return float(s[r - 1]), float(s[r - 1 + q])
         if kind == "shortest":
@@ -728,6 +745,12 @@ class MonteCarloResult:
             out["kept"] = False
             if self.dim:
                 out["cov"] = self.cov.tolist()
+            elif self.sketch is not None:
+                out["p"] = float(p)
+                out["interval_shortest"] = list(self.coverage_interval(p, "shortest"))
+                out["interval_symmetric"] = list(self.coverage_interval(p, "symmetric"))
+                out["U"] = self.expanded_uncertainty(p)
+                out["rank_error"] = self.rank_error
         elif self.dim == 0:
             out["p"] = float(p)
             out["interval_shortest"] = list(self.coverage_interval(p, "shortest"))
