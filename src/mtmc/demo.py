@@ -10,7 +10,10 @@ in well under a minute, the five-axis story as study files (the package's copies
 3. ``axis_c`` and ``axis_a``: the rotary axes C and A from three ball positions each
    (Stryczek eqs. 8–19);
 4. ``bcs_origin``: the A–C offset and the origin of the base coordinate system, with u on
-   the σ_probe × σ_machine grid and the fitted surrogate (Stryczek Fig. 12–15).
+   the σ_probe × σ_machine grid and the fitted surrogate (Stryczek Fig. 12–15);
+5. ``five_axis``: a five-axis table-table machine with uncertain ISO 230 geometric errors
+   through its forward kinematics to the tool position at four poses (kind
+   ``kinematics``).
 
 Each study writes its result folder (``result.json``, CSV tables, ``provenance.json``,
 ``report.html``) under the output folder, and ``index.html`` links the reports. There is
@@ -35,6 +38,7 @@ STUDIES: tuple[str, ...] = (
     "axis_c.toml",
     "axis_a.toml",
     "bcs_origin.toml",
+    "five_axis.toml",
 )
 
 

@@ -59,7 +59,7 @@ def _lookup(doc, key):
     return cur
 
 
-@pytest.fixture(scope="module", params=["mass_calibration", "bcs_origin", "axis_c"])
+@pytest.fixture(scope="module", params=["mass_calibration", "bcs_origin", "axis_c", "five_axis"])
 def folder(request, tmp_path_factory):
     study = load_study(STUDIES / f"{request.param}.toml")
     out = tmp_path_factory.mktemp("rep") / request.param
@@ -109,6 +109,8 @@ def test_every_plot_is_inline_and_nothing_is_fetched(folder):
         expected.add("graph")
     if doc.get("sweep"):
         expected.add("sweep")
+    if doc.get("machine"):
+        expected.add("machine")
     assert set(parser.plots) == expected
     assert all(n > 0 for n in parser.plots.values()), parser.plots
     assert all(u.startswith("#") for u in parser.urls), parser.urls

@@ -32,7 +32,7 @@ seed = 3
 
 # (replace this, with this, expected line, expected field, words in the message)
 CASES = [
-    ('kind = "propagate"', 'kind = "spline"', 1, "kind", "expected one of graph, propagate"),
+    ('kind = "propagate"', 'kind = "spline"', 1, "kind", "expected one of graph, kinematics, propagate"),
     ('kind = "propagate"', "kind = 3", 1, "kind", "expected a string"),
     ('kind = "propagate"\n', "", 1, "kind", "missing kind"),
     ('model = "a + b"', 'model = "a + "', 3, "model", ""),
@@ -176,3 +176,34 @@ def test_cli_prints_one_line_and_leaves_no_folder(tmp_path, capsys, old, new):
 def test_missing_file(tmp_path):
     with pytest.raises(MtmcError, match="cannot read the study file"):
         load_study(tmp_path / "none.toml")
+
+
+KIN = """\
+kind = "kinematics"
+machine = "table-table"
+poses = [[0.0, 0.0, 0.0, -30.0, 0.0]]
+
+[errors]
+EX0C = "normal(0, 0.003)"
+"""
+
+KIN_CASES = [
+    ('machine = "table-table"', 'machine = "lathe"', 2, "machine", "table-table"),
+    ("-30.0, 0.0]]", "-30.0]]", 3, "poses", "expected 5 numbers (X, Y, Z, A, C)"),
+    ("-30.0, 0.0]]", "-30.0, nan]]", 3, "poses", "pose 1: expected a finite number"),
+    ("poses = [[0.0, 0.0, 0.0, -30.0, 0.0]]", "poses = []", 3, "poses", "array of poses"),
+    ('EX0C = "normal(0, 0.003)"', 'EQ9Z = "normal(0, 0.003)"', 6, "errors.EQ9Z", "EX0C"),
+    ('EX0C = "normal(0, 0.003)"', 'EX0C = "normal(0, -0.003)"', 6, "errors.EX0C", ">= 0"),
+    ('machine = "table-table"', 'machine = "table-table"\nangles = "grad"', 3, "angles", "deg"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "line", "field", "words"), KIN_CASES)
+def test_broken_kinematics_file_names_file_line_and_field(old, new, line, field, words):
+    text = KIN.replace(old, new, 1)
+    assert text != KIN
+    with pytest.raises(MtmcError) as info:
+        loads_study(text, file="k.toml")
+    err = info.value
+    assert (err.file, err.line, err.field) == ("k.toml", line, field)
+    assert words in err.message

@@ -180,3 +180,50 @@ def test_package_studies_are_the_examples():
     assert names == sorted(p.name for p in packaged.glob("*.toml"))
     for n in names:
         assert (packaged / n).read_text() == (STUDIES / n).read_text(), n
+
+
+def _fd_jacobian(machine, q, names, h=1e-7):
+    cols = []
+    for n in names:
+        plus = machine.tool_position(q, {n: h})
+        minus = machine.tool_position(q, {n: -h})
+        cols.append((plus - minus)[0] / (2 * h))
+    return np.stack(cols, axis=1)  # (3, N)
+
+
+def test_kinematics_study_against_finite_differences_and_own_sampling():
+    from mtmc import library_machine
+
+    study = load_study(STUDIES / "five_axis.toml")
+    r = study.run(trials=M, seed=SEED)
+    machine = library_machine("table-table")
+    names = list(study.errors)
+    u_e = np.array([study.errors[n].std for n in names])
+    poses = study.poses
+    assert poses.shape == (4, 5)
+    assert poses[0, 3] == pytest.approx(math.radians(-30.0))
+    rng = np.random.default_rng(np.random.SeedSequence(2024))
+    m = 20_000
+    own = {}
+    for n in names:
+        d = study.errors[n]
+        if str(d).startswith("normal"):
+            own[n] = rng.normal(0.0, d.std, m)
+        else:
+            half = d.std * math.sqrt(3.0)
+            own[n] = rng.uniform(-half, half, m)
+    for i, q in enumerate(poses):
+        J = _fd_jacobian(machine, q, names)
+        u_fd = np.sqrt((J**2) @ (u_e**2))
+        u_own = machine.tool_position(q, own).std(axis=0, ddof=1)
+        for j, c in enumerate("xyz"):
+            quant = r.quantity(f"pose{i + 1}.{c}")
+            # the GUM by differentiation of the model against finite differences
+            assert quant.gum["u"] == pytest.approx(u_fd[j], rel=1e-5)
+            # Monte Carlo against draws made here with another generator
+            assert quant.mc["u"] == pytest.approx(u_own[j], rel=_mc_tol(M) + _mc_tol(m))
+            assert quant.gum["estimate"] == pytest.approx(machine.tool_position(q)[0, j])
+    # pose 1, x: rectangular tilts dominate, the MC interval is narrower than the GUM's
+    q1x = r.quantity("pose1.x")
+    assert q1x.mc["k"] < 1.93 < q1x.gum["k"]
+    assert r.tables[0].rows[0] == (1, 150.0, 0.0, -100.0, -30.0, 0.0)

@@ -109,6 +109,9 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
     graph = result.get("graph")
     if graph:
         figs["graph"] = plots.graph_svg(graph["toml"], graph.get("file"))
+    machine = result.get("machine")
+    if machine:
+        figs["machine"] = plots.machine_svg(machine["name"])
     if result.get("sweep"):
         figs["sweep"] = plots.sweep_svg(result["sweep"])
     template = _env().get_template("report.html.j2")

@@ -21,6 +21,7 @@ __all__ = [
     "display_unit",
     "graph_svg",
     "histogram_svg",
+    "machine_svg",
     "region_svg",
     "sweep_svg",
 ]
@@ -79,7 +80,7 @@ def histogram_svg(q: dict[str, Any]) -> str:
     ref = mc["estimate"]
     edges = (np.asarray(q["histogram"]["edges"]) - ref) * scale
     density = np.asarray(q["histogram"]["density"]) / scale
-    fig = _figure(6.0, 3.3)
+    fig = _figure(5.2, 3.1)
     ax = fig.add_subplot(1, 1, 1)
     ax.stairs(density, edges, fill=True, alpha=0.45, color="C0", label="Monte Carlo")
     lo, hi = ((np.asarray(mc["shortest"]) - ref) * scale).tolist()
@@ -112,7 +113,7 @@ def convergence_svg(q: dict[str, Any]) -> str:
     est = (np.asarray(c["estimate"]) - q["monte_carlo"]["estimate"]) * scale
     u = np.asarray(c["u"]) * scale
     unit = f" / {label}" if label not in ("", "1") else ""
-    fig = _figure(6.0, 2.6)
+    fig = _figure(5.2, 2.6)
     a1, a2 = fig.subplots(1, 2)
     a1.semilogx(m, est, "C0.-", ms=3, lw=0.8)
     a1.axhline(0.0, color="k", lw=0.6)
@@ -174,6 +175,23 @@ def graph_svg(toml_text: str, name: str | None = None) -> str:
         path = Path(d) / "graph.svg"
         draw(graph, path)
         text = path.read_text(encoding="utf-8")
+    start = text.find("<svg")
+    return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()
+
+
+def machine_svg(name: str) -> str:
+    """The kinematic chain of a machine (:func:`mtmc.kinematics.draw_chain`).
+
+    Parameters
+    ----------
+    name : str
+        A configuration of the machine library or a topology string.
+    """
+    from mtmc.kinematics.draw import draw_chain
+    from mtmc.kinematics.library import library_machine, library_names
+
+    spec: Any = library_machine(name) if name.strip().lower() in library_names() else name
+    text = draw_chain(spec)
     start = text.find("<svg")
     return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()
 

@@ -1,0 +1,199 @@
+"""Study kind ``kinematics``: uncertain ISO 230 geometric errors through the forward kinematics.
+
+The file names a machine (a library configuration or a topology string), the commanded
+poses, and a distribution for each uncertain error (ISO 230-1 and ISO 230-7 names). The
+model is the tool position at every pose (:meth:`mtmc.kinematics.Machine.tool_position`,
+batched over the trials), run by :func:`mtmc.monte_carlo` and, coordinate by coordinate,
+by :func:`mtmc.gum` (JCGM 100 with sensitivities of the same model), compared by the
+JCGM 101 §8 validation.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mtmc.errors import InputError, MtmcError
+from mtmc.kinematics.library import library_machine, library_names
+from mtmc.kinematics.machine import Machine
+from mtmc.kinematics.topology import is_rotary
+from mtmc.study.base import ProgressFn, Study, StudyResult, Table, quantity
+from mtmc.study.propagate import read_inputs
+from mtmc.study.spec import Fields, RunSettings, check_number, register_kind
+from mtmc.uncertainty.distributions import Distribution
+from mtmc.uncertainty.gum import gum
+from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.results import MonteCarloResult
+
+__all__ = ["KinematicsStudy", "tool_positions_model"]
+
+
+def tool_positions_model(
+    machine: Machine, poses: NDArray[np.float64]
+) -> Callable[..., NDArray[np.float64]]:
+    """The tool positions at several poses as a model of the geometric errors.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine.
+    poses : ndarray, shape (P, n_axes)
+        Commanded axis positions (mm, rad), in the order of ``machine.axes``.
+
+    Returns
+    -------
+    callable
+        ``model(**errors)``, each error an array ``(m,)``, returning ``(m, 3P)``: x, y, z
+        of pose 1, then pose 2, ... (mm). One batched call of
+        :meth:`~mtmc.kinematics.Machine.tool_position` per pose.
+
+    Examples
+    --------
+    >>> m = library_machine("table-table")
+    >>> model = tool_positions_model(m, np.zeros((1, 5)))
+    >>> model(EX0C=np.array([0.0, 0.01])).shape
+    (2, 3)
+    """
+    q = np.asarray(poses, dtype=np.float64)
+
+    def model(**errors: Any) -> NDArray[np.float64]:
+        return np.hstack([machine.tool_position(q[i], errors) for i in range(q.shape[0])])
+
+    return model
+
+
+def _component(model: Callable[..., Any], j: int) -> Callable[..., NDArray[np.float64]]:
+    def comp(**errors: Any) -> NDArray[np.float64]:
+        return np.asarray(model(**errors))[:, j]
+
+    return comp
+
+
+@dataclass(frozen=True)
+class KinematicsStudy(Study):
+    """A machine, its poses and its uncertain geometric errors (kind ``kinematics``).
+
+    Attributes
+    ----------
+    machine : Machine
+    machine_name : str
+        The library name or topology string of the file.
+    poses : ndarray, shape (P, n_axes)
+        Commanded axis positions, mm and rad.
+    errors : dict of str to Distribution
+        The uncertain errors (mm, rad).
+    poses_given : tuple of tuple of float
+        The poses as the file gives them (rotary axes in ``angles``).
+    angles : str
+        ``"deg"`` or ``"rad"``: the unit of the rotary axes in the file.
+    """
+
+    kind = "kinematics"
+    machine: Machine
+    machine_name: str
+    poses: NDArray[np.float64]
+    errors: dict[str, Distribution]
+    poses_given: tuple[tuple[float, ...], ...]
+    angles: str
+
+    def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
+        """Monte Carlo and GUM of the tool positions (module docstring)."""
+        model = tool_positions_model(self.machine, self.poses)
+        mc = monte_carlo(
+            model, self.errors, trials=settings.trials, seed=settings.seed, progress=progress
+        )
+        vals = np.asarray(mc.samples)
+        quantities = []
+        for i in range(self.poses.shape[0]):
+            for j, c in enumerate("xyz"):
+                col = 3 * i + j
+                g = gum(_component(model, col), self.errors, p=settings.p)
+                q_mc = MonteCarloResult(samples=vals[:, col], trials=mc.trials, seed=mc.seed)
+                quantities.append(quantity(f"pose{i + 1}.{c}", "mm", q_mc, g, settings))
+        axes = self.machine.axes
+        pose_rows = tuple((i + 1, *p) for i, p in enumerate(self.poses_given))
+        units = [f"{a} / {self.angles if is_rotary(a) else 'mm'}" for a in axes]
+        inputs = tuple(
+            {"name": n, "distribution": str(d), "estimate": float(d.mean), "u": float(d.std)}
+            for n, d in self.errors.items()
+        )
+        extra = {"machine": {"name": self.machine_name, "topology": str(self.machine.topology)}}
+        return self._result(
+            settings,
+            quantities=tuple(quantities),
+            tables=(Table("poses", "Commanded poses", ("pose", *units), pose_rows),),
+            inputs=inputs,
+            extra=extra,
+            samples={"tool_positions": mc.samples} if settings.samples else {},
+        )
+
+
+@register_kind("kinematics", "ISO 230 geometric errors through a machine's forward kinematics")
+def load_kinematics(top: Fields) -> KinematicsStudy:
+    """Validate a ``kinematics`` study file (see ``docs/study-format.md``)."""
+    top.only(("kind", "title", "machine", "poses", "angles", "errors", "run"))
+    name = top.text("machine")
+    try:
+        machine = (
+            library_machine(name)
+            if name.strip().lower() in library_names()
+            else Machine.from_topology(name)
+        )
+    except MtmcError as exc:
+        raise top.error(
+            f"{exc.message} (or one of the library: {', '.join(library_names())})", "machine"
+        ) from None
+    angles = top.text("angles", "deg", choices=("deg", "rad"))
+    raw = top.data.get("poses")
+    n = machine.n_axes
+    if not isinstance(raw, list) or not raw:
+        raise top.error(
+            f"expected an array of poses, each {n} numbers ({', '.join(machine.axes)})", "poses"
+        )
+    poses = []
+    given = []
+    for i, pose in enumerate(raw):
+        if not isinstance(pose, list) or len(pose) != n:
+            raise top.error(
+                f"pose {i + 1}: expected {n} numbers ({', '.join(machine.axes)}), got {pose!r}",
+                "poses",
+            )
+
+        def err(msg: str, _i: int = i) -> InputError:
+            return top.error(f"pose {_i + 1}: {msg}", "poses")
+
+        row = [check_number(v, err) for v in pose]
+        given.append(tuple(row))
+        poses.append(
+            [
+                math.radians(v) if angles == "deg" and is_rotary(a) else v
+                for a, v in zip(machine.axes, row, strict=True)
+            ]
+        )
+    et = top.table("errors")
+    assert et is not None
+    errors = read_inputs(et)
+    accepted = machine.accepted_error_names
+    for e in errors:
+        if e not in accepted:
+            raise et.error(
+                f"{e!r} is not an error of {machine.topology}; "
+                f"expected one of {', '.join(accepted)}",
+                e,
+            )
+    return KinematicsStudy(
+        title=top.text("title", f"{name}: geometric errors through the kinematics"),
+        source=top.source,
+        settings=RunSettings.read(top),
+        machine=machine,
+        machine_name=name,
+        poses=np.array(poses, dtype=np.float64),
+        errors=errors,
+        poses_given=tuple(given),
+        angles=angles,
+    )
