@@ -32,7 +32,13 @@ seed = 3
 
 # (replace this, with this, expected line, expected field, words in the message)
 CASES = [
-    ('kind = "propagate"', 'kind = "spline"', 1, "kind", "expected one of graph, kinematics, propagate"),
+    (
+        'kind = "propagate"',
+        'kind = "spline"',
+        1,
+        "kind",
+        "expected one of graph, kinematics, propagate",
+    ),
     ('kind = "propagate"', "kind = 3", 1, "kind", "expected a string"),
     ('kind = "propagate"\n', "", 1, "kind", "missing kind"),
     ('model = "a + b"', 'model = "a + "', 3, "model", ""),
