@@ -109,17 +109,16 @@ class _Lines:
             str(p[1]): n for p, n in lines.items() if len(p) == 2 and p[0] == "probe"
         }
         self.probe_line: int | None = lines.get(("probe",))
+        keys: dict[tuple[Any, ...], dict[str, int]] = {}
+        for p, n in lines.items():  # one pass: the keys of each [[place]] / [[transition]]
+            if len(p) == 3:
+                keys.setdefault(p[:2], {})[str(p[2])] = n
         self.entries: dict[str, list[tuple[int, dict[str, int]]]] = {}
         for table in ("place", "transition"):
             entries = []
             i = 0
             while (table, i) in lines:
-                keys = {
-                    str(p[2]): n
-                    for p, n in lines.items()
-                    if len(p) == 3 and p[0] == table and p[1] == i
-                }
-                entries.append((lines[(table, i)], keys))
+                entries.append((lines[(table, i)], keys.get((table, i), {})))
                 i += 1
             self.entries[table] = entries
 
