@@ -283,9 +283,13 @@ class Moments:
         n = int(xt.shape[1])
         mean = xt.mean(axis=1)
         dev = xt - mean[:, None]
-        if xt.shape[0] <= 32:  # NumPy's own loops: no BLAS threads for a few components
-            m2 = np.einsum("ik,jk->ij", dev, dev)
-        elif xt.shape[0] <= MAX_COV_DIM:
+        d = xt.shape[0]
+        if d <= 32:  # dot products of rows in NumPy's own loops: no BLAS threads
+            m2 = np.empty((d, d))
+            for i in range(d):
+                for j in range(i, d):
+                    m2[i, j] = m2[j, i] = np.einsum("m,m->", dev[i], dev[j])
+        elif d <= MAX_COV_DIM:
             m2 = dev @ dev.T
         else:
             m2 = np.einsum("ij,ij->i", dev, dev)
