@@ -108,7 +108,8 @@ def test_out_that_is_a_file_is_refused_with_a_message(capsys, tmp_path):
     assert f"--out: expected a folder, but {f} is a file" in capsys.readouterr().err
 
 
-def test_cli_demo_ends_with_the_report_path(capsys, tmp_path):
+def test_cli_demo_ends_with_the_report_path(capsys, tmp_path, monkeypatch):
+    monkeypatch.setattr(demo, "STUDIES", ("ball_centre.toml",))
     argv = ["demo", "-o", str(tmp_path / "d"), "--trials", "2000", "--quiet"]
     assert main(argv) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]

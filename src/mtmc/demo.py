@@ -52,7 +52,7 @@ def run_demo(
     *,
     trials: int | None = None,
     seed: int | None = None,
-    studies: Sequence[str] = STUDIES,
+    studies: Sequence[str] | None = None,
     progress: Callable[[str], Any] | None = None,
     echo: Callable[[str], Any] = print,
 ) -> Path:
@@ -66,7 +66,7 @@ def run_demo(
         Overrides the trials of every study (the sweeps keep theirs per grid point).
     seed : int, optional
         Overrides the seed of every study.
-    studies : sequence of str
+    studies : sequence of str, optional
         Which shipped studies (default :data:`STUDIES`).
     progress : callable, optional
         ``progress(label)`` gives a context manager yielding a progress callback (the
@@ -89,7 +89,7 @@ def run_demo(
     folder.mkdir(parents=True, exist_ok=True)
     entries = []
     start = time.perf_counter()
-    for name in studies:
+    for name in STUDIES if studies is None else studies:
         study = load_study(study_path(name))
         stem = Path(name).stem
         t0 = time.perf_counter()

@@ -50,16 +50,20 @@ def _svg(fig: Any) -> str:
     buf = io.StringIO()
     # a salt per figure keeps the ids of clip paths unique among the SVGs of one page
     with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": f"mtmc{next(_SALT)}"}):
-        fig.savefig(buf, format="svg", bbox_inches="tight")
+        fig.savefig(buf, format="svg", metadata={"Date": None})
     text = buf.getvalue()
     start = text.find("<svg")
     return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()
 
 
-def _figure(w: float, h: float) -> Any:
+def _figure(w: float, h: float, **margins: float) -> Any:
+    """A figure with fixed margins (fractions of its size): a layout engine or a tight
+    bounding box would draw each figure twice more."""
     from matplotlib.figure import Figure
 
-    return Figure(figsize=(w, h), layout="constrained")
+    fig = Figure(figsize=(w, h))
+    fig.subplots_adjust(**margins)
+    return fig
 
 
 def histogram_svg(q: dict[str, Any]) -> str:
@@ -80,7 +84,7 @@ def histogram_svg(q: dict[str, Any]) -> str:
     ref = mc["estimate"]
     edges = (np.asarray(q["histogram"]["edges"]) - ref) * scale
     density = np.asarray(q["histogram"]["density"]) / scale
-    fig = _figure(5.2, 3.1)
+    fig = _figure(5.2, 3.1, left=0.13, right=0.98, bottom=0.15, top=0.97)
     ax = fig.add_subplot(1, 1, 1)
     ax.stairs(density, edges, fill=True, alpha=0.45, color="C0", label="Monte Carlo")
     lo, hi = ((np.asarray(mc["shortest"]) - ref) * scale).tolist()
@@ -113,7 +117,7 @@ def convergence_svg(q: dict[str, Any]) -> str:
     est = (np.asarray(c["estimate"]) - q["monte_carlo"]["estimate"]) * scale
     u = np.asarray(c["u"]) * scale
     unit = f" / {label}" if label not in ("", "1") else ""
-    fig = _figure(5.2, 2.6)
+    fig = _figure(5.2, 2.6, left=0.14, right=0.98, bottom=0.18, top=0.96, wspace=0.5)
     a1, a2 = fig.subplots(1, 2)
     a1.semilogx(m, est, "C0.-", ms=3, lw=0.8)
     a1.axhline(0.0, color="k", lw=0.6)
@@ -139,7 +143,7 @@ def region_svg(r: dict[str, Any]) -> str:
     axes = np.asarray(r["axes"])
     semi = np.asarray(r["semi_axes"]) * scale
     angle = float(np.degrees(np.arctan2(axes[1, 1], axes[0, 1])))
-    fig = _figure(3.6, 3.4)
+    fig = _figure(3.6, 3.4, left=0.2, right=0.97, bottom=0.14, top=0.97)
     ax = fig.add_subplot(1, 1, 1)
     ax.plot(pts[:, 0], pts[:, 1], ".", ms=2, color="C0", alpha=0.5)
     ax.add_patch(
@@ -215,7 +219,7 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         return np.sqrt(np.clip(s["c0"] + (sig**2) @ coef, 0.0, None)) * scale
 
     if grid.shape[1] == 2:
-        fig = _figure(6.4, 4.6)
+        fig = _figure(6.4, 4.6, left=0.0, right=0.95, bottom=0.05, top=1.0)
         ax = fig.add_subplot(1, 1, 1, projection="3d")
         a = np.linspace(grid[:, 0].min(), grid[:, 0].max(), 30)
         b = np.linspace(grid[:, 1].min(), grid[:, 1].max(), 30)
@@ -228,7 +232,7 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         ax.set_zlabel(f"u({sw['output']}) / {label}", fontsize=8)
         ax.legend(fontsize=7, loc="upper left")
     else:
-        fig = _figure(6.0, 3.4)
+        fig = _figure(6.0, 3.4, left=0.12, right=0.98, bottom=0.15, top=0.97)
         ax = fig.add_subplot(1, 1, 1)
         x = grid[:, 0]
         xs = np.linspace(x.min(), x.max(), 200)
