@@ -9,7 +9,6 @@ the estimate.
 from __future__ import annotations
 
 import io
-import itertools
 import re
 from typing import Any
 
@@ -25,8 +24,6 @@ __all__ = [
     "region_svg",
     "sweep_svg",
 ]
-
-_SALT = itertools.count()
 
 
 def display_unit(unit: str) -> tuple[float, str]:
@@ -44,12 +41,13 @@ def display_unit(unit: str) -> tuple[float, str]:
     return 1.0, unit
 
 
-def _svg(fig: Any) -> str:
+def _svg(fig: Any, salt: str) -> str:
     import matplotlib
 
     buf = io.StringIO()
-    # a salt per figure keeps the ids of clip paths unique among the SVGs of one page
-    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": f"mtmc{next(_SALT)}"}):
+    # a salt per plot of a page keeps the ids of its clip paths apart from the other
+    # SVGs of the page, and the same from one rendering to the next
+    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": salt}):
         fig.savefig(buf, format="svg", metadata={"Date": None})
     text = buf.getvalue()
     start = text.find("<svg")
@@ -106,7 +104,7 @@ def histogram_svg(q: dict[str, Any]) -> str:
     ax.set_xlabel(f"{q['name']} − estimate{unit}")
     ax.set_ylabel(f"density{' / ' + label + '⁻¹' if unit else ''}")
     ax.legend(fontsize=7, loc="upper right")
-    return _svg(fig)
+    return _svg(fig, f"histogram:{q['name']}")
 
 
 def convergence_svg(q: dict[str, Any]) -> str:
@@ -130,7 +128,7 @@ def convergence_svg(q: dict[str, Any]) -> str:
         a2.legend(fontsize=7)
     a2.set_xlabel("trials m")
     a2.set_ylabel(f"u{unit}")
-    return _svg(fig)
+    return _svg(fig, f"convergence:{q['name']}")
 
 
 def region_svg(r: dict[str, Any]) -> str:
@@ -163,7 +161,7 @@ def region_svg(r: dict[str, Any]) -> str:
     ax.set_xlabel(f"{r['labels'][0]}{unit}")
     ax.set_ylabel(f"{r['labels'][1]}{unit}")
     ax.legend(fontsize=6, loc="upper right")
-    return _svg(fig)
+    return _svg(fig, f"region:{r['name']}")
 
 
 def graph_svg(toml_text: str, name: str | None = None) -> str:
@@ -174,8 +172,10 @@ def graph_svg(toml_text: str, name: str | None = None) -> str:
     from mtmc.graph.draw import draw
     from mtmc.graph.toml_format import loads
 
+    import matplotlib
+
     graph = loads(toml_text, file=name)
-    with tempfile.TemporaryDirectory() as d:
+    with tempfile.TemporaryDirectory() as d, matplotlib.rc_context({"svg.hashsalt": "graph"}):
         path = Path(d) / "graph.svg"
         draw(graph, path)
         text = path.read_text(encoding="utf-8")
@@ -243,4 +243,4 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         ax.set_xlabel(f"{names[0]} / µm")
         ax.set_ylabel(f"u({sw['output']}) / {label}")
         ax.legend(fontsize=7)
-    return _svg(fig)
+    return _svg(fig, "sweep")
