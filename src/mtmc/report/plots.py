@@ -55,8 +55,10 @@ def _svg(fig: Any, salt: str) -> str:
 
 
 def _figure(w: float, h: float, **margins: float) -> Any:
-    """A figure with fixed margins (fractions of its size): a layout engine or a tight
-    bounding box would draw each figure twice more."""
+    """A figure with fixed margins (fractions of its size).
+
+    A layout engine or a tight bounding box would draw each figure twice more.
+    """
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(w, h))
