@@ -171,10 +171,10 @@ def graph_svg(toml_text: str, name: str | None = None) -> str:
     import tempfile
     from pathlib import Path
 
+    import matplotlib
+
     from mtmc.graph.draw import draw
     from mtmc.graph.toml_format import loads
-
-    import matplotlib
 
     graph = loads(toml_text, file=name)
     with tempfile.TemporaryDirectory() as d, matplotlib.rc_context({"svg.hashsalt": "graph"}):
