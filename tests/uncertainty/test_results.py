@@ -69,7 +69,9 @@ def test_normal_samples_vs_closed_form():
     assert r.expanded_uncertainty() == pytest.approx(z * sigma, abs=5 * se)
     assert r.expanded_uncertainty(kind="symmetric") == pytest.approx(0.5 * (hi - lo))
     # k = U/u: the error of U (5 se) plus that of u (5 σ/√(2M)), relative to σ
-    assert r.coverage_factor() == pytest.approx(z, abs=5 * se / sigma + 5 * z / math.sqrt(2 * M))
+    assert r.implied_coverage_factor() == pytest.approx(
+        z, abs=5 * se / sigma + 5 * z / math.sqrt(2 * M)
+    )
 
 
 def test_rectangular_samples_vs_closed_form():

@@ -644,8 +644,13 @@ class MonteCarloResult:
         lo, hi = self.coverage_interval(p, kind)
         return 0.5 * (hi - lo)
 
-    def coverage_factor(self, p: float = 0.95, kind: IntervalKind = "shortest") -> float:
-        """``k_p = U_p / u(y)``: the coverage factor implied by the MC interval."""
+    def implied_coverage_factor(self, p: float = 0.95, kind: IntervalKind = "shortest") -> float:
+        """``U_p / u(y)``: the coverage factor the Monte Carlo interval implies.
+
+        Not to be confused with :func:`mtmc.uncertainty.gum.coverage_factor`, the
+        t-quantile ``k_p`` of the GUM for ``ν_eff`` degrees of freedom: for a Gaussian
+        output the two agree.
+        """
         self._require_scalar("a coverage factor")
         return self.expanded_uncertainty(p, kind) / float(self.u)
 
