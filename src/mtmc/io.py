@@ -19,13 +19,12 @@ PosixPath('...out.txt')
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 __all__ = ["atomic_path", "to_jsonable", "write_bytes_atomic", "write_text_atomic"]
 
@@ -105,10 +104,13 @@ def to_jsonable(obj: Any, *, nonfinite_as_null: bool = False) -> Any:
 
     Examples
     --------
+    >>> import numpy as np
     >>> value = {"a": np.arange(2), "b": (np.float64(1.5), float("inf"))}
     >>> to_jsonable(value, nonfinite_as_null=True)
     {'a': [0, 1], 'b': [1.5, None]}
     """
+    import numpy as np  # here, so that importing mtmc.io (and mtmc) stays cheap
+
     if isinstance(obj, dict):
         return {str(k): to_jsonable(v, nonfinite_as_null=nonfinite_as_null) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
@@ -117,6 +119,6 @@ def to_jsonable(obj: Any, *, nonfinite_as_null: bool = False) -> Any:
         return to_jsonable(obj.tolist(), nonfinite_as_null=nonfinite_as_null)
     if isinstance(obj, np.generic):
         obj = obj.item()
-    if nonfinite_as_null and isinstance(obj, float) and not np.isfinite(obj):
+    if nonfinite_as_null and isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj

@@ -14,7 +14,7 @@ True
 
 from __future__ import annotations
 
-from xml.sax.saxutils import escape
+from html import escape
 
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import Topology, is_linear, parse_topology
@@ -134,6 +134,8 @@ def draw_chain(spec: str | Topology | Machine, *, title: str | None = None) -> s
     return (
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
         f'viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="13">'
-        f"{defs}<title>{escape(head)}</title>"
-        f'<text x="20" y="24" font-size="15">{escape(head)}</text>' + "".join(items) + "</svg>"
+        f"{defs}<title>{escape(head, quote=False)}</title>"
+        f'<text x="20" y="24" font-size="15">{escape(head, quote=False)}</text>'
+        + "".join(items)
+        + "</svg>"
     )

@@ -24,15 +24,17 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
-import sympy as sp
 from numpy.typing import NDArray
 
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import AXIS_DIRECTION, is_linear
+
+if TYPE_CHECKING:  # SymPy is imported where it is used: it costs ~0.3 s at import
+    import sympy as sp
 
 __all__ = ["EquationOfMotion", "equation_of_motion"]
 
@@ -41,6 +43,8 @@ _ROTS = "ABC"
 
 
 def _T(v: Sequence[Any]) -> sp.Matrix:
+    import sympy as sp
+
     M = sp.eye(4)
     for i in range(3):
         M[i, 3] = v[i]
@@ -48,6 +52,8 @@ def _T(v: Sequence[Any]) -> sp.Matrix:
 
 
 def _R(a: Any, b: Any, c: Any, transpose: bool = False) -> sp.Matrix:
+    import sympy as sp
+
     M = sp.eye(4)
     S = sp.Matrix([[1, -c, b], [c, 1, -a], [-b, a, 1]])
     if transpose:
@@ -58,11 +64,15 @@ def _R(a: Any, b: Any, c: Any, transpose: bool = False) -> sp.Matrix:
 
 def _truncate(expr: Any, scale: dict[Any, Any], eps: Any, order: int) -> Any:
     """Drop the terms of ``expr`` of degree > order in the error symbols."""
+    import sympy as sp
+
     e = sp.expand(expr.xreplace(scale))
     return sum((e.coeff(eps, k) for k in range(order + 1)), sp.Integer(0))
 
 
 def _rot(axis: int, q: Any) -> sp.Matrix:
+    import sympy as sp
+
     c, s = sp.cos(q), sp.sin(q)
     i, k = (axis + 1) % 3, (axis + 2) % 3
     M = sp.eye(4)
@@ -102,10 +112,14 @@ class EquationOfMotion:
 
     def text(self) -> str:
         """The three coordinate equations as plain text, one per line."""
+        import sympy as sp
+
         return "\n".join(f"{n}_W = {sp.sstr(e)}" for n, e in zip("xyz", self.position, strict=True))
 
     def latex(self) -> str:
         """The three equations as a LaTeX ``aligned`` block."""
+        import sympy as sp
+
         rows = [f"{n}_W &= {sp.latex(e)}" for n, e in zip("xyz", self.position, strict=True)]
         return "\\begin{aligned}\n" + " \\\\\n".join(rows) + "\n\\end{aligned}"
 
@@ -121,6 +135,8 @@ class EquationOfMotion:
             functions are not accepted here, evaluate them first); ``tool`` and
             ``workpiece`` default to the machine's offsets.
         """
+        import sympy as sp
+
         args = (*self.axis_symbols, *self.error_symbols, *self.offset_symbols)
         fn = sp.lambdify(args, list(self.position), modules="numpy", cse=True)
         names = [str(s) for s in self.error_symbols]
@@ -184,6 +200,8 @@ def equation_of_motion(
     nesting appears with our sign of the part-side motion (``+q``, since each part-side
     axis enters as the inverse of its physical motion).
     """
+    import sympy as sp
+
     names = (
         machine.error_names if errors is None else tuple(machine.error_term(n).name for n in errors)
     )

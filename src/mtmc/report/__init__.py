@@ -18,7 +18,6 @@ from typing import Any
 
 from mtmc.errors import InputError
 from mtmc.io import write_text_atomic
-from mtmc.report import plots
 
 __all__ = ["fmt", "html", "render", "render_index", "report"]
 
@@ -56,6 +55,8 @@ def _env() -> Any:
     )
     env.filters["fmt"] = fmt
     env.filters["pct"] = lambda x: "—" if x is None else f"{100 * x:.1f} %"
+    from mtmc.report import plots  # NumPy, SciPy, Matplotlib: imported when a report is made
+
     env.globals["display_unit"] = plots.display_unit
     env.globals["repr"] = repr
     return env
@@ -100,6 +101,8 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
             f"expected an mtmc result (format mtmc-result/1), got format {result.get('format')!r}",
             field="format",
         )
+    from mtmc.report import plots
+
     figs: dict[str, str] = {}
     for q in result.get("quantities", []):
         figs[f"histogram:{q['name']}"] = plots.histogram_svg(q)

@@ -13,7 +13,6 @@ import re
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 __all__ = [
     "convergence_svg",
@@ -94,6 +93,8 @@ def histogram_svg(q: dict[str, Any]) -> str:
     ax.plot([], [], color="C3", ls="--", label="symmetric interval")
     g = q.get("gum")
     if g and g["u"] > 0:
+        from scipy import stats  # imported here: scipy.stats costs ~0.5 s at import
+
         x = np.linspace(edges[0], edges[-1], 400)
         ax.plot(
             x,

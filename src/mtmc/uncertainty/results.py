@@ -37,7 +37,6 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
-from scipy import stats
 
 from mtmc.errors import InputError
 from mtmc.uncertainty.sketch import QuantileSketch
@@ -714,6 +713,8 @@ class MonteCarloResult:
             q, _ = coverage_indices(self.m, pf)
             k2 = float(np.partition(d2, q - 1)[q - 1])
         elif method == "chi2":
+            from scipy import stats  # imported here: scipy.stats costs ~0.5 s at import
+
             k2 = float(stats.chi2.ppf(pf, self.dim))
         else:
             raise InputError(f"expected 'mc' or 'chi2', got {method!r}", field="method")

@@ -1,0 +1,92 @@
+"""A fast start: importing mtmc (all of its public names, and the CLI) leaves SymPy,
+Matplotlib and SciPy's statistics and optimisation unimported; the lazy re-export of the
+top-level package gives the same names and objects as the subpackages."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("sympy", "matplotlib", "scipy.stats", "scipy.optimize", "scipy.special")
+
+
+def _loaded_after(code: str) -> list[str]:
+    """Run ``code`` in a fresh interpreter; return which of HEAVY it left in sys.modules."""
+    probe = (
+        f"{code}\nimport json, sys\nprint(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", probe], check=True, capture_output=True, text=True
+    ).stdout
+    return list(json.loads(out.strip().splitlines()[-1]))
+
+
+@pytest.mark.parametrize(
+    "code",
+    [
+        "import mtmc",
+        "from mtmc import *",
+        "import mtmc.cli.main",
+        "import mtmc.uncertainty, mtmc.geometry, mtmc.graph, mtmc.kinematics, mtmc.demo",
+    ],
+)
+def test_import_leaves_heavy_modules_unimported(code):
+    assert _loaded_after(code) == []
+
+
+def test_heavy_module_is_imported_when_used():
+    # the probe sees a module that is imported: the check above can fail
+    code = "from mtmc.uncertainty.gum import coverage_factor\ncoverage_factor(0.95, 10)"
+    loaded = _loaded_after(code)
+    assert "scipy.stats" in loaded and "sympy" not in loaded
+
+
+def test_lazy_names_are_those_of_the_subpackages():
+    import mtmc
+    from mtmc import errors, geometry, graph, kinematics, uncertainty
+
+    from mtmc import study
+
+    study_names = ["StudyResult", "load_study", "loads_study", "register_kind", "study_kinds"]
+    expected = ["__version__", "errors", "report", *study_names, "write_result"]
+    for sub in (errors, uncertainty, geometry, graph, kinematics):
+        expected += sub.__all__
+    assert mtmc.__all__ == expected
+    assert len(set(expected)) == len(expected)
+    for sub in (errors, uncertainty, geometry, graph, kinematics):
+        for name in sub.__all__:
+            assert getattr(mtmc, name) is getattr(sub, name), name
+    assert set(mtmc.__all__) <= set(dir(mtmc))
+    assert mtmc.graph is graph
+    assert mtmc.load_study is study.load_study
+    # the function, even after the module of the same name is imported
+    import mtmc.report.plots  # noqa: F401
+
+    assert callable(mtmc.report) and mtmc.report.__module__ == "mtmc.report"
+    with pytest.raises(AttributeError, match="no attribute 'not_a_name'"):
+        _ = mtmc.not_a_name
+
+
+def test_type_checker_block_covers_every_name():
+    # the names the type checker sees (the star imports under TYPE_CHECKING) are those
+    # re-exported at run time, so a module added to a subpackage is not missed
+    import ast
+    import importlib
+    from pathlib import Path
+
+    import mtmc
+
+    tree = ast.parse(Path(mtmc.__file__).read_text(encoding="utf-8"))
+    block = next(
+        n for n in tree.body if isinstance(n, ast.If) and "TYPE_CHECKING" in ast.dump(n.test)
+    )
+    seen = {"errors", "report", *importlib.import_module("mtmc.errors").__all__}
+    for node in block.body:
+        if isinstance(node, ast.ImportFrom) and node.names[0].name == "*":
+            seen |= set(importlib.import_module(str(node.module)).__all__)
+        elif isinstance(node, ast.ImportFrom) and node.module != "mtmc":
+            seen |= {a.name for a in node.names}
+    assert seen == set(mtmc.__all__) - {"__version__"}
