@@ -33,14 +33,18 @@ workpiece, so with zero errors and offsets and the rotary axes at zero the tool 
 at the commanded linear coordinates whichever of part or tool an axis moves.
 
 Implementation: the chain is applied to the tool point (and, for the pose, to three
-directions) factor by factor from the tool to the workpiece, each factor as a handful of
-element-wise array operations on ``(M,)`` columns, never a 4 x 4 matrix product, and never
-a loop over trials. Factors whose errors are all absent are skipped.
+directions) from the tool to the workpiece, never as a product of ``(M, 4, 4)`` matrices
+and never with a loop over trials. :meth:`Machine.tool_position`, :meth:`Machine.pose` and
+:meth:`Machine.tool_direction` lower the factors once per call into a short program on
+coordinate rows (:mod:`mtmc.kinematics._columns`): constant factors multiplied out into
+one affine map, the error functions of an axis evaluated together, internal blocks of a
+few thousand poses with reused buffers. :meth:`Machine.jacobian` applies the factors one
+by one on ``(M, k, 3)`` arrays. Factors whose errors are all absent are skipped.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -49,6 +53,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
+from mtmc.kinematics import _columns as _cols
 from mtmc.kinematics.error_terms import (
     ErrorTerm,
     _check_term_for,
@@ -131,6 +136,26 @@ class _Factor:
     def partials(self, y: _F, vals: Values, q: _F, exact: bool) -> list[tuple[str, _F]]:
         return []
 
+    def lower(self, present: Mapping[str, Any], exact: bool) -> list[_cols.Op]:
+        """The operations (:mod:`mtmc.kinematics._columns`) of this factor.
+
+        Only the errors in ``present`` appear; ``exact`` selects the rotations.
+        """
+        raise NotImplementedError
+
+
+def _rotation_ops(
+    names: Sequence[str], present: Mapping[str, Any], exact: bool, transpose: bool
+) -> list[_cols.Op]:
+    """``R(a, b, c)`` (or its transpose) of the present named angles, as operations."""
+    if not any(n in present for n in names):
+        return []
+    if not exact:
+        a, b, c = (n if n in present else None for n in names)
+        return [_cols.SmallRotation((a, b, c), -1.0 if transpose else 1.0)]
+    order, sign = ((2, 1, 0), -1.0) if transpose else ((0, 1, 2), 1.0)
+    return [_cols.AxisRotation(j, names[j], sign) for j in order if names[j] in present]
+
 
 class _Translate(_Factor):
     """``y + sign * (const + (v_x, v_y, v_z))`` on points; v named errors."""
@@ -158,6 +183,17 @@ class _Translate(_Factor):
             t[..., j] = comps[j]
         return y + self.sign * t * is_point[:, None]
 
+    def lower(self, present: Mapping[str, Any], exact: bool) -> list[_cols.Op]:
+        ops: list[_cols.Op] = []
+        if self.const is not None:
+            ops.append(_cols.Affine(np.eye(3), self.sign * self.const))
+        terms = tuple(
+            ((self.sign, n),) if n is not None and n in present else () for n in self.slot
+        )
+        if any(terms):
+            ops.append(_cols.Translate(terms))
+        return ops
+
     def partials(self, y: _F, vals: Values, q: _F, exact: bool) -> list[tuple[str, _F]]:
         out = []
         for j in range(3):
@@ -178,6 +214,9 @@ class _ErrorRotation(_Factor):
 
     def active(self, vals: Values) -> bool:
         return any(n in vals for n in self.names)
+
+    def lower(self, present: Mapping[str, Any], exact: bool) -> list[_cols.Op]:
+        return _rotation_ops(self.names, present, exact, self.transpose)
 
     def _angles(self, vals: Values) -> tuple[Any, Any, Any]:
         a, b, c = (_col(vals[n]) if n in vals else 0.0 for n in self.names)
@@ -223,6 +262,9 @@ class _AxisRotation(_Factor):
     def apply(self, y: _F, is_point: _F, vals: Values, q: _F, exact: bool) -> _F:
         return _rot_axis(self.direction, q[:, self.col, None], y)
 
+    def lower(self, present: Mapping[str, Any], exact: bool) -> list[_cols.Op]:
+        return [_cols.AxisRotation(self.direction, f"q:{self.col}", 1.0)]
+
 
 class _LinearMotion(_Factor):
     """Nominal translation ``q R(s) e`` of a linear axis, ``s`` its squareness angles."""
@@ -232,6 +274,13 @@ class _LinearMotion(_Factor):
         self.col = col
         self.sq = squareness
         self.names = tuple(n for n, _ in squareness)
+
+    def lower(self, present: Mapping[str, Any], exact: bool) -> list[_cols.Op]:
+        names = ["", "", ""]
+        for n, j in self.sq:
+            names[j] = n
+        rot = _rotation_ops(names, present, exact, transpose=False)
+        return [_cols.LinearMotion(f"q:{self.col}", self.direction, rot)]
 
     def _dir(self, vals: Values, exact: bool) -> _F:
         e = np.zeros(3)
@@ -544,12 +593,10 @@ class Machine:
         qa = self._q(q)
         return self._values(qa, errors)
 
-    def _values(self, qa: _F, errors: Mapping[str, Any] | None) -> dict[str, Any]:
+    def _inputs(self, errors: Mapping[str, Any] | None) -> dict[str, Any]:
+        """Check the errors; normalised name -> array () or (M,), or ErrorFunction."""
         out: dict[str, Any] = {}
-        if not errors:
-            return out
-        cols = {ax: i for i, ax in enumerate(self.axes)}
-        for raw, val in errors.items():
+        for raw, val in (errors or {}).items():
             term = self.error_term(raw)
             if term.name in out:
                 raise InputError(f"error {term.name} given twice", field=raw)
@@ -560,33 +607,52 @@ class Machine:
                         "or an array (M,), not a function of position",
                         field=raw,
                     )
-                v = np.asarray(val(qa[:, cols[term.axis]]), dtype=np.float64)
-            else:
-                try:
-                    v = np.asarray(val, dtype=np.float64)
-                except (TypeError, ValueError) as exc:
-                    raise InputError(
-                        f"expected a number, an array (M,) or an error function, got {val!r}",
-                        field=raw,
-                    ) from exc
-                if v.ndim > 1:
-                    raise InputError(
-                        f"expected a number or an array of shape (M,), got shape {v.shape}",
-                        field=raw,
-                    )
+                out[term.name] = val
+                continue
+            try:
+                v = np.asarray(val, dtype=np.float64)
+            except (TypeError, ValueError) as exc:
+                raise InputError(
+                    f"expected a number, an array (M,) or an error function, got {val!r}",
+                    field=raw,
+                ) from exc
+            if v.ndim > 1:
+                raise InputError(
+                    f"expected a number or an array of shape (M,), got shape {v.shape}",
+                    field=raw,
+                )
             if not np.all(np.isfinite(v)):
                 raise InputError("expected finite error values", field=raw)
             out[term.name] = v
         return out
 
+    def _values(self, qa: _F, errors: Mapping[str, Any] | None) -> dict[str, Any]:
+        out = self._inputs(errors)
+        cols = {ax: i for i, ax in enumerate(self.axes)}
+        for name, val in out.items():
+            if isinstance(val, ErrorFunction):
+                v = np.asarray(val(qa[:, cols[self.error_term(name).axis]]), dtype=np.float64)
+                if not np.all(np.isfinite(v)):
+                    raise InputError("expected finite error values", field=name)
+                out[name] = v
+        return out
+
     def _batch(self, qa: _F, vals: Mapping[str, Any]) -> int:
-        shapes = [(qa.shape[0],), *(np.shape(v) for v in vals.values())]
+        shapes = [
+            (qa.shape[0],),
+            *(
+                np.broadcast_shapes((qa.shape[0],), v.coefficients.shape[:-1])
+                if isinstance(v, ErrorFunction) and v.coefficients.ndim == 2
+                else (() if isinstance(v, ErrorFunction) else np.shape(v))
+                for v in vals.values()
+            ),
+        ]
         try:
             (m,) = np.broadcast_shapes(*shapes) or (1,)
         except ValueError as exc:
             raise InputError(
                 f"the trial axes do not match: q has {qa.shape[0]} rows, errors have shapes "
-                f"{sorted({np.shape(v) for v in vals.values()})}",
+                f"{sorted({s for s in shapes[1:]})}",
                 field="errors",
             ) from exc
         return int(m)
@@ -598,18 +664,45 @@ class Machine:
         q: npt.ArrayLike | Mapping[str, npt.ArrayLike],
         errors: Mapping[str, Any] | None,
         exact: bool,
-        y0: _F,
-        is_point: _F,
+        start: list[list[float]],
+        points: tuple[bool, ...],
     ) -> _F:
+        """The chain applied to the vectors ``start`` (points or directions): (M, n, 3).
+
+        In blocks of :data:`~mtmc.kinematics._columns.BLOCK` poses, each coordinate a
+        column, the chain lowered once into operations with the constant factors
+        multiplied out (:mod:`mtmc.kinematics._columns`).
+        """
         qa = self._q(q)
-        vals = self._values(qa, errors)
+        vals = self._inputs(errors)
         m = self._batch(qa, vals)
-        if qa.shape[0] != m:
-            qa = np.broadcast_to(qa, (m, qa.shape[1]))
-        y = np.broadcast_to(y0, (m, *y0.shape)).copy()
+        # constant sources are floats, the others arrays (M,) or functions of a position
+        const: dict[str, Any] = {}
+        arrays: dict[str, _F] = {}
+        funcs: dict[str, tuple[str, ErrorFunction]] = {}
+        qcols: dict[str, int] = {}
+        for i in range(self.n_axes):
+            if qa.shape[0] == 1:
+                const[f"q:{i}"] = float(qa[0, i])
+            else:
+                qcols[f"q:{i}"] = i
+        cols = {ax: i for i, ax in enumerate(self.axes)}
+        for name, v in vals.items():
+            if isinstance(v, ErrorFunction):
+                if v.coefficients.ndim == 2 and v.coefficients.shape[0] == 1:
+                    v = v.with_coefficients(v.coefficients[0])
+                funcs[name] = (f"q:{cols[self.error_term(name).axis]}", v)
+            elif v.size == 1:
+                const[name] = float(v.reshape(()))
+            else:
+                arrays[name] = v
+        ops: list[_cols.Op] = []
         for f in reversed(self._factors):  # type: ignore[attr-defined]
-            if f.active(vals):
-                y = f.apply(y, is_point, vals, qa, exact)
+            ops.extend(f.lower(vals, exact))
+        prog = _cols.Program(ops, start, points, const, arrays, qcols, funcs)
+        y = prog.run(qa, m)
+        if funcs and not np.isfinite(y.sum()):
+            self._values(qa, errors)  # names the error function that overflowed
         return y
 
     def tool_position(
@@ -642,8 +735,7 @@ class Machine:
         InputError
             On a bad ``q`` or error (see :meth:`error_values`).
         """
-        y0 = np.zeros((1, 3))
-        return self._run(q, errors, exact, y0, np.ones(1))[:, 0, :]
+        return self._run(q, errors, exact, [[0.0, 0.0, 0.0]], (True,))[:, 0, :]
 
     def pose(
         self,
@@ -665,8 +757,8 @@ class Machine:
             ``W_T_tool``; its translation is :meth:`tool_position`. With small-angle error
             matrices the rotation block is orthonormal only to first order.
         """
-        y0 = np.vstack([np.zeros(3), np.eye(3)])
-        y = self._run(q, errors, exact, y0, np.array([1.0, 0.0, 0.0, 0.0]))
+        start = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        y = self._run(q, errors, exact, start, (True, False, False, False))
         out = np.zeros((y.shape[0], 4, 4))
         out[:, :3, :3] = np.swapaxes(y[:, 1:, :], 1, 2)
         out[:, :3, 3] = y[:, 0, :]
@@ -692,7 +784,7 @@ class Machine:
         ndarray, shape (M, 3)
             The image of :attr:`tool_axis` (unit to first order with small angles).
         """
-        y = self._run(q, errors, exact, self.tool_axis[None, :], np.zeros(1))
+        y = self._run(q, errors, exact, [[float(v) for v in self.tool_axis]], (False,))
         return y[:, 0, :]
 
     def jacobian(
