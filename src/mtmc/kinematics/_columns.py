@@ -44,6 +44,10 @@ from mtmc.kinematics.functions import ErrorFunction, PolynomialFunction
 _F = NDArray[np.float64]
 #: A source: a float where it is the same for every pose of the block, else a row (B,).
 Src = Any
+Sources = Mapping[str, Src]
+#: The buffers (4, B) of the vectors, and which vectors are points.
+Bufs = list[_F]
+Flags = Sequence[bool]
 
 #: Poses per internal block: the buffers of a block (a few dozen rows) stay in the
 #: second-level cache.
@@ -108,14 +112,7 @@ class Op:
 
     keys: tuple[str, ...] = ()
 
-    def run(
-        self,
-        vs: list[_F],
-        spare: list[_F],
-        points: Sequence[bool],
-        src: Mapping[str, Src],
-        w: _F,
-    ) -> None:
+    def run(self, vs: Bufs, spare: Bufs, points: Flags, src: Sources, w: _F) -> None:
         raise NotImplementedError
 
 
@@ -129,14 +126,7 @@ class Affine(Op):
     def __post_init__(self) -> None:
         self.M = np.hstack([self.A, self.t[:, None]])
 
-    def run(
-        self,
-        vs: list[_F],
-        spare: list[_F],
-        points: Sequence[bool],
-        src: Mapping[str, Src],
-        w: _F,
-    ) -> None:
+    def run(self, vs: Bufs, spare: Bufs, points: Flags, src: Sources, w: _F) -> None:
         for n, v in enumerate(vs):
             np.matmul(self.M, v, out=spare[n][:3])
             vs[n], spare[n] = spare[n], v
@@ -168,14 +158,7 @@ class Translate(Op):
             return (self.terms[0][0][1], self.terms[1][0][1], self.terms[2][0][1])
         return None
 
-    def run(
-        self,
-        vs: list[_F],
-        spare: list[_F],
-        points: Sequence[bool],
-        src: Mapping[str, Src],
-        w: _F,
-    ) -> None:
+    def run(self, vs: Bufs, spare: Bufs, points: Flags, src: Sources, w: _F) -> None:
         for n, v in enumerate(vs):
             if not points[n]:
                 continue
@@ -200,14 +183,7 @@ class SmallRotation(Op):
     def __post_init__(self) -> None:
         self.keys = tuple(k for k in self.names if k is not None)
 
-    def run(
-        self,
-        vs: list[_F],
-        spare: list[_F],
-        points: Sequence[bool],
-        src: Mapping[str, Src],
-        w: _F,
-    ) -> None:
+    def run(self, vs: Bufs, spare: Bufs, points: Flags, src: Sources, w: _F) -> None:
         a, b, c = (None if k is None else src[k] for k in self.names)
         for n, v in enumerate(vs):
             o = spare[n]
@@ -234,14 +210,7 @@ class AxisRotation(Op):
     def __post_init__(self) -> None:
         self.keys = (self.key,)
 
-    def run(
-        self,
-        vs: list[_F],
-        spare: list[_F],
-        points: Sequence[bool],
-        src: Mapping[str, Src],
-        w: _F,
-    ) -> None:
+    def run(self, vs: Bufs, spare: Bufs, points: Flags, src: Sources, w: _F) -> None:
         c = src[f"{self.key}#cos"]
         s = src[f"{self.key}#sin"]
         j = self.j
@@ -285,14 +254,7 @@ class LinearMotion(Op):
             op.run(d, tmp, (False,), src, np.empty(width))
         return d[0][:3]
 
-    def run(
-        self,
-        vs: list[_F],
-        spare: list[_F],
-        points: Sequence[bool],
-        src: Mapping[str, Src],
-        w: _F,
-    ) -> None:
+    def run(self, vs: Bufs, spare: Bufs, points: Flags, src: Sources, w: _F) -> None:
         q = src[self.q]
         d = self.direction(src, w.shape[0])
         for n, v in enumerate(vs):
