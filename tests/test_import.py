@@ -46,9 +46,7 @@ def test_heavy_module_is_imported_when_used():
 
 def test_lazy_names_are_those_of_the_subpackages():
     import mtmc
-    from mtmc import errors, geometry, graph, kinematics, uncertainty
-
-    from mtmc import study
+    from mtmc import errors, geometry, graph, kinematics, study, uncertainty
 
     study_names = ["StudyResult", "load_study", "loads_study", "register_kind", "study_kinds"]
     expected = ["__version__", "errors", "report", *study_names, "write_result"]
