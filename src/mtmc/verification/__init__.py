@@ -1,0 +1,16 @@
+"""Laser-tracker volumetric verification of machine tools (Aguado et al. 2016, 2017).
+
+The workspace discretised into verification points and the path through them
+(:mod:`~mtmc.verification.workspace`), the NC program that moves the machine along it and
+an estimate of the measuring time (:mod:`~mtmc.verification.ncprogram`), and compensation
+tables written from identified error functions (:mod:`~mtmc.verification.compensation`).
+"""
+
+from mtmc.verification import ncprogram, workspace
+from mtmc.verification.ncprogram import *  # noqa: F403
+from mtmc.verification.workspace import *  # noqa: F403
+
+__all__: list[str] = [
+    *ncprogram.__all__,
+    *workspace.__all__,
+]
