@@ -12,7 +12,7 @@ import sys
 import typer
 
 from mtmc import __version__
-from mtmc.cli import graph, kinematics, propagate, run
+from mtmc.cli import graph, kinematics, propagate, run, verify
 
 app = typer.Typer(
     name="mtmc",
@@ -27,6 +27,7 @@ app.command("report")(run.report_cmd)
 app.command("demo")(run.demo_cmd)
 app.add_typer(graph.app, name="graph")
 app.add_typer(kinematics.app, name="kinematics")
+app.add_typer(verify.app, name="verify")
 
 
 def _version(value: bool) -> None:

@@ -6,11 +6,13 @@ an estimate of the measuring time (:mod:`~mtmc.verification.ncprogram`), and com
 tables written from identified error functions (:mod:`~mtmc.verification.compensation`).
 """
 
-from mtmc.verification import ncprogram, workspace
+from mtmc.verification import compensation, ncprogram, workspace
+from mtmc.verification.compensation import *  # noqa: F403
 from mtmc.verification.ncprogram import *  # noqa: F403
 from mtmc.verification.workspace import *  # noqa: F403
 
 __all__: list[str] = [
+    *compensation.__all__,
     *ncprogram.__all__,
     *workspace.__all__,
 ]

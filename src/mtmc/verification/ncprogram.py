@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import re
+import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,11 +36,11 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.errors import InputError
+from mtmc.errors import InputError, ParseError, TopologyError
 from mtmc.io import write_text_atomic
 from mtmc.kinematics.topology import is_linear, is_rotary
 from mtmc.study.spec import Fields, Source
-from mtmc.verification.workspace import MeasurementPlan
+from mtmc.verification.workspace import MeasurementPlan, read_workspace
 
 __all__ = [
     "DIALECTS",
@@ -48,6 +49,8 @@ __all__ = [
     "estimate_time",
     "heidenhain_program",
     "iso_program",
+    "load_plan_study",
+    "loads_plan_study",
     "nc_from_dict",
     "points_table",
     "program_text",
@@ -789,3 +792,96 @@ def nc_from_dict(
     nc = top.table("nc")
     assert nc is not None
     return read_nc(nc, axes)
+
+
+# ---------------------------------------------------------------------------------------
+# A planning study: machine, [workspace] and [nc]
+
+
+def _machine_axes(top: Fields) -> tuple[str, ...] | None:
+    """The axes of the study's ``machine`` (a library name or a topology), if it has one."""
+    from mtmc.kinematics.library import library_machine, library_names
+    from mtmc.kinematics.topology import parse_topology
+
+    if "machine" not in top.data:
+        return None
+    raw = top.data["machine"]
+    if isinstance(raw, dict):
+        sub = top.table("machine")
+        assert sub is not None
+        if "topology" not in raw:
+            raise sub.error('expected the machine\'s topology, e.g. topology = "XFYZ"', "topology")
+        spec, where, key = sub.text("topology"), sub, "topology"
+    else:
+        spec, where, key = top.text("machine"), top, "machine"
+    if spec.strip().lower() in library_names():
+        return library_machine(spec).axes
+    try:
+        return parse_topology(spec).axes
+    except TopologyError as exc:
+        raise where.error(
+            f"{exc.message}; nor is it a library name ({', '.join(library_names())})", key
+        ) from None
+
+
+def loads_plan_study(text: str, file: str = "<study>") -> tuple[MeasurementPlan, NCSettings]:
+    """Read the plan of a verification study from TOML text.
+
+    Reads the study's ``machine`` (optional: a library name or a topology string such as
+    ``"XFYZ"``, or a table with ``topology``; it fixes the axes and their order), its
+    ``[workspace]`` table (:func:`~mtmc.verification.workspace.read_workspace`) and its
+    ``[nc]`` table (:func:`read_nc`). Other keys of the study are left to the study's own
+    loader.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    file : str
+        The file name for the messages.
+
+    Returns
+    -------
+    tuple of (MeasurementPlan, NCSettings)
+
+    Raises
+    ------
+    ParseError
+        If the text is not TOML (with line and column).
+    InputError
+        On any wrong field, naming the file, the line and the field.
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        msg = str(exc).split(" (at line")[0]
+        line, col = (int(m.group(1)), int(m.group(2))) if m else (None, None)
+        raise ParseError(f"not valid TOML: {msg}", file=file, line=line, column=col) from None
+    top = Fields(Source.from_text(text, file), data)
+    axes = _machine_axes(top)
+    ws = top.table("workspace")
+    nc = top.table("nc")
+    assert ws is not None and nc is not None
+    plan = read_workspace(ws, axes)
+    return plan, read_nc(nc, plan.axes)
+
+
+def load_plan_study(path: str | Path) -> tuple[MeasurementPlan, NCSettings]:
+    """Read the plan of a verification study file (see :func:`loads_plan_study`).
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read, or as :func:`loads_plan_study`.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(
+            f"cannot read the study file: {exc.strerror or exc}", file=str(path)
+        ) from None
+    except UnicodeDecodeError:
+        raise InputError("the study file is not UTF-8 text", file=str(path)) from None
+    return loads_plan_study(text, str(path))
