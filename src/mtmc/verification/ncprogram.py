@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 import re
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from mtmc.errors import InputError, ParseError, TopologyError
 from mtmc.io import write_text_atomic
 from mtmc.kinematics.topology import is_linear, is_rotary
-from mtmc.study.spec import Fields, Source
+from mtmc.study.spec import Fields, Source, check_number
 from mtmc.verification.workspace import MeasurementPlan, read_workspace
 
 __all__ = [
@@ -69,16 +69,7 @@ _PGM_NAME = re.compile(r"^[A-Za-z0-9_]{1,24}$")
 
 
 def _positive(v: Any, name: str, *, allow_zero: bool = False) -> float:
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        raise InputError(f"expected a number, got {v!r}", field=name) from None
-    ok = math.isfinite(f) and (f >= 0.0 if allow_zero else f > 0.0)
-    if not ok:
-        raise InputError(
-            f"expected a finite number {'>=' if allow_zero else '>'} 0, got {v!r}", field=name
-        )
-    return f
+    return check_number(v, lambda m: InputError(m, field=name), 0.0, open_low=not allow_zero)
 
 
 @dataclass(frozen=True)
@@ -196,6 +187,37 @@ def _comment_iso(text: str) -> str:
     return "(" + text.upper().replace("(", "[").replace(")", "]") + ")"
 
 
+def _walk(
+    plan: MeasurementPlan, fmt: Callable[[float], str]
+) -> Iterator[tuple[str, int, list[str]]]:
+    """The program's events in order: a pass starts, a move, a dwell at a point.
+
+    Yields ``("pass", k, [])`` when the pass of offset ``k`` starts, ``("move", i,
+    words)`` with the axis words (``"X12.500"``) of the axes whose written value changes
+    (all of them for the first move; a move that changes none is left out), and
+    ``("dwell", point, [])`` after a move that reaches a verification point.
+    """
+    pos = _display(plan)
+    last: list[str] | None = None
+    pass_ = -1
+    for i in range(pos.shape[0]):
+        k = int(plan.move_offset[i])
+        if k != pass_:
+            yield "pass", k, []
+            pass_ = k
+        text = [fmt(v) for v in pos[i]]
+        words = [
+            f"{a}{t}"
+            for j, (a, t) in enumerate(zip(plan.axes, text, strict=True))
+            if last is None or t != last[j]
+        ]
+        last = text
+        if words:
+            yield "move", i, words
+        if plan.move_point[i] >= 0:
+            yield "dwell", int(plan.move_point[i]), []
+
+
 def iso_program(plan: MeasurementPlan, settings: NCSettings) -> str:
     """The ISO (Fanuc-style) G-code program of a plan.
 
@@ -234,7 +256,6 @@ def iso_program(plan: MeasurementPlan, settings: NCSettings) -> str:
         The program, one block per line (LF line ends).
     """
     nd = settings.decimals
-    pos = _display(plan)
     out = [
         "%",
         f"O{settings.program:04d} " + _comment_iso("mtmc volumetric verification"),
@@ -252,32 +273,21 @@ def iso_program(plan: MeasurementPlan, settings: NCSettings) -> str:
         if settings.dwell_word == "P"
         else f"G04 {settings.dwell_word}{settings.dwell:.3f}"
     )
-    last: NDArray[np.float64] | None = None
-    pass_ = -1
-    for i in range(pos.shape[0]):
-        k = int(plan.move_offset[i])
-        if k != pass_:
-            if pass_ >= 0:
+    first = True
+    for kind, k, words in _walk(plan, lambda v: f"{v:.{nd}f}"):
+        if kind == "pass":
+            if k > 0:
                 out.append("M00 " + _comment_iso(f"move the reflector to offset {k + 1}"))
-            o = plan.offsets[k]
+            o = [f"{v:.{nd}f}" for v in plan.offsets[k]]
             out.append(
                 _comment_iso(
-                    f"offset {k + 1} of {plan.n_offsets}: reflector X{o[0]:.{nd}f} "
-                    f"Y{o[1]:.{nd}f} Z{o[2]:.{nd}f} mm"
+                    f"offset {k + 1} of {plan.n_offsets}: reflector X{o[0]} Y{o[1]} Z{o[2]} mm"
                 )
             )
-            pass_ = k
-        words = [
-            f"{a}{pos[i, j]:.{nd}f}"
-            for j, a in enumerate(plan.axes)
-            if last is None or f"{pos[i, j]:.{nd}f}" != f"{last[j]:.{nd}f}"
-        ]
-        if last is None:
-            words.append(f"F{settings.feed:.1f}")
-        if words:
-            out.append("G01 " + " ".join(words))
-        last = pos[i]
-        if plan.move_point[i] >= 0 and settings.dwell > 0:
+        elif kind == "move":
+            out.append("G01 " + " ".join(words) + (f" F{settings.feed:.1f}" if first else ""))
+            first = False
+        elif settings.dwell > 0:
             out.append(dwell)
     out += ["M30", "%"]
     return "\n".join(out) + "\n"
@@ -325,7 +335,6 @@ def heidenhain_program(plan: MeasurementPlan, settings: NCSettings) -> str:
         The program, one block per line (LF line ends).
     """
     nd = settings.decimals
-    pos = _display(plan)
     body = [
         f"BEGIN PGM {settings.name} MM",
         "; MTMC VOLUMETRIC VERIFICATION",
@@ -336,28 +345,17 @@ def heidenhain_program(plan: MeasurementPlan, settings: NCSettings) -> str:
         *settings.preamble,
     ]
     feed = f"F{settings.feed:g}"
-    last: NDArray[np.float64] | None = None
-    pass_ = -1
-    for i in range(pos.shape[0]):
-        k = int(plan.move_offset[i])
-        if k != pass_:
-            if pass_ >= 0:
+    for kind, k, words in _walk(plan, lambda v: _hh(v, nd)):
+        if kind == "pass":
+            if k > 0:
                 body += [f"; MOVE THE REFLECTOR TO OFFSET {k + 1}", "STOP"]
-            o = plan.offsets[k]
+            o = [_hh(v, nd) for v in plan.offsets[k]]
             body.append(
-                f"; OFFSET {k + 1} OF {plan.n_offsets}: REFLECTOR X{_hh(o[0], nd)} "
-                f"Y{_hh(o[1], nd)} Z{_hh(o[2], nd)} MM"
+                f"; OFFSET {k + 1} OF {plan.n_offsets}: REFLECTOR X{o[0]} Y{o[1]} Z{o[2]} MM"
             )
-            pass_ = k
-        words = [
-            f"{a}{_hh(pos[i, j], nd)}"
-            for j, a in enumerate(plan.axes)
-            if last is None or _hh(pos[i, j], nd) != _hh(last[j], nd)
-        ]
-        if words:
+        elif kind == "move":
             body.append("L " + " ".join(words) + f" R0 {feed}")
-        last = pos[i]
-        if plan.move_point[i] >= 0 and settings.dwell > 0:
+        elif settings.dwell > 0:
             body += ["CYCL DEF 9.0 DWELL TIME", f"CYCL DEF 9.1 DWELL {settings.dwell:g}"]
     body.append(f"END PGM {settings.name} MM")
     return "\n".join(f"{n} {line}" for n, line in enumerate(body)) + "\n"
