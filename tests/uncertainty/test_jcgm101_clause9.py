@@ -32,6 +32,12 @@ from mtmc import (
 from mtmc.uncertainty.gum import gum, validate
 
 
+@pytest.fixture(params=["random", "sobol"])
+def sampling(request):
+    """Every Monte Carlo run twice: pseudo-random, and randomised quasi-Monte Carlo."""
+    return request.param
+
+
 def _close(value, published, decimals, delta=0.0):
     """|value - published| <= δ + half a unit in the last printed decimal."""
     tol = delta + 0.5 * 10.0 ** (-decimals)
@@ -41,17 +47,19 @@ def _close(value, published, decimals, delta=0.0):
 SUM4 = expression("x1 + x2 + x3 + x4")
 
 
-def _additive(inputs, seed, ndig):
-    mc = monte_carlo(SUM4, inputs, seed=seed, adaptive=True, ndig=ndig, kind="symmetric")
+def _additive(inputs, seed, ndig, sampling):
+    mc = monte_carlo(
+        SUM4, inputs, seed=seed, adaptive=True, ndig=ndig, kind="symmetric", sampling=sampling
+    )
     return mc, gum(SUM4, inputs)
 
 
-def test_9_2_2_normal_inputs_table_2():
+def test_9_2_2_normal_inputs_table_2(sampling):
     """§9.2.2, Table 2: X_i ~ N(0, 1). GUF: y = 0.0, u = 2.0, [-3.9, 3.9];
     MCM: y = 0.0, u = 2.0, probabilistically symmetric 95 % interval [-3.9, 3.9]
     (published with more digits; exact: ±1.96 × 2 = ±3.92). GUF validated."""
     inputs = {f"x{i}": Normal(0.0, 1.0) for i in range(1, 5)}
-    mc, g = _additive(inputs, seed=2022, ndig=3)
+    mc, g = _additive(inputs, seed=2022, ndig=3, sampling=sampling)
     d = mc.tolerance
     assert d == 0.005  # u = 2.00 (ndig = 3, as Table 2) -> δ = ½ × 10⁻²
     _close(g.estimate, 0.000, 3)
@@ -68,13 +76,13 @@ def test_9_2_2_normal_inputs_table_2():
     assert validate(g, mc, ndig=2).passed
 
 
-def test_9_2_3_rectangular_inputs_table_3():
+def test_9_2_3_rectangular_inputs_table_3(sampling):
     """§9.2.3, Table 3: X_i rectangular with expectation 0 and standard deviation 1.
     GUF: u = 2.000, [-3.92, 3.92]; MCM: u = 2.000, [-3.88, 3.88]. The exact interval
     from the Irwin–Hall distribution of the sum is ±3.8794."""
     a = math.sqrt(3.0)
     inputs = {f"x{i}": Uniform(-a, a) for i in range(1, 5)}
-    mc, g = _additive(inputs, seed=2023, ndig=3)
+    mc, g = _additive(inputs, seed=2023, ndig=3, sampling=sampling)
     d = mc.tolerance
     _close(g.u, 2.000, 3)
     _close(g.interval[1], 3.92, 2)
@@ -106,7 +114,7 @@ def test_9_2_3_rectangular_inputs_table_3():
     assert abs(v.d_low - abs(g.interval[1] - exact)) <= 5 * se
 
 
-def test_9_2_4_dominant_rectangular_input_table_4():
+def test_9_2_4_dominant_rectangular_input_table_4(sampling):
     """§9.2.4, Table 4: X_1..X_3 ~ N(0, 1), X_4 rectangular with standard deviation 10.
     GUF: u = 10.1 (= √103), [-19.9, 19.9]; MCM: [-17.0, 17.0]; GUF not validated.
     Exact endpoint: the 97.5 % quantile of N(0, 3) convolved with R(-10√3, 10√3)."""
@@ -117,7 +125,7 @@ def test_9_2_4_dominant_rectangular_input_table_4():
         "x3": Normal(0.0, 1.0),
         "x4": Uniform(-a, a),
     }
-    mc, g = _additive(inputs, seed=2024, ndig=2)
+    mc, g = _additive(inputs, seed=2024, ndig=2, sampling=sampling)
     d = mc.tolerance
     _close(g.u, 10.1, 1)
     _close(g.interval[0], -19.9, 1)
@@ -195,7 +203,7 @@ def _mass_exact():
     return mu - 100_000.0, u, (quantile(0.025), quantile(0.975))
 
 
-def test_9_3_mass_calibration_tables_7_and_8():
+def test_9_3_mass_calibration_tables_7_and_8(sampling):
     """§9.3, Table 7: GUF δm = 1.2340 mg, u = 0.0539 mg, [1.1285, 1.3395] mg;
     MCM 1.2341 mg, u = 0.0754 mg, shortest 95 % interval [1.0834, 1.3825] mg.
     Table 8: first-order GUF d_low = 0.0451, d_high = 0.0430, δ = 0.0005: not validated.
@@ -229,7 +237,9 @@ def test_9_3_mass_calibration_tables_7_and_8():
     _close(1.1285 - 1.0834, 0.0451, 4)
     _close(1.3825 - 1.3395, 0.0430, 4)
 
-    mc = monte_carlo(MASS, MASS_INPUTS, seed=1, adaptive=True, ndig=2, kind="shortest")
+    mc = monte_carlo(
+        MASS, MASS_INPUTS, seed=1, adaptive=True, ndig=2, kind="shortest", sampling=sampling
+    )
     d = mc.tolerance
     assert d == 0.0005
     g = gum(MASS, MASS_INPUTS)
@@ -278,14 +288,16 @@ U_LOSS = 0.005
 
 
 @pytest.mark.parametrize("x1", [0.0, 0.010, 0.050])
-def test_9_4_comparison_loss_uncorrelated_vs_noncentral_chi2(x1):
+def test_9_4_comparison_loss_uncorrelated_vs_noncentral_chi2(x1, sampling):
     """§9.4 (Tables 9–11), uncorrelated inputs X_1 ~ N(x1, 0.005²), X_2 ~ N(0, 0.005²).
     δY/u² is non-central χ² with 2 degrees of freedom and non-centrality (x1/u)²: the
     MC results are checked against it (mean x1² + 2u², standard deviation
     2u² √(1 + λ), quantiles from scipy.stats.ncx2). GUF (first order): y = x1²,
     u = 2 x1 u(x1) (0 for x1 = 0, as published)."""
     inputs = {"x1": Normal(x1, U_LOSS), "x2": Normal(0.0, U_LOSS)}
-    mc = monte_carlo(LOSS, inputs, seed=94, adaptive=True, ndig=2, kind="symmetric")
+    mc = monte_carlo(
+        LOSS, inputs, seed=94, adaptive=True, ndig=2, kind="symmetric", sampling=sampling
+    )
     lam = (x1 / U_LOSS) ** 2
     ref = stats.ncx2(2, lam, scale=U_LOSS**2) if lam > 0 else stats.chi2(2, scale=U_LOSS**2)
     lo, hi = mc.coverage_interval(0.95, kind="symmetric")
@@ -306,7 +318,7 @@ def test_9_4_comparison_loss_uncorrelated_vs_noncentral_chi2(x1):
         assert g.u == 0.0 and not validate(g, mc).passed
 
 
-def test_9_4_comparison_loss_correlated_inputs():
+def test_9_4_comparison_loss_correlated_inputs(sampling):
     """§9.4 with correlated inputs, r = 0.9 (X ~ N(x, V), V = u² [[1, r], [r, 1]]).
     Closed forms for a Gaussian quadratic form: E = |x|² + tr V,
     Var = 2 tr(V²) + 4 xᵀ V x. For x1 = 0, δY = u²((1 + r) Z1² + (1 - r) Z2²); its
@@ -329,7 +341,9 @@ def test_9_4_comparison_loss_correlated_inputs():
         def loss(x):
             return x[:, 0] ** 2 + x[:, 1] ** 2
 
-        mc = monte_carlo(loss, inputs, seed=seed, adaptive=True, ndig=2, kind="symmetric")
+        mc = monte_carlo(
+            loss, inputs, seed=seed, adaptive=True, ndig=2, kind="symmetric", sampling=sampling
+        )
         m = mc.trials
         e_ref = mean @ mean + np.trace(v)
         sd_ref = math.sqrt(2 * np.trace(v @ v) + 4 * mean @ v @ mean)
@@ -366,7 +380,7 @@ GAUGE_INPUTS = {
 }
 
 
-def test_9_5_gauge_block_table_16():
+def test_9_5_gauge_block_table_16(sampling):
     """§9.5, Table 16: MCM y = 838 nm, u = 36 nm, shortest 99 % interval [745, 932] nm;
     GUF u = 32 nm (as GUM H.1). The MC u exceeds the GUF u through the t variances
     ν/(ν - 2) and the product δα·θ, which first order drops.
@@ -379,7 +393,7 @@ def test_9_5_gauge_block_table_16():
     2δ plus the rounding of both endpoints; its centre, which is poorly determined
     (over 40 adaptive runs of mtmc its standard deviation was 0.48 nm, lengths
     186.1-187.3 nm), within 2.5 nm of the published centre 838.5 nm."""
-    mc = monte_carlo(GAUGE, GAUGE_INPUTS, seed=95, adaptive=True, ndig=2, p=0.99)
+    mc = monte_carlo(GAUGE, GAUGE_INPUTS, seed=95, adaptive=True, ndig=2, p=0.99, sampling=sampling)
     d = mc.tolerance
     assert d == 0.5
     ls = 50_000_623.6

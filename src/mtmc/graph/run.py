@@ -40,6 +40,7 @@ from mtmc.uncertainty.distributions import (
 )
 from mtmc.uncertainty.montecarlo import NanPolicy, monte_carlo
 from mtmc.uncertainty.results import MonteCarloResult
+from mtmc.uncertainty.sampling import Sampling
 
 __all__ = [
     "GRAPH_BLOCK_SIZE",
@@ -552,6 +553,7 @@ def run_graph(
     executor: ExecutorKind | Any = "thread",
     scheduler: Any = None,
     nan_policy: NanPolicy = "raise",
+    sampling: Sampling = "random",
 ) -> GraphResult:
     """Monte Carlo over a measurement graph (JCGM 101 with Stryczek's graph as the model).
 
@@ -592,6 +594,10 @@ def run_graph(
         With ``executor="dask"``, a running Dask cluster to use.
     nan_policy : {"raise", "omit"}
         As :func:`~mtmc.uncertainty.monte_carlo`.
+    sampling : {"random", "sobol"}
+        Pseudo-random draws or randomised quasi-Monte Carlo, as
+        :func:`~mtmc.uncertainty.monte_carlo` (the Sobol dimensions go to the input
+        places in sorted order of their names).
 
     Returns
     -------
@@ -635,6 +641,7 @@ def run_graph(
         executor=executor,
         scheduler=scheduler,
         nan_policy=nan_policy,
+        sampling=sampling,
     )
     places = {n: PlaceSummary(n, plan.types[n], res[n]) for n in summ}
     samples_out = {n: unflatten(plan.types[n], res[n].values) for n in keep_s}

@@ -16,6 +16,12 @@ Uniform(low=-1.0, high=1.0)
 >>> parse_distribution(str(Trapezoidal(-2, 2, 0.5))) == Trapezoidal(-2, 2, 0.5)
 True
 
+For randomised quasi-Monte Carlo (``sampling="sobol"`` of
+:func:`~mtmc.uncertainty.montecarlo.monte_carlo`) each PDF also maps points of the unit
+cube to draws: ``uniform_dims`` coordinates per draw through ``from_uniform``, for a
+scalar PDF its inverse CDF ``ppf`` (a ``k``-variate normal: ``k`` coordinates, the
+Cholesky factor applied to their normal quantiles).
+
 Standard normal draws come from the Generator's ziggurat sampler by default; the
 Box–Muller transform (Stryczek eq. 6) is available as ``normal_method=
 "box-muller"`` for reproducing that paper's figure (see :func:`standard_normal`).
@@ -271,6 +277,44 @@ class Distribution(abc.ABC):
     ) -> NDArray[np.float64]:
         """Draw ``n`` values: shape ``(n,)`` (scalar) or ``(n, k)`` (``k``-variate)."""
 
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """Inverse CDF (quantile function) of a scalar PDF at probabilities ``u`` in (0, 1).
+
+        Parameters
+        ----------
+        u : array_like
+            Probabilities, any shape.
+
+        Returns
+        -------
+        ndarray
+            The quantiles, the shape of ``u``.
+
+        Raises
+        ------
+        DistributionError
+            For a PDF without a quantile function (a vector PDF, or one drawn from
+            several uniform numbers: see :attr:`uniform_dims`).
+        """
+        raise DistributionError(
+            f"{self}: no quantile function (a draw takes {self.uniform_dims} uniform numbers)",
+            field="ppf",
+        )
+
+    @property
+    def uniform_dims(self) -> int:
+        """Coordinates of a point of the unit cube that one draw takes (``from_uniform``)."""
+        return 1
+
+    def from_uniform(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Draws from points of the unit cube: ``(n, uniform_dims)`` -> ``(n,)`` or ``(n, k)``.
+
+        A scalar PDF maps its one coordinate through :meth:`ppf` (the inverse-CDF
+        method of JCGM 101 §6.4.1 NOTE applied to a quasi-random point instead of a
+        pseudo-random number).
+        """
+        return self.ppf(u[:, 0])
+
     def _params(self) -> tuple[Any, ...]:
         return tuple(getattr(self, f.name) for f in dataclasses.fields(cast(Any, self)) if f.init)
 
@@ -326,6 +370,12 @@ class Normal(Distribution):
         z += self.mean
         return z
 
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """``μ + σ Φ⁻¹(u)``."""
+        from scipy.special import ndtri
+
+        return np.asarray(self.mean + self.std * ndtri(u), dtype=np.float64)
+
 
 @register_distribution("uniform", "rectangular")
 @dataclass(frozen=True, eq=False)
@@ -375,6 +425,10 @@ class Uniform(Distribution):
         r *= self.high - self.low
         r += self.low
         return r
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """``a + (b - a) u``."""
+        return np.asarray(self.low + (self.high - self.low) * np.asarray(u, dtype=np.float64))
 
 
 @register_distribution("triangular")
@@ -451,12 +505,19 @@ class Triangular(Distribution):
         if self.mode is None:
             r = rng.random((n, 2))
             return a + (0.5 * (b - a)) * (r[:, 0] + r[:, 1])
-        c = self.mode
-        r = rng.random(n)
+        return self.ppf(rng.random(n))
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """The inverse CDF: ``a + sqrt(u (b - a)(c - a))`` below ``(c - a)/(b - a)``.
+
+        Above it ``b - sqrt((1 - u)(b - a)(b - c))``.
+        """
+        a, b, c = self.low, self.high, self._c
+        r = np.asarray(u, dtype=np.float64)
         split = (c - a) / (b - a)
         left = a + np.sqrt(r * ((b - a) * (c - a)))
         right = b - np.sqrt((1.0 - r) * ((b - a) * (b - c)))
-        return np.where(r < split, left, right)
+        return np.asarray(np.where(r < split, left, right))
 
 
 @register_distribution("trapezoidal", "trapezoid")
@@ -516,6 +577,24 @@ class Trapezoidal(Distribution):
         r = rng.random((_check_n(n), 2))
         half = 0.5 * (self.high - self.low)
         return self.low + half * ((1.0 + self.beta) * r[:, 0] + (1.0 - self.beta) * r[:, 1])
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """Inverse of the piecewise quadratic / linear / quadratic CDF.
+
+        With ``h = (b - a)/2``, ``t = β h`` and the height ``H = 1/(h + t)`` of the PDF,
+        ``F = H (y + h)²/(2(h - t))`` on the rising side (``y = x - (a + b)/2``), linear
+        with slope ``H`` on the top, and symmetric.
+        """
+        r = np.asarray(u, dtype=np.float64)
+        h = 0.5 * (self.high - self.low)
+        t = self.beta * h
+        H = 1.0 / (h + t)
+        u1 = 0.5 * H * (h - t)  # the CDF at the start of the top
+        q = np.minimum(r, 1.0 - r)
+        side = -h + np.sqrt(2.0 * q * (h - t) / H)
+        y = np.where(q < u1, side, -t + (q - u1) / H)
+        y = np.where(r <= 0.5, y, -y)
+        return np.asarray(0.5 * (self.low + self.high) + y)
 
 
 @register_distribution("ctrap", "curvilinear_trapezoid")
@@ -577,10 +656,18 @@ class CurvilinearTrapezoid(Distribution):
         self, rng: np.random.Generator, n: int, *, normal_method: NormalMethod = "default"
     ) -> NDArray[np.float64]:
         """Draw ``n`` values, shape ``(n,)`` (§6.4.3.4)."""
-        r = rng.random((_check_n(n), 2))
-        a_s = (self.low - self.d) + (2.0 * self.d) * r[:, 0]
+        return self.from_uniform(rng.random((_check_n(n), 2)))
+
+    @property
+    def uniform_dims(self) -> int:
+        """Two: one for the limits, one for the position between them (§6.4.3.4)."""
+        return 2
+
+    def from_uniform(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The construction of §6.4.3.4 on the two coordinates of each point."""
+        a_s = (self.low - self.d) + (2.0 * self.d) * u[:, 0]
         b_s = (self.low + self.high) - a_s
-        return a_s + (b_s - a_s) * r[:, 1]
+        return np.asarray(a_s + (b_s - a_s) * u[:, 1])
 
 
 @register_distribution("arcsine", "u_shaped")
@@ -628,6 +715,14 @@ class Arcsine(Distribution):
         """Draw ``n`` values, shape ``(n,)`` (§6.4.6.4)."""
         r = rng.random(_check_n(n))
         return self.mean + (0.5 * (self.high - self.low)) * np.sin((2.0 * np.pi) * r)
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """``(a + b)/2 + (b - a)/2 · sin(π (u - 1/2))``.
+
+        The inverse of ``F = 1/2 + arcsin((2x - a - b)/(b - a))/π``.
+        """
+        r = np.asarray(u, dtype=np.float64)
+        return np.asarray(self.mean + (0.5 * (self.high - self.low)) * np.sin(np.pi * (r - 0.5)))
 
 
 @register_distribution("t", "student_t")
@@ -708,6 +803,12 @@ class StudentT(Distribution):
             t = z / np.sqrt(chi2 / self.df)
         return self.loc + self.scale * t
 
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """``μ + s t_ν⁻¹(u)``."""
+        from scipy.special import stdtrit
+
+        return np.asarray(self.loc + self.scale * stdtrit(self.df, u), dtype=np.float64)
+
 
 @register_distribution("exponential")
 @dataclass(frozen=True, eq=False)
@@ -745,6 +846,10 @@ class Exponential(Distribution):
     ) -> NDArray[np.float64]:
         """Draw ``n`` values, shape ``(n,)`` (§6.4.10.4)."""
         return self.mean * rng.standard_exponential(_check_n(n))
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """``-x ln(1 - u)``."""
+        return np.asarray(-self.mean * np.log1p(-np.asarray(u, dtype=np.float64)))
 
 
 @register_distribution("gamma")
@@ -796,6 +901,12 @@ class Gamma(Distribution):
     ) -> NDArray[np.float64]:
         """Draw ``n`` values, shape ``(n,)`` (§6.4.11.4)."""
         return self.scale * rng.standard_gamma(self.shape, _check_n(n))
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """``θ P⁻¹(k, u)``, ``P`` the regularised lower incomplete gamma function."""
+        from scipy.special import gammaincinv
+
+        return np.asarray(self.scale * gammaincinv(self.shape, u), dtype=np.float64)
 
 
 # --------------------------------------------------------------------------- vector PDFs
@@ -904,6 +1015,19 @@ class MultivariateNormal(Distribution):
         out += self.mean
         return out
 
+    @property
+    def uniform_dims(self) -> int:
+        """``k``: one coordinate per component."""
+        return self.dim
+
+    def from_uniform(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``μ + R^T z`` with ``z = Φ⁻¹(u)`` component by component (§6.4.8.4)."""
+        from scipy.special import ndtri
+
+        out = ndtri(u) @ self._factor.T
+        out += self.mean
+        return np.asarray(out)
+
 
 @register_distribution("iid")
 @dataclass(frozen=True, eq=False)
@@ -990,6 +1114,17 @@ class IID(Distribution):
         n = _check_n(n)
         return self.base.sample(rng, n * self.k, normal_method=normal_method).reshape(n, self.k)
 
+    @property
+    def uniform_dims(self) -> int:
+        """``k`` times those of the base PDF."""
+        return self.k * self.base.uniform_dims
+
+    def from_uniform(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Each component from its own ``base.uniform_dims`` coordinates."""
+        n, s = u.shape[0], self.base.uniform_dims
+        flat = self.base.from_uniform(np.ascontiguousarray(u).reshape(n * self.k, s))
+        return flat.reshape(n, self.k)
+
 
 @register_distribution("constant")
 @dataclass(frozen=True, eq=False)
@@ -1041,6 +1176,23 @@ class Constant(Distribution):
         """Return ``n`` copies of the value, shape ``(n,)`` or ``(n, k)``."""
         n = _check_n(n)
         out = np.empty((n,) if self.dim == 0 else (n, self.dim))
+        out[...] = self.value
+        return out
+
+    @property
+    def uniform_dims(self) -> int:
+        """None: a constant takes no coordinate."""
+        return 0
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """The value, whatever ``u`` (a scalar constant)."""
+        if self.dim:
+            return super().ppf(u)
+        return np.full(np.shape(u), float(self.value))
+
+    def from_uniform(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``n`` copies of the value."""
+        out = np.empty((u.shape[0],) if self.dim == 0 else (u.shape[0], self.dim))
         out[...] = self.value
         return out
 

@@ -41,8 +41,10 @@ from mtmc.uncertainty.results import (
 from mtmc.uncertainty.sampling import (
     DEFAULT_BLOCK_SIZE,
     SEED_BLOCK_SIZE,
+    Sampling,
     _BlockSource,
     _check_int,
+    _check_sampling,
     _prepare,
     evaluation_block_size,
     resolve_seed,
@@ -50,9 +52,14 @@ from mtmc.uncertainty.sampling import (
 from mtmc.uncertainty.sketch import QuantileSketch
 from mtmc.uncertainty.tolerance import numerical_tolerance
 
-__all__ = ["KEEP_AUTO_BYTES", "adaptive_block_size", "monte_carlo"]
+__all__ = ["KEEP_AUTO_BYTES", "RQMC_MIN_BLOCKS", "adaptive_block_size", "monte_carlo"]
 
 NanPolicy = Literal["raise", "omit"]
+
+#: An adaptive run with ``sampling="sobol"`` stops after at least this many independent
+#: scramblings: their spread ``s`` then has 9 degrees of freedom, and ``2 s <= δ`` holds
+#: the error within ``δ`` about as often (92 %) as the many blocks of a pseudo-random run.
+RQMC_MIN_BLOCKS: int = 10
 
 #: ``progress(done, total)``: called after each block of trials with the number of trials
 #: done so far; ``total`` is None while it is not known (adaptive runs).
@@ -226,10 +233,11 @@ class _BlockJob:
     keep: bool | frozenset[str]
     total: int
     sketch: frozenset[str]
+    sampling: Sampling = "random"
 
     def __call__(self, span: tuple[int, int]) -> _Digest:
         a, b = span
-        samples = _BlockSource(self.dists, self.seed, self.method).trials(a, b)
+        samples = _BlockSource(self.dists, self.seed, self.method, self.sampling).trials(a, b)
         outs = _evaluate(self.model, samples, a, b)
         return _digest(a, outs, self.keep, self.total, self.sketch)
 
@@ -420,11 +428,15 @@ class _Runner:
         workers: int,
         executor: ExecutorKind | Any,
         scheduler: Any = None,
+        sampling: Sampling = "random",
     ) -> None:
         self.model, self.dists, self.seed, self.method = model, dists, seed, method
         self.block_size = evaluation_block_size(dists, block_size)
         self.workers, self.executor, self.scheduler = workers, executor, scheduler
-        self.source = _BlockSource(dists, seed, method)
+        self.sampling = sampling
+        self.source = _BlockSource(dists, seed, method, sampling)
+        #: trials per seed block (quasi-random points are scrambled block by block)
+        self.seed_block = next(iter(self.source.sizes.values()), SEED_BLOCK_SIZE)
 
     def run(
         self,
@@ -460,7 +472,9 @@ class _Runner:
                 return _digest(span[0], outs, keep, total, sketch)
 
         else:
-            fn = _BlockJob(self.model, self.dists, self.seed, self.method, keep, total, sketch)
+            fn = _BlockJob(
+                self.model, self.dists, self.seed, self.method, keep, total, sketch, self.sampling
+            )
         for (_, b), digest in zip(
             spans,
             map_blocks(
@@ -510,6 +524,7 @@ def monte_carlo(
     progress: ProgressFn | None = None,
     keep: bool | Literal["auto"] | Iterable[str] = "auto",
     sketch: bool | Iterable[str] | None = None,
+    sampling: Sampling = "random",
 ) -> Any:
     """Propagate the input distributions through a vectorised model (JCGM 101 §7).
 
@@ -590,6 +605,15 @@ def monte_carlo(
         (:class:`~mtmc.uncertainty.sketch.QuantileSketch`), from which their coverage
         intervals are read with a stated rank error (``rank_error`` of the result); by
         default none, except with ``keep="auto"`` past its size.
+    sampling : {"random", "sobol"}, default "random", keyword-only
+        ``"random"``: pseudo-random draws (JCGM 101 §6). ``"sobol"``: randomised
+        quasi-Monte Carlo, each seed block of ``2¹⁴`` trials (fewer for very wide
+        inputs) an independently scrambled Sobol point set mapped through the inverse
+        CDFs of the inputs (:mod:`mtmc.uncertainty.sampling`). For smooth models the
+        error of the estimate and of ``u`` falls much faster than ``M^(-1/2)``; the
+        blocks stay independent, so the adaptive procedure works on them as it does
+        on pseudo-random blocks (see Notes). ``trials`` should then be a multiple of the
+        seed block (a power of two): the points are balanced only in whole blocks.
 
     Returns
     -------
@@ -622,6 +646,18 @@ def monte_carlo(
     4. stop when ``2 s_x <= δ`` for all four quantities; the result holds all ``n·h``
        values (the first ``n·h`` trials of the seed, as a fixed run of ``n·h`` trials).
 
+    With ``sampling="sobol"`` the blocks of the procedure are whole seed blocks
+    (``h`` rounded up to a multiple of the seed block, 2¹⁴ trials for ``p <= 0.9939``),
+    each an independent scrambling: the rule stops on the spread of independent
+    randomised quasi-Monte Carlo estimates, which for smooth models is far smaller than
+    that of pseudo-random blocks of the same size, and not before
+    :data:`RQMC_MIN_BLOCKS` of them (with two, ``s`` has one degree of freedom and
+    ``2 s <= δ`` is often met by chance). Quantiles gain less than the estimate and
+    ``u`` (an interval endpoint is the mean of an indicator, not a smooth function), and
+    the position of a shortest interval, set by the minimum of a flat length, gains
+    little: where the PDF is symmetric, ``kind="symmetric"`` watches the same interval
+    with far less noise.
+
     With several workers the blocks are evaluated ahead in parallel but the stopping
     rule is applied block by block in order, so the number of trials and every value are
     the same for any ``workers``.
@@ -638,6 +674,7 @@ def monte_carlo(
         raise InputError(f"expected a callable model, got {type(model).__name__}", field="model")
     seed_int = resolve_seed(seed)
     dists, method = _prepare(inputs, normal_method)
+    sampling = _check_sampling(sampling, method)
     block_size = _check_int(block_size, "block_size", 1)
     workers = _check_int(workers, "workers", 1)
     if nan_policy not in ("raise", "omit"):
@@ -646,7 +683,9 @@ def monte_carlo(
         raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
     keep_set = _check_names(keep, "keep", (True, False, "auto"))
     sketch_set = _check_names(sketch, "sketch", (True, False, None))
-    runner = _Runner(model, dists, seed_int, method, block_size, workers, executor, scheduler)
+    runner = _Runner(
+        model, dists, seed_int, method, block_size, workers, executor, scheduler, sampling
+    )
 
     if adaptive:
         if trials is not None:
@@ -677,7 +716,9 @@ def monte_carlo(
             f"only {good} of {m_total} trials gave a finite value; need at least 2",
             field="model",
         )
-    results = collector.results(trials=m_total, seed=seed_int, normal_method=method)
+    results = collector.results(
+        trials=m_total, seed=seed_int, normal_method=method, sampling=sampling
+    )
     return _package(results, m_total, seed_int, collector.omitted)
 
 
@@ -723,6 +764,10 @@ def _adaptive(
                 f"expected a positive numerical tolerance, got {tolerance!r}", field="tolerance"
             )
     h = adaptive_block_size(p)
+    min_blocks = 2
+    if runner.sampling == "sobol":  # whole seed blocks: independent scramblings
+        h = runner.seed_block * -(-h // runner.seed_block)
+        min_blocks = RQMC_MIN_BLOCKS
     ahead = runner.workers if runner.workers > 1 else 1
     kept: list[Outputs] = []
     stats: list[NDArray[np.float64]] = []
@@ -758,7 +803,7 @@ def _adaptive(
             nblocks = n + i + 1
             if progress is not None:
                 progress(nblocks * h, None)
-            if nblocks < 2:
+            if nblocks < min_blocks:
                 continue
             s = np.stack(stats)  # (nblocks, 4, d)
             sd = s.std(axis=0, ddof=1) / math.sqrt(nblocks)  # (4, d)
@@ -785,6 +830,7 @@ def _adaptive(
                         tolerance=delta,
                         omitted=omitted,
                         normal_method=method,
+                        sampling=runner.sampling,
                     )
                     for name in kept[0]
                 }

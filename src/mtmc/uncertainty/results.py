@@ -342,6 +342,9 @@ class MonteCarloResult:
         Trials whose model value was not finite and that were left out.
     normal_method : str
         How standard normal numbers were made (``"default"`` or ``"box-muller"``).
+    sampling : str
+        ``"random"`` (pseudo-random draws) or ``"sobol"`` (randomised quasi-Monte Carlo,
+        see :mod:`mtmc.uncertainty.sampling`).
     moments : Moments or None
         Count, mean and second moments of the values, merged over fixed blocks of trials
         (only for a result whose samples were not kept).
@@ -363,6 +366,7 @@ class MonteCarloResult:
     tolerance: float | None = None
     omitted: int = 0
     normal_method: str = "default"
+    sampling: str = "random"
     moments: Moments | None = field(default=None, repr=False)
     scalar: bool = True
     sketch: QuantileSketch | None = field(default=None, repr=False)
@@ -572,6 +576,7 @@ class MonteCarloResult:
             tolerance=self.tolerance,
             omitted=self.omitted,
             normal_method=self.normal_method,
+            sampling=self.sampling,
         )
 
     # ------------------------------------------------------------------ intervals

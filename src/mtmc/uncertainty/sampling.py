@@ -21,6 +21,26 @@ workers, or the order of the inputs:
 :data:`SEED_BLOCK_SIZE` is part of the reproducibility contract: changing it changes the
 numbers of every seeded run.
 
+Randomised quasi-Monte Carlo (``sampling="sobol"``)
+---------------------------------------------------
+With ``sampling="sobol"`` the inputs of a seed block are drawn together from one point
+set: the first :func:`sobol_block_trials` points of a scrambled Sobol sequence in
+``D`` dimensions (``scipy.stats.qmc.Sobol`` with ``scramble=True``: a random linear
+matrix scrambling and a random digital shift), scrambled afresh for every seed block by
+the Generator of ``SeedSequence(seed, spawn_key=(k, key("sobol")))`` (a stream no
+pseudo-random run uses: a Sobol run draws no per-input stream). The seed blocks
+are therefore independent randomisations of the same low-discrepancy point set: each is
+an unbiased estimate, and their spread gives the error estimate of the run (the
+adaptive procedure stops on it). Each input takes ``uniform_dims`` consecutive
+dimensions (one for a scalar PDF, mapped through its inverse CDF; ``k`` for a
+``k``-variate normal, through ``Φ⁻¹`` and the Cholesky factor), the inputs in **sorted
+order of their names** (:func:`sobol_layout`): the order of the mapping does not
+matter, but adding or removing an input moves the dimensions of the inputs after it in
+that order, and so changes their numbers. A constant takes no dimension. As for
+pseudo-random draws, no number depends on the evaluation blocks or the workers, and the
+first ``M`` trials of a run are those of any longer run with the same seed; the points
+are balanced in whole seed blocks, so ``M`` should be a multiple of the seed block.
+
 Examples
 --------
 >>> from mtmc.uncertainty.distributions import Normal, Uniform
@@ -36,7 +56,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterator, Mapping
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,6 +71,11 @@ from mtmc.uncertainty.distributions import (
 
 __all__ = [
     "DEFAULT_BLOCK_SIZE",
+    "MAX_SOBOL_DIMS",
+    "Sampling",
+    "sobol_block_trials",
+    "sobol_layout",
+    "sobol_points",
     "SEED_BLOCK_SIZE",
     "seed_block_trials",
     "draw",
@@ -59,6 +84,15 @@ __all__ = [
     "iter_blocks",
     "resolve_seed",
 ]
+
+Sampling = Literal["random", "sobol"]
+_SAMPLINGS = ("random", "sobol")
+
+#: The most dimensions of a Sobol point set (those of SciPy's direction numbers).
+MAX_SOBOL_DIMS: int = 21201
+
+#: Bits of a Sobol coordinate; each coordinate is moved by half a step, into (0, 1).
+_SOBOL_BITS = 32
 
 #: Number of trials drawn from one spawned child of the seed (fixed; see module docs).
 SEED_BLOCK_SIZE: int = 16384
@@ -202,6 +236,116 @@ def _check_seed(seed: Any) -> int:
     return resolve_seed(seed)
 
 
+def sobol_layout(dists: Mapping[str, Distribution]) -> dict[str, tuple[int, int]]:
+    """The Sobol dimensions of each input: name -> (first, count), names in sorted order.
+
+    Parameters
+    ----------
+    dists : mapping of str to Distribution
+        The inputs.
+
+    Returns
+    -------
+    dict of str to (int, int)
+        For each input (in sorted order of the names), its first dimension and its
+        number of dimensions (``uniform_dims``).
+
+    Examples
+    --------
+    >>> from mtmc.uncertainty.distributions import MultivariateNormal, Normal, Uniform
+    >>> sobol_layout({"z": Normal(0, 1), "a": MultivariateNormal([0, 0], [[1, 0], [0, 1]]),
+    ...               "m": Uniform(0, 1)})
+    {'a': (0, 2), 'm': (2, 1), 'z': (3, 1)}
+    """
+    out: dict[str, tuple[int, int]] = {}
+    first = 0
+    for name in sorted(dists):
+        k = dists[name].uniform_dims
+        out[name] = (first, k)
+        first += k
+    return out
+
+
+def sobol_block_trials(dims: int) -> int:
+    """Points per seed block of a Sobol run in ``dims`` dimensions: a power of two.
+
+    :data:`SEED_BLOCK_SIZE` (2¹⁴) while the block holds at most
+    :data:`MAX_SEED_BLOCK_VALUES` coordinates, else the largest power of two that does
+    (at least 2). Part of the reproducibility contract, like :data:`SEED_BLOCK_SIZE`.
+
+    Examples
+    --------
+    >>> sobol_block_trials(17), sobol_block_trials(288)
+    (16384, 2048)
+    """
+    n = SEED_BLOCK_SIZE
+    while n > 2 and n * max(1, dims) > MAX_SEED_BLOCK_VALUES:
+        n //= 2
+    return n
+
+
+def _sobol_key() -> int:
+    return _name_key("sobol")
+
+
+def sobol_points(seed: int, block: int, dims: int, n: int) -> NDArray[np.float64]:
+    """The scrambled Sobol points of seed block ``block``: shape ``(n, dims)`` in (0, 1).
+
+    Parameters
+    ----------
+    seed : int
+        The run's seed.
+    block : int
+        Index of the seed block; each block is scrambled independently.
+    dims : int
+        Number of dimensions, at most :data:`MAX_SOBOL_DIMS`.
+    n : int
+        Number of points, a power of two (the first ``n`` of the sequence).
+
+    Returns
+    -------
+    ndarray, shape (n, dims)
+        The points of ``scipy.stats.qmc.Sobol(dims, scramble=True, bits=32)`` seeded by
+        the Generator of ``SeedSequence(seed, spawn_key=(block, key("sobol")))``, moved
+        by half a step, 2⁻³³, so that no coordinate is 0 or 1 (every inverse CDF is
+        finite; a normal input reaches 6.2 standard deviations).
+
+    Examples
+    --------
+    >>> u = sobol_points(1, 0, 3, 1024)
+    >>> u.shape, bool(np.all((u > 0) & (u < 1))), np.array_equal(u, sobol_points(1, 0, 3, 1024))
+    ((1024, 3), True, True)
+    """
+    if n & (n - 1) or n < 1:
+        raise InputError(f"expected a power of two points, got {n}", field="trials")
+    if dims == 0:
+        return np.empty((n, 0))
+    from scipy.stats import qmc  # imported here: scipy.stats costs ~0.5 s at import
+
+    ss = np.random.SeedSequence(seed, spawn_key=(int(block), _sobol_key()))
+    eng = qmc.Sobol(
+        dims, scramble=True, bits=_SOBOL_BITS, rng=np.random.Generator(np.random.PCG64(ss))
+    )
+    u = eng.random_base2(n.bit_length() - 1)
+    u += 2.0 ** -(_SOBOL_BITS + 1)
+    return u
+
+
+def _check_sampling(sampling: Any, method: str) -> Sampling:
+    if sampling not in _SAMPLINGS:
+        raise InputError(
+            f"expected one of {', '.join(map(repr, _SAMPLINGS))}, got {sampling!r}",
+            field="sampling",
+        )
+    if sampling == "sobol" and method != "default":
+        raise InputError(
+            f"normal_method={method!r} is for pseudo-random draws; quasi-random points are "
+            "mapped through the normal quantile function",
+            field="normal_method",
+        )
+    return sampling
+
+
 def _check_int(value: Any, field: str, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise InputError(f"expected an integer >= {minimum}, got {value!r}", field=field)
@@ -239,18 +383,51 @@ class _BlockSource:
     inputs (at the price of drawing a seed block again for each evaluation block in it).
     """
 
-    def __init__(self, dists: dict[str, Distribution], seed: int, method: NormalMethod):
-        self.dists, self.seed, self.method = dists, seed, method
-        self.sizes = {n: seed_block_trials(d.dim) for n, d in dists.items()}
-        width = {n: max(1, d.dim) for n, d in dists.items()}
-        self.caching = sum(self.sizes[n] * width[n] for n in dists) * 8 <= CACHE_BYTES
+    def __init__(
+        self,
+        dists: dict[str, Distribution],
+        seed: int,
+        method: NormalMethod,
+        sampling: Sampling = "random",
+    ):
+        self.dists, self.seed, self.method, self.sampling = dists, seed, method, sampling
+        self.block_trials = SEED_BLOCK_SIZE
+        if sampling == "sobol":
+            self.layout = sobol_layout(dists)
+            self.dims = sum(k for _, k in self.layout.values())
+            if self.dims > MAX_SOBOL_DIMS:
+                raise InputError(
+                    f"the inputs take {self.dims} quasi-random dimensions, more than the "
+                    f"{MAX_SOBOL_DIMS} of a Sobol sequence; use sampling='random'",
+                    field="sampling",
+                )
+            n = sobol_block_trials(self.dims)
+            self.block_trials = n
+            self.sizes = {name: n for name in dists}
+            self.caching = True  # the inputs of a seed block come from one point set
+        else:
+            self.sizes = {n: seed_block_trials(d.dim) for n, d in dists.items()}
+            width = {n: max(1, d.dim) for n, d in dists.items()}
+            self.caching = sum(self.sizes[n] * width[n] for n in dists) * 8 <= CACHE_BYTES
         self.cached: dict[str, tuple[int, NDArray[np.float64]]] = {}
+
+    def _sobol_block(self, k: int) -> None:
+        """Map the points of seed block ``k`` to every input (cached)."""
+        n = next(iter(self.sizes.values()))
+        u = sobol_points(self.seed, k, self.dims, n)
+        for name, (first, count) in self.layout.items():
+            arr = self.dists[name].from_uniform(u[:, first : first + count])
+            arr.setflags(write=False)
+            self.cached[name] = (k, arr)
 
     def block(self, name: str, k: int) -> NDArray[np.float64]:
         """Seed block ``k`` of input ``name`` (read-only)."""
         hit = self.cached.get(name)
         if hit is not None and hit[0] == k:
             return hit[1]
+        if self.sampling == "sobol":
+            self._sobol_block(k)
+            return self.cached[name][1]
         arr = self.dists[name].sample(
             input_generator(self.seed, k, name), self.sizes[name], normal_method=self.method
         )
@@ -260,6 +437,19 @@ class _BlockSource:
         return arr
 
     def trials(self, start: int, stop: int) -> dict[str, NDArray[np.float64]]:
+        if (
+            self.sampling == "sobol"
+            and (stop - 1) // self.block_trials != start // self.block_trials
+        ):
+            # several seed blocks: each point set is made once, for every input
+            whole = {
+                name: np.empty((stop - start, *((d.dim,) if d.dim else ())))
+                for name, d in self.dists.items()
+            }
+            self.fill(whole, start, stop, offset=start)
+            for arr in whole.values():
+                arr.setflags(write=False)
+            return whole
         out: dict[str, NDArray[np.float64]] = {}
         for name, d in self.dists.items():
             s = self.sizes[name]
@@ -282,6 +472,13 @@ class _BlockSource:
             out[lo - offset : hi - offset] = self.block(name, k)[lo - k * s : hi - k * s]
 
     def fill(self, out: dict[str, NDArray[np.float64]], start: int, stop: int, offset: int) -> None:
+        if self.sampling == "sobol":  # seed block by seed block: one point set each
+            s = self.block_trials
+            for k in range(start // s, (stop - 1) // s + 1):
+                lo, hi = max(start, k * s), min(stop, (k + 1) * s)
+                for name in self.dists:
+                    self.fill_one(name, out[name], lo, hi, offset)
+            return
         for name in self.dists:
             self.fill_one(name, out[name], start, stop, offset)
 
@@ -324,6 +521,7 @@ def iter_blocks(
     *,
     normal_method: NormalMethod = "default",
     start: int = 0,
+    sampling: Sampling = "random",
 ) -> Iterator[tuple[int, int, dict[str, NDArray[np.float64]]]]:
     """Yield the draws of trials ``start..trials-1`` in evaluation blocks.
 
@@ -343,6 +541,8 @@ def iter_blocks(
         :func:`~mtmc.uncertainty.distributions.standard_normal`).
     start : int, default 0
         First trial (a multiple of nothing in particular; lets a worker draw a range).
+    sampling : {"random", "sobol"}
+        Pseudo-random draws, or scrambled Sobol points (see the module notes).
 
     Yields
     ------
@@ -364,7 +564,7 @@ def iter_blocks(
     start = _check_int(start, "start", 0)
     seed = _check_seed(seed)
     dists, method = _prepare(inputs, normal_method)
-    source = _BlockSource(dists, seed, method)
+    source = _BlockSource(dists, seed, method, _check_sampling(sampling, method))
     for a in range(start, trials, block_size):
         b = min(a + block_size, trials)
         yield a, b, source.trials(a, b)
@@ -377,6 +577,7 @@ def draw(
     block_size: int = DEFAULT_BLOCK_SIZE,
     *,
     normal_method: NormalMethod = "default",
+    sampling: Sampling = "random",
 ) -> dict[str, NDArray[np.float64]]:
     """Draw all ``trials`` of every input at once (the same numbers as :func:`iter_blocks`).
 
@@ -392,6 +593,8 @@ def draw(
         Accepted for symmetry with :func:`iter_blocks`; it does not change the numbers.
     normal_method : {"default", "box-muller"}
         How standard normal numbers are made.
+    sampling : {"random", "sobol"}
+        Pseudo-random draws, or scrambled Sobol points (see the module notes).
 
     Returns
     -------
@@ -415,5 +618,7 @@ def draw(
     seed = _check_seed(seed)
     dists, method = _prepare(inputs, normal_method)
     out = {n: np.empty((trials, *((d.dim,) if d.dim else ()))) for n, d in dists.items()}
-    _BlockSource(dists, seed, method).fill(out, 0, trials, offset=0)
+    _BlockSource(dists, seed, method, _check_sampling(sampling, method)).fill(
+        out, 0, trials, offset=0
+    )
     return out
