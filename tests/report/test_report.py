@@ -111,6 +111,7 @@ def test_every_plot_is_inline_and_nothing_is_fetched(folder):
         expected.add("sweep")
     if doc.get("machine"):
         expected.add("machine")
+    expected |= {f"field:{f['name']}" for f in doc.get("fields", [])}
     assert set(parser.plots) == expected
     assert all(n > 0 for n in parser.plots.values()), parser.plots
     assert all(u.startswith("#") for u in parser.urls), parser.urls

@@ -112,6 +112,8 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
     graph = result.get("graph")
     if graph:
         figs["graph"] = plots.graph_svg(graph["toml"], graph.get("file"))
+    for f in result.get("fields", []):
+        figs[f"field:{f['name']}"] = plots.field_svg(f)
     machine = result.get("machine")
     if machine:
         figs["machine"] = plots.machine_svg(machine["name"])

@@ -17,6 +17,7 @@ import numpy as np
 __all__ = [
     "convergence_svg",
     "display_unit",
+    "field_svg",
     "graph_svg",
     "histogram_svg",
     "machine_svg",
@@ -184,6 +185,55 @@ def graph_svg(toml_text: str, name: str | None = None) -> str:
         text = path.read_text(encoding="utf-8")
     start = text.find("<svg")
     return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()
+
+
+def field_svg(f: dict[str, Any]) -> str:
+    """A map (a value per point, as colour) or error vectors (arrows), in xy, xz and 3D.
+
+    Points in mm; values in mm are shown in µm. Vectors are drawn magnified by the
+    field's ``magnification`` (Wang, Cheung and Kong 2022, Fig. 7).
+    """
+    pts = np.asarray(f["points"], dtype=np.float64).reshape(-1, 3)
+    vals = np.asarray(f["values"], dtype=np.float64)
+    scale, label = display_unit(f["unit"])
+    names = f["axes"]
+    fig = _figure(10.5, 3.6, left=0.07, right=0.95, bottom=0.15, top=0.9, wspace=0.4)
+    a1 = fig.add_subplot(1, 3, 1)
+    a2 = fig.add_subplot(1, 3, 2)
+    a3: Any = fig.add_subplot(1, 3, 3, projection="3d")
+    if f["kind"] == "vectors":
+        v = vals.reshape(-1, 3) * f["magnification"]
+        for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
+            ax.quiver(
+                pts[:, i],
+                pts[:, j],
+                v[:, i],
+                v[:, j],
+                angles="xy",
+                scale_units="xy",
+                scale=1,
+                color="C3",
+                width=0.004,
+            )
+            ax.plot(pts[:, i], pts[:, j], "k.", ms=3)
+        a3.quiver(pts[:, 0], pts[:, 1], pts[:, 2], v[:, 0], v[:, 1], v[:, 2], color="C3")
+        fig.suptitle(f"arrows magnified {f['magnification']:g} times", fontsize=8)
+    else:
+        c = vals.reshape(-1) * scale
+        for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
+            sc = ax.scatter(
+                pts[:, i], pts[:, j], c=c, cmap="viridis", s=28, edgecolors="k", linewidths=0.3
+            )
+        a3.scatter(pts[:, 0], pts[:, 1], pts[:, 2], c=c, cmap="viridis", s=20)
+        fig.colorbar(sc, ax=a3, shrink=0.7, pad=0.12, label=f"{f['name']} / {label}")
+    for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
+        ax.set_xlabel(f"{names[i]} / mm")
+        ax.set_ylabel(f"{names[j]} / mm")
+        ax.set_aspect("equal", adjustable="datalim")
+    a3.set_xlabel(f"{names[0]} / mm", fontsize=7)
+    a3.set_ylabel(f"{names[1]} / mm", fontsize=7)
+    a3.set_zlabel(f"{names[2]} / mm", fontsize=7)
+    return _svg(fig, f"field:{f['name']}")
 
 
 def machine_svg(name: str) -> str:

@@ -32,6 +32,7 @@ from mtmc.uncertainty.tolerance import round_to_uncertainty
 
 __all__ = [
     "RESULT_FORMAT",
+    "PointField",
     "Quantity",
     "Region",
     "Study",
@@ -403,6 +404,59 @@ def region(
 
 
 @dataclass(frozen=True)
+class PointField:
+    """Values at points of the workspace, drawn by the report in xy, xz and 3D views.
+
+    A scalar per point (``values`` of shape ``(n,)``: a map, e.g. the uncertainty of the
+    tool position or of a calibrated error at each measured point, Aguado et al. 2017
+    Fig. 5–6) or a vector per point (``(n, 3)``: error vectors drawn as arrows
+    magnified by ``magnification``, Wang, Cheung and Kong 2022 Fig. 7).
+
+    Attributes
+    ----------
+    name, title : str
+        Key and caption.
+    points : ndarray, shape (n, 3)
+        Where, mm.
+    values : ndarray, shape (n,) or (n, 3)
+        What, in ``unit``.
+    unit : str
+        Unit of the values (``mm``: shown in µm).
+    labels : tuple of str
+        A group label per point (e.g. the pose), or empty.
+    axes : tuple of str
+        Names of the three coordinates of ``points``.
+    magnification : float
+        Scale of the arrows of a vector field.
+    """
+
+    name: str
+    title: str
+    points: NDArray[np.float64]
+    values: NDArray[np.float64]
+    unit: str
+    labels: tuple[str, ...] = ()
+    axes: tuple[str, str, str] = ("x", "y", "z")
+    magnification: float = 1.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (an entry of ``fields`` in ``result.json``)."""
+        return _plain(
+            {
+                "name": self.name,
+                "title": self.title,
+                "kind": "vectors" if np.ndim(self.values) == 2 else "map",
+                "points": self.points,
+                "values": self.values,
+                "unit": self.unit,
+                "labels": list(self.labels),
+                "axes": list(self.axes),
+                "magnification": self.magnification,
+            }
+        )
+
+
+@dataclass(frozen=True)
 class StudyResult:
     """The frozen result of a study run: what ``result.json`` holds, and the samples.
 
@@ -426,6 +480,8 @@ class StudyResult:
         Coverage ellipses of two-component outputs.
     tables : tuple of Table
         Further tables of the kind (inputs, a sweep grid, ...).
+    fields : tuple of PointField
+        Maps and error vectors over the workspace.
     inputs : tuple of dict
         The input quantities: ``name``, ``distribution`` (text), ``estimate``, ``u``.
     extra : dict
@@ -444,6 +500,7 @@ class StudyResult:
     quantities: tuple[Quantity, ...]
     regions: tuple[Region, ...] = ()
     tables: tuple[Table, ...] = ()
+    fields: tuple[PointField, ...] = ()
     inputs: tuple[dict[str, Any], ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict)
     samples: Mapping[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
@@ -471,6 +528,7 @@ class StudyResult:
                 "quantities": [q.to_dict() for q in self.quantities],
                 "regions": [r.to_dict() for r in self.regions],
                 "tables": [t.to_dict() for t in self.tables],
+                "fields": [f.to_dict() for f in self.fields],
                 **{k: v for k, v in self.extra.items()},
             }
         )

@@ -22,7 +22,7 @@ from mtmc.errors import InputError, MtmcError
 from mtmc.kinematics.library import library_machine, library_names
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import is_rotary
-from mtmc.study.base import ProgressFn, Study, StudyResult, Table, quantity
+from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
 from mtmc.study.propagate import read_inputs
 from mtmc.study.spec import Fields, RunSettings, check_number, register_kind
 from mtmc.uncertainty.distributions import Distribution
@@ -122,11 +122,22 @@ class KinematicsStudy(Study):
             {"name": n, "distribution": str(d), "estimate": float(d.mean), "u": float(d.std)}
             for n, d in self.errors.items()
         )
+        nominal = model()  # (1, 3P): the tool positions with every error at zero
+        u = np.asarray(mc.u, dtype=np.float64).reshape(-1, 3)
+        field = PointField(
+            name="u_tool",
+            title="Standard uncertainty of the tool position at each pose, √(u²x + u²y + u²z)",
+            points=np.asarray(nominal, dtype=np.float64).reshape(-1, 3),
+            values=np.sqrt((u**2).sum(axis=1)),
+            unit="mm",
+            labels=tuple(f"pose {i + 1}" for i in range(self.poses.shape[0])),
+        )
         extra = {"machine": {"name": self.machine_name, "topology": str(self.machine.topology)}}
         return self._result(
             settings,
             quantities=tuple(quantities),
             tables=(Table("poses", "Commanded poses", ("pose", *units), pose_rows),),
+            fields=(field,),
             inputs=inputs,
             extra=extra,
             samples={"tool_positions": mc.samples} if settings.samples else {},
