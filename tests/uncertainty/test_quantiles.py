@@ -1,11 +1,13 @@
-"""Inverse CDFs of the input PDFs (for quasi-random sampling) against SciPy's, and the
-maps from the unit cube of the PDFs drawn from several coordinates against their moments."""
+"""Inverse CDFs of the input PDFs (for quasi-random sampling) against SciPy's or against
+the integral of the PDF, and the maps from the unit cube of the vector PDFs."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
-from scipy import stats
+from scipy import integrate, stats
 
 from mtmc.errors import DistributionError
 from mtmc.uncertainty.distributions import (
@@ -56,14 +58,30 @@ def _grid(n: int, d: int) -> np.ndarray:
     return np.stack([a.ravel() for a in axes], axis=1)
 
 
-def test_curvilinear_trapezoid_from_two_coordinates():
-    d = CurvilinearTrapezoid(-1.0, 3.0, 0.4)
-    assert d.uniform_dims == 2
-    x = d.from_uniform(_grid(1000, 2))
-    assert x.mean() == pytest.approx(d.mean, abs=1e-12)
-    assert x.std() == pytest.approx(d.std, rel=1e-5)
-    with pytest.raises(DistributionError, match="no quantile function"):
-        d.ppf(0.5)
+@pytest.mark.parametrize("d", [0.4, 2.0, 0.0])
+def test_curvilinear_trapezoid_quantiles(d):
+    # the CDF against the integral of the PDF of JCGM 101 §6.4.3.2, the quantiles
+    # against the CDF, and the moments of the quantiles of a fine grid
+    dist = CurvilinearTrapezoid(-1.0, 3.0, d)
+    x = dist.ppf(U)
+    assert np.all(np.diff(x) > 0)
+    np.testing.assert_allclose(dist.cdf(x), U, rtol=0, atol=1e-15)
+    lo, hi = 2.0 - d, 2.0 + d
+    if d > 0:
+
+        def pdf(t):
+            y = abs(t - 1.0)
+            return math.log(hi / max(y, lo)) / (4 * d) if y < hi else 0.0
+
+        for t in (x[3], x[50], x[-3]):
+            ref = integrate.quad(pdf, -1.0 - d, t, points=[1.0 - lo, 1.0 + lo], limit=200)[0]
+            assert dist.cdf(t) == pytest.approx(ref, abs=1e-12)
+    else:
+        np.testing.assert_allclose(x, -1.0 + 4.0 * U, rtol=0, atol=1e-14)
+    g = dist.ppf((np.arange(100_000) + 0.5) / 100_000)
+    assert g.mean() == pytest.approx(dist.mean, abs=1e-12)
+    assert g.std() == pytest.approx(dist.std, rel=1e-7)
+    assert dist.uniform_dims == 1
 
 
 def test_multivariate_normal_through_the_cholesky_factor():
@@ -80,11 +98,13 @@ def test_multivariate_normal_through_the_cholesky_factor():
 
 def test_iid_and_constant():
     d = IID(CurvilinearTrapezoid(0, 1, 0.1), 3)
-    assert d.uniform_dims == 6
-    u = np.random.default_rng(0).random((5, 6))
+    assert d.uniform_dims == 3
+    u = np.random.default_rng(0).random((5, 3))
     x = d.from_uniform(u)
     assert x.shape == (5, 3)
-    np.testing.assert_array_equal(x[:, 1], d.base.from_uniform(u[:, 2:4]))
+    np.testing.assert_array_equal(x[:, 1], d.base.ppf(u[:, 1]))
+    with pytest.raises(DistributionError, match="no quantile function"):
+        MultivariateNormal([0, 0], np.eye(2)).ppf(0.5)
     c = Constant([1.0, 2.0])
     assert c.uniform_dims == 0
     np.testing.assert_array_equal(c.from_uniform(np.empty((3, 0))), [[1.0, 2.0]] * 3)

@@ -656,18 +656,56 @@ class CurvilinearTrapezoid(Distribution):
         self, rng: np.random.Generator, n: int, *, normal_method: NormalMethod = "default"
     ) -> NDArray[np.float64]:
         """Draw ``n`` values, shape ``(n,)`` (§6.4.3.4)."""
-        return self.from_uniform(rng.random((_check_n(n), 2)))
-
-    @property
-    def uniform_dims(self) -> int:
-        """Two: one for the limits, one for the position between them (§6.4.3.4)."""
-        return 2
-
-    def from_uniform(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The construction of §6.4.3.4 on the two coordinates of each point."""
-        a_s = (self.low - self.d) + (2.0 * self.d) * u[:, 0]
+        r = rng.random((_check_n(n), 2))
+        a_s = (self.low - self.d) + (2.0 * self.d) * r[:, 0]
         b_s = (self.low + self.high) - a_s
-        return np.asarray(a_s + (b_s - a_s) * u[:, 1])
+        return a_s + (b_s - a_s) * r[:, 1]
+
+    def cdf(self, x: Any) -> NDArray[np.float64]:
+        """The distribution function, in closed form.
+
+        With ``y = x - (a + b)/2``, ``w = (b - a)/2`` and the half-width ``s`` uniform on
+        ``[w - d, w + d]``, ``F = 1/2 + sign(y) G(|y|)/2`` where ``G(y) = E[min(1, y/s)]``:
+        ``y ln((w + d)/(w - d))/(2d)`` for ``y <= w - d``, ``(y - w + d + y ln((w + d)/y))
+        /(2d)`` up to ``w + d``, then 1 (``y/w`` for ``d = 0``). Its derivative is the PDF
+        of §6.4.3.2, ``ln((w + d)/max(|y|, w - d))/(4d)``.
+        """
+        y = np.asarray(x, dtype=np.float64) - 0.5 * (self.low + self.high)
+        return np.asarray(0.5 + 0.5 * np.sign(y) * self._g(np.abs(y)))
+
+    def _g(self, y: NDArray[np.float64]) -> NDArray[np.float64]:
+        w, d = 0.5 * (self.high - self.low), self.d
+        lo, hi = w - d, w + d
+        if d == 0.0:
+            return np.asarray(np.minimum(y / w, 1.0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inner = (y - lo + y * np.log(hi / np.maximum(y, lo))) / (2.0 * d)
+            below = y * np.log(hi / lo) / (2.0 * d) if lo > 0.0 else np.zeros_like(y)
+        return np.asarray(np.where(y >= hi, 1.0, np.where(y <= lo, below, inner)))
+
+    def ppf(self, u: Any) -> NDArray[np.float64]:
+        """Inverse of :meth:`cdf`: closed form up to ``|y| = w - d``, beyond it bisection.
+
+        ``G`` is increasing on ``[w - d, w + d]``; 64 halvings of that interval give the
+        quantile to rounding.
+        """
+        r = np.asarray(u, dtype=np.float64)
+        w, d = 0.5 * (self.high - self.low), self.d
+        lo, hi = w - d, w + d
+        g = np.abs(2.0 * r - 1.0)  # G(|y|) of the quantile
+        if d == 0.0:
+            y = g * w
+        else:
+            glo = lo * math.log(hi / lo) / (2.0 * d) if lo > 0.0 else 0.0
+            a = np.full(g.shape, lo)
+            b = np.full(g.shape, hi)
+            for _ in range(64):
+                m = 0.5 * (a + b)
+                below = self._g(m) < g
+                a = np.where(below, m, a)
+                b = np.where(below, b, m)
+            y = np.where(g <= glo, g * (2.0 * d) / math.log(hi / lo) if lo > 0.0 else 0.0, a)
+        return np.asarray(0.5 * (self.low + self.high) + np.sign(r - 0.5) * y)
 
 
 @register_distribution("arcsine", "u_shaped")
