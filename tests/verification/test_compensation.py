@@ -228,6 +228,7 @@ X      EXX    EYX
             "more than one axis",
         ),
         (ISG.replace("0.1    0.2\n", "0.1    0.2\n0.3    0.4\n"), 4, "C0Y", "exactly one row"),
+        (ISG.replace("X      EXX", "Q      EXX"), 5, "Q", "unknown axis"),
     ],
 )
 def test_isg_errors_name_line_and_field(text: str, line: int, field: str, message: str) -> None:

@@ -7,6 +7,8 @@ import tomllib
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mtmc.errors import InputError
 from mtmc.verification.workspace import (
@@ -248,3 +250,20 @@ def test_workspace_axes_of_the_machine() -> None:
     with pytest.raises(InputError, match="not an axis of the machine") as info:
         workspace_from_dict(tomllib.loads(text), "s.toml", text=text, machine_axes="XY")
     assert info.value.line == 16
+
+
+@given(
+    counts=st.lists(st.integers(1, 5), min_size=1, max_size=4),
+    data=st.data(),
+)
+@settings(max_examples=60, deadline=None)
+def test_serpentine_visits_every_node_once_one_step_at_a_time(counts: list[int], data) -> None:  # type: ignore[no-untyped-def]
+    d = len(counts)
+    order = data.draw(st.permutations(range(d)))
+    hi = np.array([float(c - 1) for c in counts])  # unit steps; a count of 1 is a fixed axis
+    p = mesh(np.zeros(d), hi, counts=counts, order=order)
+    assert p.shape == (int(np.prod(counts)), d)
+    assert np.unique(p, axis=0).shape[0] == p.shape[0]
+    if p.shape[0] > 1:
+        dq = np.abs(np.diff(p, axis=0))
+        np.testing.assert_array_equal(dq.sum(axis=1), 1.0)  # one axis, one step

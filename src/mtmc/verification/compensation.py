@@ -51,7 +51,7 @@ from mtmc.io import write_text_atomic
 from mtmc.kinematics.error_terms import ErrorTerm, parse_error_name
 from mtmc.kinematics.functions import ErrorFunction, ErrorTable
 from mtmc.kinematics.parameters import ErrorModel
-from mtmc.kinematics.topology import is_rotary
+from mtmc.kinematics.topology import AXIS_DIRECTION, is_rotary
 
 __all__ = [
     "FORMATS",
@@ -731,6 +731,13 @@ def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:
             for h in parts:
                 if len(h) != 1:
                     _term(h, file, n)
+                elif h not in AXIS_DIRECTION:
+                    raise ParseError(
+                        f"unknown axis {h!r}: expected X Y Z U V W A B C as an argument column",
+                        file=file,
+                        line=n,
+                        field=h,
+                    )
             continue
         if len(parts) != len(header):
             raise ParseError(
