@@ -37,3 +37,101 @@ def test_file_mode_is_that_of_a_plain_open(tmp_path):
     plain.write_text("x")
     atomic = write_text_atomic(tmp_path / "atomic.txt", "x")
     assert os.stat(atomic).st_mode == os.stat(plain).st_mode
+
+
+def test_symlink_is_followed_and_kept(tmp_path):
+    import os
+
+    target = tmp_path / "t.csv"
+    target.write_text("old")
+    link = tmp_path / "l.csv"
+    os.symlink("t.csv", link)
+    write_text_atomic(link, "new")
+    assert link.is_symlink() and os.readlink(link) == "t.csv"
+    assert target.read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["l.csv", "t.csv"]
+
+
+def test_dangling_symlink_creates_its_target(tmp_path):
+    import os
+
+    link = tmp_path / "l.csv"
+    os.symlink("t.csv", link)
+    write_text_atomic(link, "x")
+    assert link.is_symlink() and (tmp_path / "t.csv").read_text() == "x"
+
+
+def test_existing_file_keeps_its_mode(tmp_path):
+    import os
+    import stat
+
+    dest = tmp_path / "secret.json"
+    dest.write_text("old")
+    os.chmod(dest, 0o600)
+    write_text_atomic(dest, "new")
+    assert stat.S_IMODE(os.stat(dest).st_mode) == 0o600
+    assert dest.read_text() == "new"
+
+
+def test_fifo_is_written_through_not_replaced(tmp_path):
+    import os
+    import stat
+    import threading
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
+    reader.start()
+    write_text_atomic(fifo, "a,b\n1,2\n")
+    reader.join(timeout=10)
+    assert got == [b"a,b\n1,2\n"]
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe"]
+
+
+def _char_device(path, minor):
+    """A copy of /dev/null (minor 3) or /dev/full (minor 7) at ``path``, or skip.
+
+    The real /dev nodes are never used: a writer that replaced its destination would
+    replace them for the whole machine when the tests run as root.
+    """
+    import os
+    import stat
+
+    try:
+        os.mknod(path, stat.S_IFCHR | 0o666, os.makedev(1, minor))
+        with open(path, "wb"):
+            pass
+    except OSError:
+        pytest.skip("cannot make a character device here (not root, or a nodev folder)")
+    return path
+
+
+def test_character_device_is_written_through(tmp_path):
+    import os
+    import stat
+
+    dev = _char_device(tmp_path / "null", 3)
+    before = os.stat(dev)
+    write_text_atomic(dev, "discarded")
+    after = os.stat(dev)
+    assert stat.S_ISCHR(after.st_mode) and after.st_ino == before.st_ino
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["null"]
+
+
+def test_full_device_gives_an_os_error_and_stays_a_device(tmp_path):
+    import os
+    import stat
+
+    dev = _char_device(tmp_path / "full", 7)
+    with pytest.raises(OSError):
+        write_text_atomic(dev, "x" * 10_000)
+    assert stat.S_ISCHR(os.stat(dev).st_mode)
+
+
+def test_folder_destination_is_refused_with_a_message(tmp_path):
+    (tmp_path / "d").mkdir()
+    with pytest.raises(IsADirectoryError, match="is a folder"):
+        write_text_atomic(tmp_path / "d", "x")
+    assert (tmp_path / "d").is_dir()

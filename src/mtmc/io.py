@@ -21,6 +21,8 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -36,6 +38,15 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     Use it for writers that want a file name (Matplotlib's ``savefig``, ``np.savetxt``).
     If the block raises, the temporary file is removed and ``path`` is left untouched.
 
+    What stands at ``path`` is respected:
+
+    - a symbolic link is followed: its target is replaced atomically and the link stays;
+    - an existing regular file keeps its permission bits (a 0600 file stays 0600);
+    - a FIFO or a character device (``/dev/null``, a terminal) is written through: the
+      complete content is first written to a temporary file, then copied into it, and
+      the node itself is never replaced;
+    - anything else (a folder, a block device, a socket) is refused.
+
     Parameters
     ----------
     path : path-like
@@ -46,20 +57,37 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     pathlib.Path
         The temporary file to write; it has the same suffix as ``path`` so that writers
         which choose a format by suffix choose the right one.
+
+    Raises
+    ------
+    FileNotFoundError
+        When the folder of ``path`` does not exist.
+    IsADirectoryError, PermissionError
+        When ``path`` is a folder, a block device or a socket; the message names it.
+    OSError
+        From the file system (full disk, no permission); ``path`` is then left as it was.
     """
-    dest = Path(path)
-    if not dest.parent.is_dir():
-        raise FileNotFoundError(f"{dest}: the folder {dest.parent} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=dest.suffix, dir=dest.parent)
+    dest = _resolve(Path(path))
+    mode = _destination_mode(dest)
+    through = mode is not None and (stat.S_ISFIFO(mode) or stat.S_ISCHR(mode))
+    # A write-through target lives in a folder such as /dev: keep the temporary elsewhere.
+    folder = None if through else dest.parent
+    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=dest.suffix, dir=folder)
     os.close(fd)
     tmp_path = Path(tmp)
     try:
         yield tmp_path
+        if through:
+            with open(tmp_path, "rb") as src, open(dest, "wb") as out:
+                shutil.copyfileobj(src, out)
+            tmp_path.unlink()
+            return
         with open(tmp_path, "rb+") as fh:
             fh.flush()
             os.fsync(fh.fileno())
-        # mkstemp creates the file owner-only (0600): give it the mode a plain open() would.
-        os.chmod(tmp_path, 0o666 & ~_umask())
+        # mkstemp creates the file owner-only (0600): give it the mode of the file it
+        # replaces, or the mode a plain open() would.
+        os.chmod(tmp_path, stat.S_IMODE(mode) if mode is not None else 0o666 & ~_umask())
         os.replace(tmp_path, dest)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
@@ -71,6 +99,31 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def _resolve(dest: Path) -> Path:
+    """The file a write to ``dest`` lands in: symbolic links followed, the folder checked."""
+    if dest.is_symlink():
+        dest = Path(os.path.realpath(dest))
+    if not dest.parent.is_dir():
+        raise FileNotFoundError(f"{dest}: the folder {dest.parent} does not exist")
+    return dest
+
+
+def _destination_mode(dest: Path) -> int | None:
+    """``st_mode`` of what stands at ``dest`` (None if nothing); refuse what cannot be written."""
+    try:
+        mode = os.stat(dest).st_mode
+    except FileNotFoundError:
+        return None
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(f"{dest}: is a folder, expected a file name")
+    if not (stat.S_ISREG(mode) or stat.S_ISFIFO(mode) or stat.S_ISCHR(mode)):
+        kind = "a block device" if stat.S_ISBLK(mode) else "a socket or special file"
+        raise PermissionError(
+            f"{dest}: is {kind}; mtmc writes only files, pipes and character devices"
+        )
+    return mode
 
 
 def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:

@@ -22,6 +22,7 @@ from typing import Any
 from mtmc.errors import GraphError, MtmcError, ParseError
 from mtmc.graph.model import Graph, check
 from mtmc.graph.places import Place, ProbeDefaults, Transition
+from mtmc.io import write_text_atomic
 
 __all__ = ["KeyPath", "key_lines", "load", "loads", "dump", "dumps"]
 
@@ -373,6 +374,6 @@ def dump(graph: Graph, path: str | Path) -> None:
     graph : Graph
         The graph.
     path : str or Path
-        The file to write.
+        The file to write (atomically, :func:`mtmc.io.write_text_atomic`).
     """
-    Path(path).write_text(dumps(graph), encoding="utf-8")
+    write_text_atomic(path, dumps(graph))
