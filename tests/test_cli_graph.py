@@ -90,7 +90,7 @@ def test_sweep(tmp_path, capsys):
         "probe.u_probe=0.001:0.003:3",
         "--vary",
         "probe.u_axis=0.001:0.002:2",
-        "--output",
+        "--quantity",
         "cx",
         "--trials",
         "500",
@@ -114,7 +114,7 @@ def test_sweep(tmp_path, capsys):
                 str(EXAMPLES / "ball_centre.toml"),
                 "--vary",
                 "probe.u_probe",
-                "--output",
+                "--quantity",
                 "cx",
             ],
             "expected KEY=LOW:HIGH:N",
@@ -196,7 +196,7 @@ def test_progress_keeps_stdout_json(capsys):
     loud = capsys.readouterr()
     assert loud.out == quiet.out and json.loads(loud.out)["trials"] == 40000
     assert quiet.err == "" and "40000/40000 trials" in loud.err
-    sweep = ["graph", "sweep", str(EXAMPLES / "ball_centre.toml"), "--output", "cx"]
+    sweep = ["graph", "sweep", str(EXAMPLES / "ball_centre.toml"), "--quantity", "cx"]
     sweep += ["--vary", "probe.u_probe=0.001:0.002:2", "-n", "300", "--seed", "1", "--json"]
     assert main([*sweep, "--progress"]) == 0
     loud = capsys.readouterr()
@@ -234,7 +234,7 @@ def test_files_are_written_atomically(tmp_path, capsys, monkeypatch):
                 "{ball}",
                 "--vary",
                 "probe.u_probe=0.001:0.002:2",
-                "--output",
+                "--quantity",
                 "cx",
                 "-n",
                 "50",

@@ -28,7 +28,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_path", "to_jsonable", "write_bytes_atomic", "write_text_atomic"]
+from mtmc.errors import ParseError
+
+__all__ = ["atomic_path", "decode_utf8", "to_jsonable", "write_bytes_atomic", "write_text_atomic"]
 
 
 @contextlib.contextmanager
@@ -175,3 +177,44 @@ def to_jsonable(obj: Any, *, nonfinite_as_null: bool = False) -> Any:
     if nonfinite_as_null and isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
+
+
+def decode_utf8(data: bytes, file: str) -> str:
+    r"""The text of a file that must be UTF-8, or a :class:`ParseError` at the first bad byte.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's content.
+    file : str
+        Its name, for the message.
+
+    Returns
+    -------
+    str
+        The text.
+
+    Raises
+    ------
+    ParseError
+        Naming the file, the line and column of the first byte that is not UTF-8.
+
+    Examples
+    --------
+    >>> decode_utf8(b"a = 1\nb = \xff", "g.toml")
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.ParseError: g.toml:2:5: not UTF-8 text (byte 0xff); expected UTF-8
+    """
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        head = data[: exc.start]
+        line = head.count(b"\n") + 1
+        column = exc.start - (head.rfind(b"\n") + 1) + 1
+        raise ParseError(
+            f"not UTF-8 text (byte 0x{data[exc.start]:02x}); expected UTF-8",
+            file=file,
+            line=line,
+            column=column,
+        ) from None

@@ -135,11 +135,22 @@ def test_line_constructors() -> None:
 
 
 def test_frame_by_hand() -> None:
-    # plane z = 1, line along (0, 1, 1) projects to +y; point (5, 6, 7) -> origin (5, 6, 1)
+    # plane z = 1; the line through 0 along (0, 1, 1) projects to the y direction through
+    # (0, 0, 1); the point (5, 6, 7) fixes the origin along it: (0, 6, 1)
     T = frame_from_plane_line_point(
         Plane([0, 0, 1], [0, 0, 1]), Line([0, 0, 0], [0, 1, 1]), [5, 6, 7]
     )
-    expected = np.array([[0, -1, 0, 5], [1, 0, 0, 6], [0, 0, 1, 1], [0, 0, 0, 1.0]])
+    expected = np.array([[0, -1, 0, 0], [1, 0, 0, 6], [0, 0, 1, 1], [0, 0, 0, 1.0]])
+    assert_allclose(T[0], expected, atol=1e-15)
+
+
+def test_frame_is_3_2_1_by_hand() -> None:
+    # plane z = 0, then the line y = 5 along x, then the point (7, 0, 0): the origin is
+    # where the plane x = 7 (through the point, across the line) cuts the line: (7, 5, 0)
+    T = frame_from_plane_line_point(
+        Plane([0, 0, 0], [0, 0, 1]), Line([-3, 5, 0], [1, 0, 0]), [7, 0, 0]
+    )
+    expected = np.array([[1, 0, 0, 7], [0, 1, 0, 5], [0, 0, 1, 0], [0, 0, 0, 1.0]])
     assert_allclose(T[0], expected, atol=1e-15)
 
 
@@ -338,10 +349,25 @@ def test_frame_is_a_proper_rigid_transform_with_the_documented_axes(seed: int) -
     proj = d - np.einsum("mi,mi->m", d, plane.normal)[:, None] * plane.normal
     x_ref = proj / np.linalg.norm(proj, axis=1)[:, None]
     assert np.all(np.abs(R[:, :, 0] - x_ref).max(axis=1) <= 4e-15 / sin)
-    assert_allclose(T[:, :3, 3], project_point_plane(point, plane), atol=1e-12)
-    # the point, expressed in the new frame, lies on its z axis
+    # the origin by a second method: the intersection of three planes, solved per trial:
+    # the datum plane, the plane through the point across x, and the plane that holds the
+    # line and the normal (so the projected line)
+    n, x = plane.normal, x_ref
+    a_mat = np.stack([n, x, np.cross(n, d)], axis=1)
+    rhs = np.stack(
+        [
+            np.einsum("mi,mi->m", n, plane.point),
+            np.einsum("mi,mi->m", x, point),
+            np.einsum("mi,mi->m", np.cross(n, d), line.point),
+        ],
+        axis=1,
+    )
+    origin = np.linalg.solve(a_mat, rhs[..., None])[..., 0]
+    err = np.abs(T[:, :3, 3] - origin).max(axis=1)
+    assert np.all(err <= 1e-11 / sin), err * sin
+    # the point, expressed in the new frame, has x = 0 (level with the origin)
     local = np.einsum("mji,mj->mi", R, point - T[:, :3, 3])
-    assert_allclose(local[:, :2], 0.0, atol=1e-11)
+    assert_allclose(local[:, 0], 0.0, atol=1e-11)
 
 
 @settings(max_examples=20, deadline=None)

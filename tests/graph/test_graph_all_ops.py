@@ -119,17 +119,24 @@ def test_values_by_hand():
     d = pl["ln_pp"].part("direction")[0]
     np.testing.assert_allclose(abs(d[0]), 1.0, atol=1e-15)  # the x axis, either sense
     np.testing.assert_allclose(pl["ln_pp"].part("point")[0][1:], [0, 0], atol=1e-12)
-    # frame: z = plane normal, x = line direction, origin = P projected on the plane
+    # frame (3-2-1): z = plane normal, x = line direction, origin on the line AB (the x
+    # axis) level with P = (3, 4, 5): (3, 0, 0)
     rot, _ = pl["fr"].part("rotation")[:2]
     np.testing.assert_allclose(rot, np.eye(3), atol=1e-15)
-    np.testing.assert_allclose(pl["fr"].part("translation")[0], [3, 4, 0], atol=1e-12)
+    np.testing.assert_allclose(pl["fr"].part("translation")[0], [3, 0, 0], atol=1e-12)
 
 
 def test_degenerate_construction_names_the_transition():
     text = build().replace(
         'in = ["K1", "K2", "K3"]\nout = "c3"', 'in = ["K1", "K3", "A"]\nout = "c3"'
     )
-    g = loads_graph(text, file="deg.toml")
+    # refused on reading, before any trial: the nominal configuration is degenerate
+    with pytest.raises(
+        DegenerateGeometryError,
+        match=r"deg.toml:\d+: field in: transition t32 \(circle\): at the nominal values",
+    ):
+        loads_graph(text, file="deg.toml")
+    g = loads_graph(text, file="deg.toml", validate=False)
     with pytest.raises(
         DegenerateGeometryError, match=r"deg.toml:\d+: .*transition t32 \(circle\): "
     ):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import contextlib
 import json
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -115,9 +115,15 @@ def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
+def warn(lines: Iterable[str]) -> None:
+    """Print each warning as one line ``mtmc: warning: ...`` on stderr."""
+    for line in lines:
+        typer.echo(f"mtmc: warning: {line}", err=True)
+
+
 def print_json(obj: Any) -> None:
-    """Write exactly one JSON object on stdout."""
-    sys.stdout.write(json.dumps(to_jsonable(obj), allow_nan=True) + "\n")
+    """Write exactly one JSON object on stdout: strict JSON, NaN and infinities as null."""
+    sys.stdout.write(json.dumps(to_jsonable(obj, nonfinite_as_null=True), allow_nan=False) + "\n")
 
 
 def write_output(path: Path, content: str | bytes) -> None:
@@ -209,5 +215,6 @@ __all__ = [
     "progress_bar",
     "progress_wanted",
     "to_jsonable",
+    "warn",
     "write_output",
 ]

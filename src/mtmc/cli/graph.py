@@ -24,6 +24,7 @@ from mtmc.cli.common import (
     parallel_options,
     print_json,
     progress_bar,
+    warn,
     write_output,
 )
 from mtmc.errors import MtmcError
@@ -55,6 +56,7 @@ def check_cmd(file: Path = FILE) -> None:
         plan = check(_read(file))
     except MtmcError as exc:
         fail(exc)
+    warn(plan.warnings)
     g = plan.graph
     typer.echo(
         f"{file.name}: ok: {len(plan.types)} places ({len(plan.marked)} marked), "
@@ -141,6 +143,7 @@ def run_cmd(
 
     try:
         plan = check(_read(file))
+        warn(plan.warnings)
         with progress_bar(f"{file.name}: Monte Carlo", progress) as bar:
             res = run_graph(
                 plan,
@@ -209,7 +212,9 @@ def sweep_cmd(
     vary: list[str] = typer.Option(
         ..., "--vary", help="KEY=LOW:HIGH:N, e.g. probe.u_probe=0.001:0.005:5 (repeatable)."
     ),
-    output: str = typer.Option(..., "--output", help="The scalar output place."),
+    quantity: str = typer.Option(
+        ..., "--quantity", "-q", help="The scalar place whose standard uncertainty is swept."
+    ),
     trials: int = typer.Option(1000, "--trials", "-n", help="Trials per grid point."),
     seed: int | None = typer.Option(None, "--seed", help="Seed of every grid point."),
     csv: Path | None = typer.Option(None, "--csv", help="Write the grid as CSV here."),
@@ -229,13 +234,13 @@ def sweep_cmd(
             key, eq, rng = item.partition("=")
             if not eq:
                 fail(f"--vary: expected KEY=LOW:HIGH:N, got {item!r}")
-            ranges[key.strip()] = parse_range(rng, field=key.strip())
+            ranges[key.strip()] = parse_range(rng, field=f"--vary {key.strip()}")
         g = _read(file)
         with progress_bar(f"{file.name}: sweep", progress) as bar:
             res = sweep(
                 g,
                 ranges,
-                output,
+                quantity,
                 trials=trials,
                 seed=seed,
                 progress=bar,
@@ -252,7 +257,7 @@ def sweep_cmd(
             {
                 "trials": res.trials,
                 "seed": res.seed,
-                "output": output,
+                "output": quantity,
                 "names": list(res.names),
                 "grid": res.grid,
                 "u": res.u,

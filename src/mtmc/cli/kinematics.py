@@ -119,6 +119,8 @@ def equation_cmd(
         m = _machine(spec)
         eq = equation_of_motion(m, errors=errors or None, first_order=not full)
     except MtmcError as exc:
+        if errors and exc.field in errors:  # a bad name given to --error: name the option
+            fail(f"--error: {exc.message}")
         fail(exc)
     typer.echo(eq.latex() if latex else eq.text())
 

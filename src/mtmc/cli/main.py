@@ -8,6 +8,7 @@ parser did (one line naming the command, and ``--help`` for more); 130 on Ctrl-C
 from __future__ import annotations
 
 import sys
+import warnings
 
 import typer
 
@@ -84,7 +85,14 @@ def main(argv: list[str] | None = None) -> int:
         # standalone_mode=False: the parser raises instead of exiting, and a typer.Exit
         # raised by a subcommand (cli.common.fail) comes back as its exit code.
         args = sys.argv[1:] if argv is None else list(argv)
-        rv = app(args=args, prog_name="mtmc", standalone_mode=False, obj={"argv": ["mtmc", *args]})
+        with warnings.catch_warnings():
+            # printed as one line by the subcommands (Plan.warnings), not with source lines
+            from mtmc.graph.nominal import ConditioningWarning
+
+            warnings.simplefilter("ignore", ConditioningWarning)
+            rv = app(
+                args=args, prog_name="mtmc", standalone_mode=False, obj={"argv": ["mtmc", *args]}
+            )
     except typer.Exit as exc:
         return int(exc.exit_code)
     except typer.Abort:

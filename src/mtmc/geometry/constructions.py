@@ -625,13 +625,21 @@ def frame_from_plane_line_point(
     """A coordinate frame from a plane, a line and a point (transition ``frame``).
 
     The 3-2-1 alignment of a workpiece (Stryczek): the plane fixes three degrees of
-    freedom, the line two, the point one. Convention:
+    freedom (a translation along its normal and two rotations), the line two (the
+    rotation about the normal and a translation across the line, in the plane), the
+    point one (the translation along the line). Convention:
 
     - z-axis: the plane's normal ``n``;
     - x-axis: the line's direction projected on the plane,
       ``x = (d - (d · n) n) / |d - (d · n) n|``;
     - y-axis: ``y = z × x`` (right-handed);
-    - origin: the point projected on the plane.
+    - origin: on the line projected in the plane, where the plane through the point
+      perpendicular to that line cuts it: with ``q`` the projection of the line's point
+      ``l`` on the plane, ``q = l - ((l - p0) · n) n``, the origin is
+      ``o = q + ((p - q) · x) x``. So the origin lies in the plane (the plane datum), on
+      the projected line (the line datum), and level with the point along x (the point
+      datum). For the plane ``z = 0``, the line ``y = 5`` along x and the point
+      ``(7, 0, 0)`` it is ``(7, 5, 0)``.
 
     The result ``T = [[x y z o], [0 0 0 1]]`` (the axes as columns) maps coordinates in
     the new frame to coordinates in the frame of the inputs: ``p_in = R p_new + o``. It
@@ -644,7 +652,7 @@ def frame_from_plane_line_point(
     line : Line
         The secondary datum (its projected direction becomes x).
     point : array_like, shape (M, 3) or (3,)
-        The tertiary datum (projected on the plane, it becomes the origin), mm.
+        The tertiary datum (it fixes the origin along the projected line), mm.
 
     Returns
     -------
@@ -662,7 +670,7 @@ def frame_from_plane_line_point(
     >>> T = frame_from_plane_line_point(
     ...     Plane([0, 0, 1], [0, 0, 1]), Line([0, 0, 0], [0, 1, 1]), [5, 6, 7])
     >>> T[0]
-    array([[ 0., -1.,  0.,  5.],
+    array([[ 0., -1.,  0.,  0.],
            [ 1.,  0.,  0.,  6.],
            [ 0.,  0.,  1.,  1.],
            [ 0.,  0.,  0.,  1.]])
@@ -681,7 +689,8 @@ def frame_from_plane_line_point(
     )
     x = xd / xn[:, None]
     y = _cross(z, x)
-    o = project_point_plane(pp, plane)
+    q = project_point_plane(line.point, plane)  # the line's point, in the plane
+    o = q + _dot(pp - q, x)[:, None] * x  # on the projected line, level with the point
     T = np.zeros((m, 4, 4))
     T[:, :3, 0] = x
     T[:, :3, 1] = y

@@ -51,6 +51,7 @@ from typing import Any
 from mtmc.errors import GraphError, MtmcError, ParseError
 from mtmc.graph.model import Graph, check
 from mtmc.graph.places import Place, ProbeDefaults, Transition
+from mtmc.io import decode_utf8
 
 __all__ = ["loads_assertions", "load_assertions", "dumps_assertions", "TYPE_CODES"]
 
@@ -411,12 +412,12 @@ def load_assertions(path: str | Path, *, validate: bool = True) -> Graph:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        data = p.read_bytes()
     except OSError as exc:
         raise GraphError(
             f"cannot read the assertion file: {exc.strerror}", file=str(path)
         ) from None
-    return loads_assertions(text, file=p.name, validate=validate)
+    return loads_assertions(decode_utf8(data, p.name), file=p.name, validate=validate)
 
 
 def _ref(name: str, prefix: str) -> str:

@@ -123,12 +123,16 @@ class Plan:
         The transitions in firing order.
     producer : dict of str to str
         The transition producing each produced place.
+    warnings : tuple of str
+        One line per construction that is badly conditioned at the nominal values
+        (:func:`mtmc.graph.nominal.check_nominal`).
     """
 
     graph: Graph
     types: dict[str, str]
     steps: tuple[Step, ...]
     producer: dict[str, str]
+    warnings: tuple[str, ...] = field(default=(), compare=False)
 
     @property
     def marked(self) -> tuple[str, ...]:
@@ -148,13 +152,21 @@ def _err(graph: Graph, msg: str, line: int | None, fld: str | None = None) -> Gr
     return GraphError(msg, file=graph.file, line=line, field=fld)
 
 
-def check(graph: Graph) -> Plan:
+def check(graph: Graph, *, nominal: bool = True) -> Plan:
     """Validate a graph and compute its types, bound variants and firing order.
+
+    With ``nominal`` (default) the nominal configuration is then checked too
+    (:func:`mtmc.graph.nominal.check_nominal`): every transition is fired once without
+    noise, a degenerate construction or a rotary-axis angle that does not match its ball
+    centres is refused, and a badly conditioned construction is reported in
+    ``Plan.warnings`` (and as a :class:`mtmc.graph.nominal.ConditioningWarning`).
 
     Parameters
     ----------
     graph : Graph
         The graph.
+    nominal : bool
+        Also check the nominal configuration (default).
 
     Returns
     -------
@@ -165,6 +177,8 @@ def check(graph: Graph) -> Plan:
     ------
     GraphError
         On the first problem found, naming the place or transition, the file and line.
+    DegenerateGeometryError
+        If a construction is degenerate at the nominal values (naming the transition).
 
     Examples
     --------
@@ -348,4 +362,10 @@ def check(graph: Graph) -> Plan:
             except MtmcError as exc:
                 raise _err(graph, exc.message, exc.line, exc.field) from None
         steps.append(Step(t, v, g))
-    return Plan(graph, types, tuple(steps), producer)
+    plan = Plan(graph, types, tuple(steps), producer)
+    if not nominal:
+        return plan
+    from mtmc.graph.nominal import check_nominal
+
+    report = check_nominal(plan)
+    return Plan(graph, types, tuple(steps), producer, report.warnings)

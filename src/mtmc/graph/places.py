@@ -21,6 +21,8 @@ __all__ = [
     "COORDINATE_TYPES",
     "VALUE_TYPES",
     "PLACE_UNITS",
+    "MAX_MAGNITUDE",
+    "finite_number",
     "Place",
     "Transition",
     "ProbeDefaults",
@@ -63,15 +65,55 @@ def _check_name(name: object, what: str, line: int | None) -> None:
         )
 
 
+#: The largest magnitude of a number in a graph file, in the file's units: 10¹² mm is a
+#: million kilometres. Geometry squares lengths and sums squares, and the probe model sums
+#: squared uncertainties; a number near the float64 limit (1e308) would overflow there.
+MAX_MAGNITUDE: float = 1e12
+
+
 def _finite(value: object, what: str, field_name: str, line: int | None) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise GraphError(f"{what}: expected a number, got {value!r}", line=line, field=field_name)
-    x = float(value)
-    if not math.isfinite(x):
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond the float range
+        x = math.inf
+    if not math.isfinite(x) or abs(x) > MAX_MAGNITUDE:
         raise GraphError(
-            f"{what}: expected a finite number, got {value!r}", line=line, field=field_name
+            f"{what}: expected a finite number of magnitude at most {MAX_MAGNITUDE:g}, "
+            f"got {value!r}",
+            line=line,
+            field=field_name,
         )
     return x
+
+
+def finite_number(value: object, what: str, field_name: str, line: int | None) -> float:
+    """A number of a graph file as a float, or a :class:`GraphError` naming the field.
+
+    Parameters
+    ----------
+    value : object
+        What the file gives.
+    what : str
+        The place or transition (``"transition m1"``), for the message.
+    field_name : str
+        The field.
+    line : int or None
+        Its line.
+
+    Returns
+    -------
+    float
+        The number.
+
+    Raises
+    ------
+    GraphError
+        If ``value`` is not a number (a boolean is not), is not finite, or is larger in
+        magnitude than :data:`MAX_MAGNITUDE`.
+    """
+    return _finite(value, what, field_name, line)
 
 
 def _vector3(value: object, what: str, field_name: str, line: int | None) -> tuple[float, ...]:
@@ -265,8 +307,16 @@ class Transition:
             self, "params", tuple(sorted((str(k), _freeze(v)) for k, v in params.items()))
         )
         if self.pos is not None:
+            if not isinstance(self.pos, list | tuple) or len(self.pos) != 2:
+                raise GraphError(
+                    f"{what}: pos must be 2 numbers, got {self.pos!r}",
+                    line=self.field_line("pos"),
+                    field="pos",
+                )
             object.__setattr__(
-                self, "pos", tuple(_finite(v, what, "pos", self.line) for v in self.pos)
+                self,
+                "pos",
+                tuple(_finite(v, what, "pos", self.field_line("pos")) for v in self.pos),
             )
 
     def param(self, key: str, default: Any = None) -> Any:

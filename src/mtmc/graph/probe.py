@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.errors import GraphError
-from mtmc.graph.places import ProbeDefaults, Transition
+from mtmc.graph.places import ProbeDefaults, Transition, finite_number
 from mtmc.uncertainty.distributions import Distribution, Normal, parse_distribution
 
 __all__ = ["MeasSpec", "meas_spec", "meas_inputs", "meas_value"]
@@ -91,16 +91,7 @@ def _vec(t: Transition, key: str) -> NDArray[np.float64]:
             line=line,
             field=key,
         )
-    out = []
-    for x in v:
-        if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
-            raise GraphError(
-                f"transition {t.name}: {key} must be a list of 3 finite numbers, got {v!r}",
-                line=line,
-                field=key,
-            )
-        out.append(float(x))
-    return np.array(out)
+    return np.array([finite_number(x, f"transition {t.name}: {key}", key, line) for x in v])
 
 
 def meas_spec(t: Transition, probe: ProbeDefaults, factor: float = 1.0) -> MeasSpec:
@@ -137,14 +128,16 @@ def meas_spec(t: Transition, probe: ProbeDefaults, factor: float = 1.0) -> MeasS
         )
     us = {}
     for key in ("u_axis", "u_probe", "u_perp"):
-        v = t.param(key, getattr(probe, key))
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v < 0:
+        v = finite_number(
+            t.param(key, getattr(probe, key)), f"transition {t.name}", key, t.field_line(key)
+        )
+        if v < 0:
             raise GraphError(
                 f"transition {t.name}: {key} must be a number >= 0, got {v!r}",
                 line=t.field_line(key),
                 field=key,
             )
-        us[key] = float(v) * factor
+        us[key] = v * factor
     dist = None
     text = t.param("dist")
     if text is not None:

@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.errors import GraphError, InputError
+from mtmc.errors import GraphError, InputError, MtmcError
 from mtmc.graph.model import Graph, check
 from mtmc.graph.places import ProbeDefaults
 from mtmc.graph.run import run_graph
@@ -114,8 +114,18 @@ def apply_setting(graph: Graph, key: str, value: float) -> Graph:
     Raises
     ------
     InputError
-        If ``key`` names nothing in the graph.
+        If ``key`` names nothing in the graph, or the value is not valid there; the
+        message names the graph's file and the key as the field.
     """
+    try:
+        return _apply(graph, key, value)
+    except MtmcError as exc:
+        raise InputError(
+            f"{exc.message} (a value of the sweep)", file=graph.file, field=key
+        ) from None
+
+
+def _apply(graph: Graph, key: str, value: float) -> Graph:
     head, _, tail = key.partition(".")
     if not tail:
         raise InputError(f"expected SECTION.FIELD (e.g. probe.u_probe), got {key!r}", field=key)

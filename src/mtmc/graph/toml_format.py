@@ -22,7 +22,7 @@ from typing import Any
 from mtmc.errors import GraphError, MtmcError, ParseError
 from mtmc.graph.model import Graph, check
 from mtmc.graph.places import Place, ProbeDefaults, Transition
-from mtmc.io import write_text_atomic
+from mtmc.io import decode_utf8, write_text_atomic
 
 __all__ = ["KeyPath", "key_lines", "load", "loads", "dump", "dumps"]
 
@@ -103,9 +103,10 @@ class _Lines:
 
     def __init__(self, text: str) -> None:
         lines = key_lines(text)
-        self.top: dict[str, int] = {
-            str(p[0]): n for p, n in lines.items() if len(p) == 1 and isinstance(p[0], str)
-        }
+        self.top: dict[str, int] = {}
+        for p, n in lines.items():  # the first line of each top-level key or table
+            if isinstance(p[0], str) and n < self.top.get(p[0], n + 1):
+                self.top[p[0]] = n
         self.probe: dict[str, int] = {
             str(p[1]): n for p, n in lines.items() if len(p) == 2 and p[0] == "probe"
         }
@@ -174,7 +175,11 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         line, col = _where(exc)
-        msg = str(exc).split(" (at line")[0]
+        msg = re.split(r" \(at (?:line|end of document)", str(exc))[0]
+        if line is None:  # "at end of document": the last line
+            lines_ = text.splitlines() or [""]
+            line, col = len(lines_), len(lines_[-1]) + 1
+            msg += " at the end of the file"
         raise ParseError(f"not valid TOML: {msg}", file=file, line=line, column=col) from None
     lines = _Lines(text)
 
@@ -297,10 +302,10 @@ def load(path: str | Path, *, validate: bool = True) -> Graph:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        data = p.read_bytes()
     except OSError as exc:
         raise GraphError(f"cannot read the graph file: {exc.strerror}", file=str(path)) from None
-    return loads(text, file=p.name, validate=validate)
+    return loads(decode_utf8(data, p.name), file=p.name, validate=validate)
 
 
 def _fmt(v: Any) -> str:

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from mtmc.errors import InputError, MtmcError, ParseError
 from mtmc.graph.toml_format import KeyPath, key_lines
+from mtmc.io import decode_utf8
 
 if TYPE_CHECKING:
     from mtmc.study.base import Study
@@ -396,11 +397,10 @@ def load_study(path: str | Path) -> Study:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        data = p.read_bytes()
     except OSError as exc:
         raise InputError(
             f"cannot read the study file: {exc.strerror or exc}", file=str(path)
         ) from None
-    except UnicodeDecodeError:
-        raise InputError("the study file is not UTF-8 text", file=str(path)) from None
+    text = decode_utf8(data, str(path))
     return loads_study(text, file=str(path), folder=p.resolve().parent)
