@@ -23,6 +23,7 @@ no mathematics here: every number comes from :mod:`mtmc.study`.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections.abc import Callable, Sequence
 from importlib import resources
@@ -117,7 +118,11 @@ def run_demo(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m mtmc.demo [--out DIR] [--trials N] [--seed S]``; returns 0."""
+    """``python -m mtmc.demo [--out DIR] [--trials N] [--seed S]``; returns 0, or 130 on Ctrl-C.
+
+    Each study's folder is written whole or not at all, so an interrupted demo leaves the
+    studies done so far, complete, and none half-written.
+    """
     parser = argparse.ArgumentParser(prog="python -m mtmc.demo", description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("mtmc-demo"), help="output folder")
     parser.add_argument("--trials", type=int, default=None, help="trials of every study")
@@ -127,7 +132,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"--trials: expected an integer >= 2, got {args.trials}")
     if args.out.exists() and not args.out.is_dir():
         parser.error(f"--out: expected a folder, but {args.out} is a file")
-    run_demo(args.out, trials=args.trials, seed=args.seed)
+    try:
+        run_demo(args.out, trials=args.trials, seed=args.seed)
+    except KeyboardInterrupt:
+        print("mtmc demo: interrupted", file=sys.stderr)
+        return 130
     return 0
 
 

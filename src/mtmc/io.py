@@ -22,8 +22,10 @@ import contextlib
 import math
 import os
 import shutil
+import signal
 import stat
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -84,17 +86,57 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
                 shutil.copyfileobj(src, out)
             tmp_path.unlink()
             return
-        with open(tmp_path, "rb+") as fh:
-            fh.flush()
-            os.fsync(fh.fileno())
-        # mkstemp creates the file owner-only (0600): give it the mode of the file it
-        # replaces, or the mode a plain open() would.
-        os.chmod(tmp_path, stat.S_IMODE(mode) if mode is not None else 0o666 & ~_umask())
-        os.replace(tmp_path, dest)
+        with deferred_interrupt():
+            with open(tmp_path, "rb+") as fh:
+                fh.flush()
+                os.fsync(fh.fileno())
+            # mkstemp creates the file owner-only (0600): give it the mode of the file it
+            # replaces, or the mode a plain open() would.
+            os.chmod(tmp_path, stat.S_IMODE(mode) if mode is not None else 0o666 & ~_umask())
+            os.replace(tmp_path, dest)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
         raise
+
+
+@contextlib.contextmanager
+def deferred_interrupt() -> Iterator[None]:
+    """Hold Ctrl-C (SIGINT) back until the block is done, then raise it.
+
+    Wraps the step that makes a result visible (a rename, a swap of folders), so that an
+    interrupt lands before or after it, never in the middle: the destination then holds
+    the old content or the new, whole. Outside the main thread (where signal handlers
+    cannot be set) the block runs as it is.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        After the block, if Ctrl-C was pressed during it.
+
+    Examples
+    --------
+    >>> import os, signal
+    >>> try:
+    ...     with deferred_interrupt():
+    ...         os.kill(os.getpid(), signal.SIGINT)
+    ...         print("the block ran to its end")
+    ... except KeyboardInterrupt:
+    ...     print("interrupted after it")
+    the block ran to its end
+    interrupted after it
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    seen: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if seen:
+        raise KeyboardInterrupt
 
 
 def _umask() -> int:

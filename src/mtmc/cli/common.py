@@ -15,6 +15,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, NoReturn
 
+import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import (
@@ -37,6 +38,42 @@ PROGRESS_OPTION: Any = typer.Option(
     help="Show a progress bar on stderr (default: when stderr is a terminal).",
     show_default=False,
 )
+
+
+#: ``--nan-policy``: what a run does with trials whose model value is NaN or infinite.
+NAN_POLICY_OPTION: Any = typer.Option(
+    "raise",
+    "--nan-policy",
+    help="raise: stop with one line at a model value that is NaN or infinite; omit: leave "
+    "those trials out (the number left out is printed).",
+)
+
+
+def nan_policy(value: str) -> str:
+    """``--nan-policy`` checked: ``raise`` or ``omit``.
+
+    Raises
+    ------
+    InputError
+        For any other value.
+    """
+    from mtmc.errors import InputError
+
+    if value not in ("raise", "omit"):
+        raise InputError(f"expected raise or omit, got {value!r}", field="--nan-policy")
+    return value
+
+
+@contextlib.contextmanager
+def quiet_numpy() -> Iterator[None]:
+    """NumPy's floating-point warnings off: a NaN or inf is reported once, by the engine."""
+    with np.errstate(all="ignore"):
+        yield
+
+
+def engine_message(exc: BaseException) -> str:
+    """The text of an engine error, with its ``nan_policy`` advice in CLI terms."""
+    return str(exc).replace("nan_policy='omit'", "--nan-policy omit")
 
 
 #: ``--workers N``: blocks of trials (or grid points) evaluated at once.
@@ -207,7 +244,11 @@ def progress_bar(
 
 
 __all__ = [
+    "NAN_POLICY_OPTION",
     "PROGRESS_OPTION",
+    "engine_message",
+    "nan_policy",
+    "quiet_numpy",
     "MtmcError",
     "ProgressFn",
     "fail",

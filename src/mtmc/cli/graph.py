@@ -17,13 +17,17 @@ from rich.table import Table
 
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
+    NAN_POLICY_OPTION,
     PROGRESS_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
+    engine_message,
     fail,
+    nan_policy,
     parallel_options,
     print_json,
     progress_bar,
+    quiet_numpy,
     warn,
     write_output,
 )
@@ -128,6 +132,7 @@ def run_cmd(
     seed: int | None = typer.Option(None, "--seed", help="Seed (default: fresh, printed)."),
     place: list[str] | None = typer.Option(None, "--place", "-p", help="Only these places."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    nan: str = NAN_POLICY_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
@@ -144,17 +149,18 @@ def run_cmd(
     try:
         plan = check(_read(file))
         warn(plan.warnings)
-        with progress_bar(f"{file.name}: Monte Carlo", progress) as bar:
+        with progress_bar(f"{file.name}: Monte Carlo", progress) as bar, quiet_numpy():
             res = run_graph(
                 plan,
                 trials,
                 seed,
                 outputs=place or None,
                 progress=bar,
+                nan_policy=nan_policy(nan),  # type: ignore[arg-type]
                 **parallel_options(workers, executor, scheduler),
             )
     except MtmcError as exc:
-        fail(exc)
+        fail(engine_message(exc))
     if as_json:
         print_json(res.to_dict())
         return

@@ -79,7 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     -------
     int
         0 on success, the status given to :func:`mtmc.cli.common.fail` (2) on bad input,
-        2 on a usage error, 1 on an abort.
+        2 on a usage error, 1 on an abort, 130 on Ctrl-C (one line ``mtmc: interrupted``;
+        no file is left half-written).
     """
     try:
         # standalone_mode=False: the parser raises instead of exiting, and a typer.Exit
@@ -98,6 +99,10 @@ def main(argv: list[str] | None = None) -> int:
     except typer.Abort:
         typer.echo("mtmc: aborted", err=True)
         return 1
+    except KeyboardInterrupt:
+        # Every file is written atomically (mtmc.io): an interrupted run leaves none half-way.
+        typer.echo("mtmc: interrupted", err=True)
+        return 130
     except SystemExit as exc:
         code = exc.code
         return code if isinstance(code, int) else (0 if code is None else 1)
@@ -106,6 +111,8 @@ def main(argv: list[str] | None = None) -> int:
         if code is None:
             raise
         return code
+    if rv == 130:  # Typer turns Ctrl-C inside a subcommand into this status
+        typer.echo("mtmc: interrupted", err=True)
     return rv if isinstance(rv, int) else 0
 
 

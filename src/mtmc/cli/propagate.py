@@ -15,13 +15,17 @@ from rich.table import Table
 
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
+    NAN_POLICY_OPTION,
     PROGRESS_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
+    engine_message,
     fail,
+    nan_policy,
     parallel_options,
     print_json,
     progress_bar,
+    quiet_numpy,
 )
 from mtmc.errors import InputError, MtmcError
 from mtmc.uncertainty.distributions import Distribution, parse_distribution
@@ -94,6 +98,7 @@ def propagate(
     with_gum: bool = typer.Option(False, "--gum", help="Also the GUM and §8 validation."),
     p: float = typer.Option(0.95, "--p", help="Coverage probability."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    nan: str = NAN_POLICY_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
@@ -105,7 +110,7 @@ def propagate(
     try:
         model = expression(expr)
         dists = parse_inputs(model, inputs)
-        with progress_bar("Monte Carlo", progress) as bar:
+        with progress_bar("Monte Carlo", progress) as bar, quiet_numpy():
             mc = monte_carlo(
                 model,
                 dists,
@@ -114,6 +119,7 @@ def propagate(
                 adaptive=adaptive,
                 p=p,
                 progress=bar,
+                nan_policy=nan_policy(nan),  # type: ignore[arg-type]
                 **parallel_options(workers, executor, scheduler),
             )
         if mc.dim != 0:
@@ -131,10 +137,12 @@ def propagate(
             "shortest": list(shortest),
             "symmetric": list(symmetric),
             "trials": mc.trials,
+            "omitted": mc.omitted,
             "seed": mc.seed,
         }
         if with_gum:
-            g = gum(model, dists, p=p)
+            with quiet_numpy():
+                g = gum(model, dists, p=p)
             v = validate(g, mc, p=p)
             out["gum"] = {
                 "estimate": g.estimate,
@@ -149,7 +157,7 @@ def propagate(
                 "passed": v.passed,
             }
     except (MtmcError, ValueError) as exc:
-        fail(exc)
+        fail(engine_message(exc))
     if as_json:
         print_json(out)
         return
@@ -164,6 +172,8 @@ def propagate(
         f"symmetric {100 * p:g} % interval", f"[{_fmt(symmetric[0])}, {_fmt(symmetric[1])}]"
     )
     table.add_row("trials", str(out["trials"]))
+    if out["omitted"]:
+        table.add_row("trials left out (NaN or inf)", str(out["omitted"]))
     table.add_row("seed", str(out["seed"]))
     console.print(table)
     if with_gum:

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from mtmc.errors import InputError
-from mtmc.io import _umask
+from mtmc.io import _umask, deferred_interrupt
 from mtmc.study.base import StudyResult
 
 __all__ = ["LIBRARIES", "now", "provenance", "write_result"]
@@ -154,13 +154,14 @@ def write_result(
             render(tmp)
         os.chmod(tmp, 0o777 & ~_umask())
         old = None
-        if dest.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{dest.name}.old.", dir=dest.parent))
-            os.rmdir(old)
-            os.replace(dest, old)
-        os.replace(tmp, dest)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        with deferred_interrupt():  # the swap is never cut half-way by Ctrl-C
+            if dest.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{dest.name}.old.", dir=dest.parent))
+                os.rmdir(old)
+                os.replace(dest, old)
+            os.replace(tmp, dest)
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
     except BaseException:
         with contextlib.suppress(OSError):
             shutil.rmtree(tmp)
