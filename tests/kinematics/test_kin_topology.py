@@ -19,10 +19,10 @@ from mtmc.kinematics import (
         ("wCBXfYZt", ("C", "B", "X"), ("Y", "Z")),
         ("wBZfXYCt", ("B", "Z"), ("X", "Y", "C")),
         ("XFYZ", ("X",), ("Y", "Z")),
-        ("ZYXF", ("Z", "Y", "X"), ()),
+        ("ZYXF", ("X", "Y", "Z"), ()),  # knee type: part on X, X on Y, Y on Z, Z on the frame
         ("FXYZ", (), ("X", "Y", "Z")),
         ("w CA X f Y Z t", ("C", "A", "X"), ("Y", "Z")),
-        ("XUfYZWt".replace("t", ""), ("X", "U"), ("Y", "Z", "W")),
+        ("XUfYZW", ("U", "X"), ("Y", "Z", "W")),  # Aguado's reading: from the frame out
     ],
 )
 def test_parse_both_notations(spec: str, part: tuple[str, ...], tool: tuple[str, ...]) -> None:

@@ -17,9 +17,11 @@ assertion                           reading here
 
 Type codes: ``"p"`` point, ``"v"`` unit (a directional versor ``I, J, K``), ``"d"``
 vector (the components of a section, ``d2``... of Stryczek, Fig. 10), ``"x"``, ``"y"``,
-``"z"`` one coordinate, ``"r"`` real (``R`` the first number). Types the table does not
-list are written by their name (``"line"``, ``"plane"``, ``"circle"``, ``"sphere"``,
-``"frame"``). The quotes may be ``"``, ``'`` or the typographic „ ” of the print.
+``"z"`` one coordinate, ``"r"`` real (``R_x, R_y, R_z``: ``R, 0, 0`` is the real ``R``;
+with ``R_y`` or ``R_z`` non-zero it is read as a vector, a displacement per coordinate).
+Types the table does not list are written by their name (``"line"``, ``"plane"``,
+``"circle"``, ``"sphere"``, ``"frame"``). The quotes may be ``"``, ``'`` or the
+typographic „ ” of the print.
 
 The numbers ``X, Y, Z``:
 
@@ -32,7 +34,8 @@ The numbers ``X, Y, Z``:
 The table has no field for the uncertainties or the probing direction. These extensions
 carry them (written by :func:`dumps_assertions`, optional on reading):
 ``title("...")``, ``units(mm)``, ``probe(u1, u2, u3)`` (the ``[probe]`` defaults),
-``u(p, u)``, ``dist(p, "uniform(-1, 1)")``, ``unit(p, deg)``, ``dir(t, I, J, K)``,
+``u(p, u)`` or ``u(p, ux, uy, uz)`` (one standard uncertainty per coordinate of a point,
+Stryczek's ``u_x, u_y, u_z``), ``dist(p, "uniform(-1, 1)")``, ``unit(p, deg)``, ``dir(t, I, J, K)``,
 ``par(t, key, value)`` (any other field of a transition, e.g. ``u_probe``). Without
 ``dir``, a ``meas`` probes along +X, +Y or +Z for an ``x``, ``y`` or ``z`` output and
 along −Z for a point. ``%`` starts a comment; a fact may end with ``.``.
@@ -179,9 +182,10 @@ def _facts(text: str, file: str | None) -> list[tuple[str, list[Any], int]]:
                 continue
             expect("punct", ")")
             break
-        if len(args) != _ARITY[head.text]:
+        arity = (2, 4) if head.text == "u" else (_ARITY[head.text],)
+        if len(args) not in arity:
             raise ParseError(
-                f"{head.text}(...) takes {_ARITY[head.text]} arguments, got {len(args)}",
+                f"{head.text}(...) takes {' or '.join(map(str, arity))} arguments, got {len(args)}",
                 file=file,
                 line=head.line,
                 column=head.col,
@@ -299,7 +303,10 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
         elif head in ("u", "dist", "unit"):
             name = _name(a[0], "p", file, line)
             p_refs.append((name, line))
-            val = _num(a[1], head, file, line) if head == "u" else str(a[1])
+            val: Any = str(a[1])
+            if head == "u":  # u(p, u) or, per coordinate, u(p, ux, uy, uz)
+                nums = tuple(_num(v, head, file, line) for v in a[1:])
+                val = nums[0] if len(nums) == 1 else nums
             extra_p.setdefault(name, {})[head] = val
         elif head == "dir":
             name = _name(a[0], "t", file, line)
@@ -341,7 +348,12 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
             if type_ in ("x", "y", "z"):
                 value = vals["xyz".index(type_)]
             elif type_ == "real":
-                value = vals[0]
+                # "r", R_x, R_y, R_z: R, 0, 0 is a real; with R_y or R_z non-zero it is
+                # a displacement per coordinate, a vector place (for displace)
+                if vals[1] == 0.0 and vals[2] == 0.0:
+                    value = vals[0]
+                else:
+                    type_, value = "vector", tuple(vals)
             else:
                 value = tuple(vals)
         elif name in producer and producer[name][1] == "meas":
@@ -486,7 +498,8 @@ def dumps_assertions(graph: Graph) -> str:
             if p.marked:
                 lines.append(f"m({_ref(name, 'p')}).")
             if p.u is not None:
-                lines.append(f"u({_ref(name, 'p')}, {_f(p.u)}).")
+                us = p.u if isinstance(p.u, tuple) else (p.u,)
+                lines.append(f"u({_ref(name, 'p')}, {', '.join(_f(v) for v in us)}).")
             if p.dist is not None:
                 lines.append(f"dist({_ref(name, 'p')}, {_f(p.dist)}).")
             if p.unit is not None:

@@ -14,6 +14,9 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from mtmc.errors import GraphError
 
 __all__ = [
@@ -137,9 +140,11 @@ class Place:
     value : float or tuple of 3 floats, optional
         Nominal value (scalar for ``x``/``y``/``z``/``real``, 3 numbers for ``point``,
         ``vector``, ``unit``). In the file's length unit, or in ``unit``.
-    u : float, optional
+    u : float or tuple of 3 floats, optional
         Standard uncertainty: the place is ``value + N(0, u²)`` (each coordinate
-        independently for 3-vectors). Requires ``value``.
+        independently for 3-vectors). A ``point``, ``vector`` or ``unit`` place may give
+        one per coordinate, ``(u_x, u_y, u_z)``, as Stryczek's point place does (Table 1);
+        :meth:`coordinate_u` gives the three in either case. Requires ``value``.
     dist : str, optional
         A distribution (``"uniform(-1e-3, 1e-3)"``) of the deviation added to ``value``
         (``value`` defaults to 0, so without it ``dist`` is the quantity itself).
@@ -160,7 +165,8 @@ class Place:
     name: str
     type: str
     value: float | tuple[float, ...] | None = None
-    u: float | None = None
+    # float, or a tuple of 3 floats (per coordinate); Any for the callers that read a float
+    u: Any = None
     dist: str | None = None
     unit: str | None = None
     pos: tuple[float, float] | None = None
@@ -194,9 +200,23 @@ class Place:
             else:
                 object.__setattr__(self, "value", _finite(self.value, what, "value", self.line))
         if self.u is not None:
-            u = _finite(self.u, what, "u", self.line)
-            if u < 0:
-                raise GraphError(f"{what}: u must be >= 0, got {u!r}", line=self.line, field="u")
+            u: float | tuple[float, ...]
+            if isinstance(self.u, list | tuple):
+                if self.type not in ("point", "vector", "unit"):
+                    raise GraphError(
+                        f"{what}: one u per coordinate needs a point, vector or unit place; "
+                        f"a {self.type} place takes one number",
+                        line=self.line,
+                        field="u",
+                    )
+                u = _vector3(self.u, what, "u", self.line)
+                low = min(u)
+            else:
+                u = low = _finite(self.u, what, "u", self.line)
+            if low < 0:
+                raise GraphError(
+                    f"{what}: u must be >= 0, got {self.u!r}", line=self.line, field="u"
+                )
             if self.value is None:
                 raise GraphError(
                     f"{what}: u needs a nominal value (add value = ...)", line=self.line, field="u"
@@ -232,6 +252,34 @@ class Place:
     def marked(self) -> bool:
         """Whether the place is marked from the start (carries a value, u or dist)."""
         return self.value is not None or self.u is not None or self.dist is not None
+
+    def coordinate_u(self, factor: float = 1.0) -> NDArray[np.float64]:
+        """The standard uncertainty of each coordinate of the place, ``(3,)``.
+
+        ``(u, u, u)`` for one ``u``, ``(u_x, u_y, u_z)`` when given per coordinate, zeros
+        without ``u``; for a scalar place the three are its one ``u``.
+
+        Parameters
+        ----------
+        factor : float
+            The place's unit in mm (or rad): the file's length unit, 1e-3 for µm.
+
+        Returns
+        -------
+        ndarray, shape (3,)
+            ``u · factor`` per coordinate (x, y, z), read-only.
+
+        Examples
+        --------
+        >>> Place("p", "point", (1.0, 2.0, 3.0), u=(1.0, 2.0, 0.0)).coordinate_u(1e-3)
+        array([0.001, 0.002, 0.   ])
+        >>> Place("p", "point", (1.0, 2.0, 3.0), u=0.5).coordinate_u()
+        array([0.5, 0.5, 0.5])
+        """
+        u = self.u if self.u is not None else 0.0
+        out = np.broadcast_to(np.asarray(u, dtype=np.float64) * factor, (3,)).copy()
+        out.flags.writeable = False
+        return out
 
 
 def _freeze(value: Any) -> Any:

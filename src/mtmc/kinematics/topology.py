@@ -2,15 +2,20 @@
 
 A topology lists the axes of a machine as a chain from the workpiece to the tool, with
 the machine frame (bed) somewhere in between. Axes written left of the frame carry the
-workpiece, axes right of it carry the tool, and in both notations the letters run from
-the workpiece towards the tool:
+workpiece, axes right of it carry the tool:
 
 - ISO 10791 style: ``w`` (workpiece), the part-side axes, ``f`` (frame), the tool-side
-  axes, ``t`` (tool). In ``wCBXfYZt`` the workpiece sits on C, C on B, B on X, X on the
-  frame; Y sits on the frame, Z on Y, the tool on Z.
-- Aguado's notation (Aguado et al. 2017; Aguado et al. 2016): the same without ``w`` and
-  ``t`` and with ``F`` for the frame: ``XFYZ`` is ``wXfYZt`` (X moves the part, Y and Z
-  move the tool).
+  axes, ``t`` (tool); the letters run from the workpiece to the tool. In ``wCBXfYZt``
+  the workpiece sits on C, C on B, B on X, X on the frame; Y sits on the frame, Z on Y,
+  the tool on Z.
+- Aguado's notation (Aguado et al. 2017; Aguado et al. 2016): no ``w`` and ``t``, ``F``
+  for the frame, and the letters of each side run **from the frame outwards**: the
+  part-side letters from the frame to the part, the tool-side ones from the frame to
+  the tool. ``XFYZ`` is ``wXfYZt`` (X moves the part, Y and Z the tool); ``ZYXF`` is
+  ``wXYZft``, a knee-type mill (Z on the frame carries Y, Y carries X, X the part).
+  Aguado et al. 2016, eq. (3), ``T_t = R(z)(R(y)(R(x) T_p + X) + Y) + Z``, nests the
+  part ``T_p`` in X first and Z last, and its eqs. (9)-(11) give X the squareness terms
+  to Y and Z and Y the one to Z, Z none: Z is the reference axis on the frame.
 
 Axis letters: linear X, Y, Z and the secondary linear U, V, W (parallel to X, Y, Z);
 rotary A, B, C about x, y, z (ISO 841).
@@ -136,8 +141,8 @@ class Topology:
 
     @property
     def aguado(self) -> str:
-        """The same topology in Aguado's notation (``XFYZ``)."""
-        return "".join(self.part_axes) + "F" + "".join(self.tool_axes)
+        """The same topology in Aguado's notation (``XFYZ``; ``wXYZft`` is ``ZYXF``)."""
+        return "".join(reversed(self.part_axes)) + "F" + "".join(self.tool_axes)
 
 
 def parse_topology(spec: str) -> Topology:
@@ -163,8 +168,10 @@ def parse_topology(spec: str) -> Topology:
     --------
     >>> parse_topology("wCBXfYZt").chain
     ('C', 'B', 'X', 'Y', 'Z')
-    >>> parse_topology("ZYXF").part_axes
-    ('Z', 'Y', 'X')
+    >>> parse_topology("ZYXF").part_axes  # from the workpiece: X carries it, Z is on the frame
+    ('X', 'Y', 'Z')
+    >>> str(parse_topology("ZYXF"))
+    'wXYZft'
     """
     if not isinstance(spec, str):
         raise TopologyError(f"expected a topology string, got {spec!r}", field="topology")
@@ -199,4 +206,7 @@ def parse_topology(spec: str) -> Topology:
                 field="topology",
             )
     k = s.index("f") if "f" in s else s.index("F")
-    return Topology(part_axes=tuple(s[:k]), tool_axes=tuple(s[k + 1 :]))
+    part = tuple(s[:k])
+    if not has_w:  # Aguado's notation: the part-side letters run from the frame to the part
+        part = part[::-1]
+    return Topology(part_axes=part, tool_axes=tuple(s[k + 1 :]))
