@@ -15,7 +15,6 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, NoReturn
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import (
@@ -67,6 +66,8 @@ def nan_policy(value: str) -> str:
 @contextlib.contextmanager
 def quiet_numpy() -> Iterator[None]:
     """NumPy's floating-point warnings off: a NaN or inf is reported once, by the engine."""
+    import numpy as np
+
     with np.errstate(all="ignore"):
         yield
 

@@ -111,7 +111,7 @@ def report_cmd(
 
 
 def demo_cmd(
-    out: Path = typer.Option(Path("mtmc-demo"), "-o", "--out", help="Output folder."),
+    out: Path = typer.Option(Path("mtmc-demo"), "-o", "--outdir", help="Output folder."),
     trials: int | None = typer.Option(None, "--trials", "-n", help="Trials of every study."),
     seed: int | None = typer.Option(None, "--seed", help="Seed of every study."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),

@@ -26,7 +26,7 @@ JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
 def plan_cmd(
     study: Path = STUDY,
     out: Path = typer.Option(
-        Path("."), "-o", "--output", help="Folder for the NC programs and the points table."
+        Path("."), "-o", "--outdir", help="Folder for the NC programs and the points table."
     ),
     as_json: bool = JSON_OPTION,
 ) -> None:
