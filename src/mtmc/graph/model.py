@@ -22,6 +22,7 @@ unknown op or field, a ``meas`` without a valid ``at``/``direction``/``u``/``dis
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 from mtmc.errors import GraphError, MtmcError
 from mtmc.graph import ops
@@ -75,19 +76,27 @@ class Graph:
         """The graph's length unit in mm."""
         return LENGTH_UNITS[self.units]
 
+    @cached_property
+    def _places_by_name(self) -> dict[str, Place]:
+        out: dict[str, Place] = {}
+        for p in self.places:
+            out.setdefault(p.name, p)  # the first, as a scan would find it
+        return out
+
+    @cached_property
+    def _transitions_by_name(self) -> dict[str, Transition]:
+        out: dict[str, Transition] = {}
+        for t in self.transitions:
+            out.setdefault(t.name, t)
+        return out
+
     def place(self, name: str) -> Place | None:
         """The declared place ``name``, or None."""
-        for p in self.places:
-            if p.name == name:
-                return p
-        return None
+        return self._places_by_name.get(name)
 
     def transition(self, name: str) -> Transition | None:
         """The transition ``name``, or None."""
-        for t in self.transitions:
-            if t.name == name:
-                return t
-        return None
+        return self._transitions_by_name.get(name)
 
 
 @dataclass(frozen=True)
