@@ -53,6 +53,7 @@ if TYPE_CHECKING:
     from mtmc.geometry.primitives import *  # noqa: F403
     from mtmc.geometry.transforms import *  # noqa: F403
     from mtmc.graph import *  # noqa: F403
+    from mtmc.kinematics.aguado import *  # noqa: F403
     from mtmc.kinematics.draw import *  # noqa: F403
     from mtmc.kinematics.error_terms import *  # noqa: F403
     from mtmc.kinematics.functions import *  # noqa: F403
