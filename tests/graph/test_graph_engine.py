@@ -92,3 +92,31 @@ def test_memory_of_a_graph_with_thousands_of_probings_is_bounded():
     tracemalloc.stop()
     assert peak < 64 * 2**20
     assert res.places["x7"].u > 0
+
+
+def test_per_coordinate_u_of_a_marked_point():
+    from mtmc.graph.toml_format import loads
+
+    text = "\n".join(
+        [
+            'units = "um"',
+            "[[place]]",
+            'name = "a"',
+            'type = "point"',
+            "value = [1.0, 2.0, 3.0]",
+            "u = [2.0, 0.0, 6.0]",
+            "[[place]]",
+            'name = "b"',
+            'type = "point"',
+            "value = [3.0, 2.0, 1.0]",
+            "[[transition]]",
+            'name = "t"',
+            'op = "middle"',
+            'in = ["a", "b"]',
+            'out = "c"',
+        ]
+    )
+    res = run_graph(loads(text), trials=200_000, seed=4, outputs=["c"])
+    u = res.places["c"].result.u  # mm: half of (2, 0, 6) µm
+    np.testing.assert_allclose(u[[0, 2]], [0.001, 0.003], rtol=0.01)  # se of u: 0.16 %
+    assert u[1] < 1e-15  # a constant coordinate (to rounding of its mean)

@@ -1,6 +1,6 @@
 """Monte Carlo over a measurement graph: all trials of a block in one batched pass.
 
-A run (seed 000, "simulation cycles"): draw every random input of the graph — the probe
+A run (Stryczek's "simulation cycles"): draw every random input of the graph — the probe
 errors of each ``meas`` (:mod:`mtmc.graph.probe`) and the marked places carrying ``u`` or
 ``dist`` — in blocks through :func:`mtmc.uncertainty.iter_blocks`, then fire every
 transition once, in the firing order of :func:`mtmc.graph.check`, on the whole block.
@@ -334,15 +334,16 @@ def random_inputs(plan: Plan) -> dict[str, Distribution]:
     for p in g.places:
         f = _place_factor(p, g.factor)
         vec = p.type in ("point", "vector", "unit")
-        if p.u is not None and p.u > 0:
+        us = p.coordinate_u(f)
+        if p.u is not None and np.any(us > 0):
             assert p.value is not None
-            if vec:
+            if vec:  # one u for all three coordinates, or (u_x, u_y, u_z)
                 assert isinstance(p.value, tuple)
-                for c, v in zip("xyz", p.value, strict=True):
-                    out[f"{p.name}.{c}"] = Normal(v * f, p.u * f)
+                for c, v, uc in zip("xyz", p.value, us, strict=True):
+                    out[f"{p.name}.{c}"] = Normal(v * f, uc) if uc > 0 else Constant(v * f)
             else:
                 assert isinstance(p.value, float)
-                out[p.name] = Normal(p.value * f, p.u * f)
+                out[p.name] = Normal(p.value * f, float(us[0]))
         elif p.dist is not None:
             d = _place_dist(p, g.file)
             for c in "xyz" if vec else ("",):
@@ -457,11 +458,12 @@ def evaluate(
             try:
                 val = s.variant.func(*[values[p] for p in t.inputs])
             except MtmcError as exc:
+                # the user's field is the transition's inputs, not the op's argument
                 raise type(exc)(
-                    f"transition {t.name} ({t.op}): {exc.message}",
+                    f"transition {t.name} ({t.op}), in some trials: {exc.message}",
                     file=g.file,
-                    line=t.line,
-                    field=exc.field,
+                    line=t.field_line("in"),
+                    field="in",
                 ) from None
         values[t.out] = val
         for p in t.inputs:
@@ -628,21 +630,28 @@ def run_graph(
     keep_s = list(dict.fromkeys(keep))
     summ = list(plan.types) if outputs is None else list(dict.fromkeys(outputs))
     model = GraphModel(plan, tuple(dict.fromkeys([*summ, *keep_s])))
-    res = monte_carlo(
-        model,
-        model.inputs,
-        trials,
-        seed,
-        keep=keep_s,
-        block_size=block_size,
-        normal_method=normal_method,
-        progress=progress,
-        workers=workers,
-        executor=executor,
-        scheduler=scheduler,
-        nan_policy=nan_policy,
-        sampling=sampling,
-    )
+    try:
+        res = monte_carlo(
+            model,
+            model.inputs,
+            trials,
+            seed,
+            keep=keep_s,
+            block_size=block_size,
+            normal_method=normal_method,
+            progress=progress,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            nan_policy=nan_policy,
+            sampling=sampling,
+        )
+    except InputError as exc:
+        if exc.field != "model" or exc.file is not None:
+            raise
+        # the engine's outputs are the graph's places: name them, and the file
+        msg = exc.message.replace("output '", "place '")
+        raise InputError(msg, file=plan.graph.file, field="place") from None
     places = {n: PlaceSummary(n, plan.types[n], res[n]) for n in summ}
     samples_out = {n: unflatten(plan.types[n], res[n].values) for n in keep_s}
     return GraphResult(res.trials, res.seed, places, samples_out, dict(plan.types))
