@@ -9,7 +9,7 @@ uncertainties and coverage-interval endpoints are all at most the numerical tole
 
 Examples
 --------
-Seed 000 (Fig. 4): the sum of N(0, 1) and N(0.5, 0.5) has u = √1.25 ≈ 1.118.
+Stryczek (Fig. 4): the sum of N(0, 1) and N(0.5, 0.5) has u = √1.25 ≈ 1.118.
 
 >>> r = monte_carlo(lambda x1, x2: x1 + x2, {"x1": "normal(0, 1)", "x2": "normal(0.5, 0.5)"},
 ...                 trials=200_000, seed=2024)
