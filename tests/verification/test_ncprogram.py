@@ -210,8 +210,26 @@ def test_time_models_path_and_axes() -> None:
     ty = 400.0 / v + v / 100.0  # Y at the feed, 100 mm/s²
     assert axes.travel_s == pytest.approx(max(tx, ty) + 2 * math.sqrt(1.0 / 100.0))
     rot = MeasurementPlan(("X", "C"), [[0.0, 0.0], [10.0, 1.0]])
-    with pytest.raises(InputError, match="linear axes only"):
+    with pytest.raises(InputError, match="rotary axis C moves"):
         estimate_time(rot, NCSettings(feed=F))
+    with pytest.raises(InputError, match="rotary axis C needs its own feed") as info:
+        estimate_time(rot, NCSettings(feed=F, time_model="axes"))
+    assert info.value.field == "axis_feed.C"
+    # C at 2 rad/s (120 rad/min), 10 rad/s²: the X move (10 mm) is the slower one
+    both = NCSettings(
+        feed=F,
+        time_model="axes",
+        axis_feed={"C": 120.0},
+        axis_acceleration={"C": 10.0},
+        acceleration=a,
+    )
+    tx, tc = float(trapezoid_time(10.0, v, a)), float(trapezoid_time(1.0, 2.0, 10.0))
+    assert estimate_time(rot, both).travel_s == pytest.approx(max(tx, tc))
+    # a rotary axis that stays put is allowed in the path model
+    still = MeasurementPlan(("X", "C"), [[0.0, 0.5], [300.0, 0.5]])
+    assert estimate_time(still, NCSettings(feed=F, acceleration=a)).travel_s == pytest.approx(
+        300.0 / v + v / a
+    )
 
 
 @pytest.mark.parametrize(

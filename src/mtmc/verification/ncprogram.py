@@ -572,10 +572,11 @@ def estimate_time(plan: MeasurementPlan, settings: NCSettings) -> TimeEstimate:
     - ``time_model = "path"`` (interpolated ``G01`` moves): the tool moves along the
       straight path of length ``L = ||Δq||`` over the linear axes at the programmed feed
       ``v = F / 60`` with the path acceleration ``a``: ``t = L/v + v/a`` or
-      ``2 sqrt(L/a)``. Rotary axes are not allowed in this model.
+      ``2 sqrt(L/a)``. Rotary axes may not move in this model.
     - ``time_model = "axes"`` (independent axes): axis ``j`` moves ``|Δq_j|`` with its
       own speed ``v_j`` and acceleration ``a_j``; the move takes
-      ``max_j t(|Δq_j|, v_j, a_j)``, the slowest axis.
+      ``max_j t(|Δq_j|, v_j, a_j)``, the slowest axis. A rotary axis needs its own
+      feed (rad/min) and acceleration (rad/s²).
 
     Neither model includes the controller's look-ahead, jerk limits, the settling of the
     servo loop or the operator's reflector changes: the travel time is a lower bound of
@@ -594,8 +595,9 @@ def estimate_time(plan: MeasurementPlan, settings: NCSettings) -> TimeEstimate:
     Raises
     ------
     InputError
-        With the ``"path"`` model on a machine with rotary axes; on a per-axis value for
-        an axis the plan does not have.
+        With the ``"path"`` model when a rotary axis moves; with the ``"axes"`` model when
+        a rotary axis has no feed or acceleration of its own; on a per-axis value for an
+        axis the plan does not have.
 
     Examples
     --------
@@ -617,15 +619,26 @@ def estimate_time(plan: MeasurementPlan, settings: NCSettings) -> TimeEstimate:
                     field=f"{attr}.{k}",
                 )
     if settings.time_model == "path":
-        if not linear.all():
+        moves_rot = ~linear & (np.any(dq > 0, axis=0) if dq.size else False)
+        moving = np.flatnonzero(moves_rot)
+        if moving.size:
             raise InputError(
-                "the 'path' time model is for linear axes only: use time_model = 'axes' "
-                "with a feed per rotary axis",
+                f"the 'path' time model is for linear axes: rotary axis "
+                f"{plan.axes[moving[0]]} moves; use time_model = 'axes' with a feed and an "
+                "acceleration for it",
                 field="time_model",
             )
-        seg = np.linalg.norm(dq, axis=1)
+        seg = np.linalg.norm(dq[:, linear], axis=1)
         t = trapezoid_time(seg, settings.feed / 60.0, settings.acceleration)
     else:
+        for a in plan.axes:
+            for attr in ("axis_feed", "axis_acceleration"):
+                if is_rotary(a) and a not in getattr(settings, attr):
+                    raise InputError(
+                        f"rotary axis {a} needs its own {attr.split('_')[1]} in the 'axes' "
+                        "model (the path feed is in mm/min)",
+                        field=f"{attr}.{a}",
+                    )
         v = np.array([settings.axis_feed.get(a, settings.feed) / 60.0 for a in plan.axes])
         acc = np.array(
             [settings.axis_acceleration.get(a, settings.acceleration) for a in plan.axes]
