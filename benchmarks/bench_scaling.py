@@ -76,14 +76,16 @@ def main() -> None:
             graph, vary, "d_ac", trials=n_sweep, seed=1, executor="dask", scheduler=client
         )
     )
-    assert np.array_equal(ref.u, thr.u) and np.array_equal(ref.u, dsk.u)
+    assert np.array_equal(ref.u, thr.u)
+    assert np.array_equal(ref.u, dsk.u)
     rows.append((f"sweep 25 x {n_sweep:.0e} trials", t1, t2, t3))
 
     kw = {"trials": n_mc, "seed": 1, "keep": False, "block_size": 2**20}
     t1, ref = timed(lambda: monte_carlo(model, INPUTS, **kw))
     t2, thr = timed(lambda: monte_carlo(model, INPUTS, workers=2, **kw))
     t3, dsk = timed(lambda: monte_carlo(model, INPUTS, executor="dask", scheduler=client, **kw))
-    assert ref.u == thr.u == dsk.u and ref.estimate == thr.estimate == dsk.estimate
+    assert ref.u == thr.u == dsk.u
+    assert ref.estimate == thr.estimate == dsk.estimate
     rows.append((f"scalar MC {n_mc:.0e} trials", t1, t2, t3))
 
     print(f"{'run':<30}{'1 process s':>12}{'2 threads':>16}{'Dask 2 procs':>16}")

@@ -34,7 +34,8 @@ def test_usage_errors_are_one_line_exit_2(argv, fragment, capsys):
     assert main(argv) == 2
     out, err = capsys.readouterr()
     assert out == ""
-    assert err.startswith("mtmc: error: ") and err.count("\n") == 1
+    assert err.startswith("mtmc: error: ")
+    assert err.count("\n") == 1
     assert fragment in err
 
 
@@ -49,7 +50,9 @@ def test_usage_errors_are_one_line_exit_2(argv, fragment, capsys):
 def test_library_errors_exit_2_through_fail(argv, capsys):
     assert main(argv) == 2
     out, err = capsys.readouterr()
-    assert out == "" and err.startswith("mtmc: error: ") and err.count("\n") == 1
+    assert out == ""
+    assert err.startswith("mtmc: error: ")
+    assert err.count("\n") == 1
 
 
 def test_success_and_help_exit_0(capsys):
@@ -75,8 +78,19 @@ def _commands() -> list[list[str]]:
 @pytest.mark.parametrize("cmd", _commands(), ids=lambda c: Path(c[-1]).name)
 def test_real_process_exit_codes(cmd):
     ok = subprocess.run(
-        [*cmd, "graph", "run", str(EXAMPLES / "ball_centre.toml"), "-n", "500", "--seed", "1"]
-        + ["-p", "cx", "--json"],
+        [
+            *cmd,
+            "graph",
+            "run",
+            str(EXAMPLES / "ball_centre.toml"),
+            "-n",
+            "500",
+            "--seed",
+            "1",
+            "-p",
+            "cx",
+            "--json",
+        ],
         capture_output=True,
         text=True,
         env=_env(),
@@ -96,9 +110,11 @@ def test_real_process_exit_codes(cmd):
     assert bad.returncode == 2
     assert bad.stdout == ""
     assert bad.stderr.count("\n") == 1
-    assert bad.stderr.startswith("mtmc: error: ") and "the graph has no place zz" in bad.stderr
+    assert bad.stderr.startswith("mtmc: error: ")
+    assert "the graph has no place zz" in bad.stderr
 
     usage = subprocess.run(
         [*cmd, "graph", "run"], capture_output=True, text=True, env=_env(), timeout=120
     )
-    assert usage.returncode == 2 and usage.stderr.count("\n") == 1
+    assert usage.returncode == 2
+    assert usage.stderr.count("\n") == 1

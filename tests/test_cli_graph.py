@@ -26,10 +26,12 @@ def test_run_json_equals_library(capsys):
     assert main(["graph", "run", str(f), "--trials", "3000", "--seed", "7", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     lib = run_graph(load_graph(f), 3000, seed=7)
-    assert data["trials"] == 3000 and data["seed"] == 7
+    assert data["trials"] == 3000
+    assert data["seed"] == 7
     d = data["places"]["d_ac"]
     assert d["type"] == "real"
-    assert d["estimate"] == lib.places["d_ac"].estimate and d["u"] == lib.places["d_ac"].u
+    assert d["estimate"] == lib.places["d_ac"].estimate
+    assert d["u"] == lib.places["d_ac"].u
     p = data["places"]["p_o"]
     np.testing.assert_array_equal(p["estimate"], lib.places["p_o"].mean)
     assert np.shape(p["cov"]) == (3, 3)
@@ -99,7 +101,8 @@ def test_sweep(tmp_path, capsys):
     ]
     assert main([*args, "--csv", str(csv), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert len(data["u"]) == 6 and data["surrogate"]["max_rel_error"] < 0.05
+    assert len(data["u"]) == 6
+    assert data["surrogate"]["max_rel_error"] < 0.05
     assert csv.read_text().splitlines()[0].startswith("probe.u_probe,probe.u_axis,cx_estimate,cx_u")
 
 
@@ -132,7 +135,9 @@ def test_sweep(tmp_path, capsys):
 def test_errors_exit_2_with_one_line(args, message, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert err.startswith("mtmc: error:") and message in err and err.count("\n") == 1
+    assert err.startswith("mtmc: error:")
+    assert message in err
+    assert err.count("\n") == 1
 
 
 def test_bad_file_names_line(tmp_path, capsys):
@@ -183,7 +188,8 @@ def test_run_table_in_graph_units(tmp_path, capsys):
     tilt = lib.places["tilt"]
     assert row("tilt")[3:] == [f"{tilt.estimate:.6g}", f"{tilt.u:.6g}", "rad"]
     assert abs(tilt.estimate - np.pi / 6) < 1e-3
-    assert row("pln")[2] == "point" and row("pln")[-1] == "um"
+    assert row("pln")[2] == "point"
+    assert row("pln")[-1] == "um"
     normal = next(ln for ln in out.splitlines() if "│ normal " in ln)
     assert normal.rstrip("│ ").endswith("│ 1")
 
@@ -200,7 +206,8 @@ def test_progress_keeps_stdout_json(capsys):
     sweep += ["--vary", "probe.u_probe=0.001:0.002:2", "-n", "300", "--seed", "1", "--json"]
     assert main([*sweep, "--progress"]) == 0
     loud = capsys.readouterr()
-    assert json.loads(loud.out)["trials"] == 300 and "600/600 trials" in loud.err
+    assert json.loads(loud.out)["trials"] == 300
+    assert "600/600 trials" in loud.err
 
 
 def test_files_are_written_atomically(tmp_path, capsys, monkeypatch):
@@ -209,7 +216,7 @@ def test_files_are_written_atomically(tmp_path, capsys, monkeypatch):
     out = tmp_path / "g.svg"
     out.write_text("old drawing")
 
-    def broken_draw(graph, path):
+    def broken_draw(_graph, path):
         Path(path).write_text("<svg half")
         raise OSError(28, "No space left on device")
 
@@ -255,7 +262,9 @@ def test_bad_output_files(argv, message, tmp_path, capsys):
         argv = [a.replace(k, v) for a in argv]
     assert main(argv) == 2
     err = capsys.readouterr().err
-    assert err.startswith("mtmc: error:") and message in err and err.count("\n") == 1
+    assert err.startswith("mtmc: error:")
+    assert message in err
+    assert err.count("\n") == 1
 
 
 def test_export_to_file_equals_stdout(tmp_path, capsys):

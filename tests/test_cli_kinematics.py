@@ -24,7 +24,8 @@ def test_show(capsys) -> None:  # type: ignore[no-untyped-def]
     out = capsys.readouterr().out
     assert "axes (column order of q): X Y Z B C" in out
     assert "chain: workpiece -> C -> B -> X -> frame -> Y -> Z -> tool" in out
-    assert "  C: rotary, moves the part" in out and "  Z: linear, moves the tool" in out
+    assert "  C: rotary, moves the part" in out
+    assert "  Z: linear, moves the tool" in out
     assert main(["kinematics", "show", "table-head", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     m = library_machine("table-head")
@@ -39,7 +40,8 @@ def test_equation_matches_library(capsys) -> None:  # type: ignore[no-untyped-de
     assert out.strip() == eq.text()
     assert main(["kinematics", "equation", "xfyz", "--latex", "-e", "EXX", "-e", "C0Y"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("\\begin{aligned}") and "EC0Y" in out
+    assert out.startswith("\\begin{aligned}")
+    assert "EC0Y" in out
     assert (
         out.strip()
         == equation_of_motion(
@@ -48,7 +50,7 @@ def test_equation_matches_library(capsys) -> None:  # type: ignore[no-untyped-de
     )
 
 
-def test_draw(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_draw(tmp_path: Path) -> None:
     f = tmp_path / "chain.svg"
     assert main(["kinematics", "draw", "wBZfXYCt", "-o", str(f)]) == 0
     root = ET.fromstring(f.read_text())

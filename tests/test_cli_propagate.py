@@ -70,7 +70,8 @@ def test_json_without_gum_has_no_gum_keys_and_p_is_used(capsys):
     code, out, _ = _run([*ARGS, "--json", "--p", "0.9"], capsys)
     assert code == 0
     got = json.loads(out)
-    assert "gum" not in got and "validation" not in got
+    assert "gum" not in got
+    assert "validation" not in got
     assert got["p"] == 0.9
     mc = monte_carlo(
         expression("a * b + c"),
@@ -114,7 +115,8 @@ def test_adaptive_run(capsys):
     mc = monte_carlo(
         expression("x + y"), {"x": "normal(0, 1)", "y": "normal(0, 1)"}, seed=5, adaptive=True
     )
-    assert got["trials"] == mc.trials and got["u"] == mc.u
+    assert got["trials"] == mc.trials
+    assert got["u"] == mc.u
 
 
 def test_table_output(capsys):
@@ -130,7 +132,8 @@ def test_table_output(capsys):
     assert f"{mc.estimate:.6g}" in out
     assert f"{mc.u:.6g}" in out
     assert "GUM validated" in out
-    assert "50000" in out and "17" in out
+    assert "50000" in out
+    assert "17" in out
 
 
 @pytest.mark.parametrize(
@@ -156,7 +159,8 @@ def test_errors_exit_non_zero_with_one_line(argv, fragments, capsys):
     assert code != 0
     assert out == ""
     lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("mtmc: error: ")
+    assert len(lines) == 1
+    assert lines[0].startswith("mtmc: error: ")
     for fragment in fragments:
         assert fragment in lines[0]
 
@@ -165,8 +169,11 @@ def test_errors_exit_non_zero_with_one_line(argv, fragments, capsys):
 def test_progress_bar_on_stderr_only(adaptive, capsys):
     argv = [*ARGS, "--json"] + (["--adaptive"] if adaptive else [])
     code, quiet, quiet_err = _run(argv, capsys)
-    assert code == 0 and quiet_err == ""
+    assert code == 0
+    assert quiet_err == ""
     code, loud, loud_err = _run([*argv, "--progress"], capsys)
-    assert code == 0 and loud == quiet
+    assert code == 0
+    assert loud == quiet
     n = json.loads(loud)["trials"]
-    assert f"{n}/{n} trials" in loud_err and loud_err.count("\n") == 1
+    assert f"{n}/{n} trials" in loud_err
+    assert loud_err.count("\n") == 1

@@ -127,7 +127,9 @@ def test_local_cluster_started_for_the_call():
 
 
 def test_unreachable_scheduler_is_one_line_naming_it():
-    with pytest.raises(InputError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+    with pytest.raises(
+        InputError, match=r"cannot reach the Dask scheduler at tcp://127\.0\.0\.1:9"
+    ):
         monte_carlo(
             model, INPUTS, trials=1000, seed=1, executor="dask", scheduler="tcp://127.0.0.1:9"
         )
@@ -163,7 +165,9 @@ def test_cli_runs_on_the_cluster_with_the_same_numbers(client, capsys):
     ref = json.loads(capsys.readouterr().out)
     assert main([*args, "--scheduler", client.scheduler.address]) == 0
     got = json.loads(capsys.readouterr().out)
-    assert got["u"] == ref["u"] and got["shortest"] == ref["shortest"]
+    assert got["u"] == ref["u"]
+    assert got["shortest"] == ref["shortest"]
     assert main([*args, "--scheduler", "tcp://127.0.0.1:9"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "tcp://127.0.0.1:9" in err[0]
+    assert len(err) == 1
+    assert "tcp://127.0.0.1:9" in err[0]

@@ -11,16 +11,22 @@ def test_text_and_bytes_round_trip(tmp_path):
 def test_failure_keeps_the_old_file_and_leaves_no_temporary(tmp_path):
     dest = tmp_path / "result.json"
     dest.write_text("old")
-    with pytest.raises(RuntimeError), atomic_path(dest) as tmp:
-        tmp.write_text("half a fi")
-        raise RuntimeError("writer failed")
+
+    def failing_writer():
+        with atomic_path(dest) as tmp:
+            tmp.write_text("half a fi")
+            raise RuntimeError("writer failed")
+
+    with pytest.raises(RuntimeError):
+        failing_writer()
     assert dest.read_text() == "old"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["result.json"]
 
 
 def test_temporary_keeps_the_suffix_for_format_sniffing_writers(tmp_path):
     with atomic_path(tmp_path / "fig.svg") as tmp:
-        assert tmp.suffix == ".svg" and tmp.parent == tmp_path
+        assert tmp.suffix == ".svg"
+        assert tmp.parent == tmp_path
         tmp.write_text("<svg/>")
     assert (tmp_path / "fig.svg").read_text() == "<svg/>"
 

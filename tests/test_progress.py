@@ -70,7 +70,8 @@ def test_adaptive_total_unknown_until_it_stops():
     np.testing.assert_array_equal(seen.samples, plain.samples)
     h = adaptive_block_size(0.95)
     n = plain.blocks
-    assert n is not None and n >= 2
+    assert n is not None
+    assert n >= 2
     # one call per block with total None, then the final (M, M)
     assert rec.calls == [(k * h, None) for k in range(1, n + 1)] + [(n * h, n * h)]
     assert rec.calls[-1] == (plain.trials, plain.trials)
@@ -101,7 +102,7 @@ def test_sweep_counts_trials_over_the_whole_grid():
 
 
 def test_progress_errors_propagate():
-    def boom(done, total):
+    def boom(*_):
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
@@ -109,7 +110,8 @@ def test_progress_errors_propagate():
 
 
 def test_progress_bar_helper_off_and_on():
-    assert not progress_wanted(False) and progress_wanted(True)
+    assert not progress_wanted(False)
+    assert progress_wanted(True)
     with progress_bar("x", False) as bar:
         assert bar is None
     buf = io.StringIO()
@@ -119,7 +121,8 @@ def test_progress_bar_helper_off_and_on():
         monte_carlo(model, INPUTS, trials=30_000, seed=2, block_size=10_000, progress=bar)
     text = buf.getvalue()
     assert text.count("\n") == 1
-    assert "Monte Carlo" in text and "30000/30000 trials" in text
+    assert "Monte Carlo" in text
+    assert "30000/30000 trials" in text
 
 
 def test_progress_wanted_follows_stderr(monkeypatch):

@@ -100,7 +100,9 @@ def test_ggs1994_geometric_circle_fit_reproduces_published_values() -> None:
     assert abs(centre[1] - expected["yc"]) <= 0.5e-4
     assert abs(radius - expected["r"]) <= 0.5e-4
     assert centre[2] == 0.0
-    assert fit.dof == 3 and fit.iterations is not None and 1 <= fit.iterations[0] < 30
+    assert fit.dof == 3
+    assert fit.iterations is not None
+    assert 1 <= fit.iterations[0] < 30
 
 
 def test_ggs1994_agrees_with_scipy_least_squares_and_is_pose_invariant() -> None:
@@ -214,7 +216,9 @@ def test_plane_fit_of_a_hand_made_plane() -> None:
     assert_allclose(fit.geometry.point, [[0, 0, 0]], atol=1e-15)
     assert_allclose(fit.residuals, [[e, -e, -e, e, 0]], atol=1e-15)
     assert_allclose(fit.rms, [e * np.sqrt(4 / 5)], rtol=1e-13)
-    assert fit.dof == 2 and fit.covariance is None and fit.iterations is None
+    assert fit.dof == 2
+    assert fit.covariance is None
+    assert fit.iterations is None
     c, s = np.cos(0.3), np.sin(0.3)
     rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
     tilted = fit_plane(pts @ rot.T + [10, 20, 30], orientation=[0, 0, 1])
@@ -247,7 +251,7 @@ def test_known_radius_with_centre_guess_from_three_points() -> None:
     centre = np.array([1.0, 2.0, 3.0])
     d = np.array([[0.2, 0.1, 1], [-0.1, 0.3, 1], [0.0, -0.2, 1]])
     pts = centre + 4.0 * d / np.linalg.norm(d, axis=1)[:, None]
-    fit = fit_sphere(pts, 4.0, centre_guess=centre + [0.1, -0.1, 0.2])
+    fit = fit_sphere(pts, 4.0, centre_guess=centre + np.array([0.1, -0.1, 0.2]))
     assert_allclose(fit.geometry.centre, [centre], atol=1e-10)
     assert fit.dof == 0
 
@@ -335,7 +339,8 @@ def test_sphere_covariance_matches_monte_carlo_spread() -> None:
     pts = nominal + rng.normal(scale=sigma, size=(m, 30, 1)) * normal
     for kwargs, k in (({}, 4), ({"radius": radius}, 3)):
         fit = fit_sphere(pts, **kwargs)
-        assert fit.covariance is not None and fit.covariance.shape == (m, k, k)
+        assert fit.covariance is not None
+        assert fit.covariance.shape == (m, k, k)
         params = np.column_stack([fit.geometry.centre, fit.geometry.radius])[:, :k]
         empirical = np.sqrt(np.diag(np.cov(params.T)))
         predicted = np.sqrt(np.diag(fit.covariance.mean(axis=0)))
@@ -359,7 +364,8 @@ def test_sphere_covariance_mean_is_closed_form_with_unbiased_variance() -> None:
     pts = nominal + rng.normal(scale=sigma, size=(m, 30, 1)) * normal
     for kwargs, k in (({}, 4), ({"radius": radius}, 3)):
         fit = fit_sphere(pts, **kwargs)
-        assert fit.covariance is not None and fit.dof == 30 - k
+        assert fit.covariance is not None
+        assert fit.dof == 30 - k
         jac = np.column_stack([-normal, -np.ones(30)])[:, :k]
         exact = sigma**2 * np.linalg.inv(jac.T @ jac)
         scale = np.sqrt(np.outer(np.diag(exact), np.diag(exact)))

@@ -31,7 +31,9 @@ def test_batch_of_one_broadcasts_against_batch_of_m() -> None:
     assert_array_equal(line.point, np.tile([5.0, 5, 5], (3, 1)))
     assert_array_equal(line.direction, [[1, 0, 0], [0, 1, 0], [0, 0, -1]])
     circ = Circle(np.zeros((4, 3)), [0, 0, 1], 2.0)
-    assert len(circ) == 4 and circ.radius.shape == (4,) and circ.normal.shape == (4, 3)
+    assert len(circ) == 4
+    assert circ.radius.shape == (4,)
+    assert circ.normal.shape == (4, 3)
 
 
 def test_plane_offset_is_eq_29() -> None:

@@ -109,7 +109,8 @@ def test_values_by_hand():
             np.testing.assert_allclose(r.places[o].mean, want, atol=1e-12, err_msg=o)
             np.testing.assert_allclose(r.places[o].cov, 0.0, atol=1e-20, err_msg=o)
     np.testing.assert_allclose(r.places["mp"].mean, [1, 2, 3])
-    assert plan.types["c4"] == "circle" and plan.types["fr"] == "frame"
+    assert plan.types["c4"] == "circle"
+    assert plan.types["fr"] == "frame"
     pl = r.places
     np.testing.assert_allclose(pl["pl_z"].part("normal")[0], [0, 0, 1], atol=1e-15)
     np.testing.assert_allclose(pl["pl_y"].part("normal")[0], [0, -1, 0], atol=1e-15)  # AB x AD

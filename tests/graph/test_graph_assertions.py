@@ -38,12 +38,14 @@ m(6). u(6, 0.0005).
 def test_fig6_reading():
     g = loads_assertions(FIG6, file="fig6.pl")
     plan = check_graph(g)
-    assert plan.types["p10"] == "point" and plan.types["p7"] == "x"
+    assert plan.types["p10"] == "point"
+    assert plan.types["p7"] == "x"
     t1 = g.transition("t1")
     assert t1.param("at") == (-12.7, 0.0, 0.0)  # the X, Y, Z of the meas output
     assert t1.param("direction") == (1.0, 0.0, 0.0)  # default for an x output
     assert g.transition("t9").inputs == ("p7", "p8", "p9")
-    assert g.place("p6").value == -12.7 and g.place("p6").u == 0.0005
+    assert g.place("p6").value == -12.7
+    assert g.place("p6").u == 0.0005
     assert g.place("p1").pos == (20.0, 20.0)
     assert plan.generations[0] == ("t1", "t2", "t3", "t4", "t5")
 

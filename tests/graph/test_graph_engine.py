@@ -46,7 +46,8 @@ def test_graph_run_is_the_engine_run_of_the_compiled_model(axis_c):
     )
     # a compiled model travels to worker processes whole
     again = pickle.loads(pickle.dumps(model))
-    assert again.outputs == model.outputs and list(again.inputs) == list(model.inputs)
+    assert again.outputs == model.outputs
+    assert list(again.inputs) == list(model.inputs)
 
 
 def test_one_trial_is_refused_as_everywhere(axis_c):

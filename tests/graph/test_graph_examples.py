@@ -137,7 +137,7 @@ def test_axis_c_against_plain_numpy(with_alpha):
     centre, n = paper_axis(p1, p2, p3, alpha) if with_alpha else circumcentre(p1, p2, p3)
     line = r.places["axis_c"]
     est_p, u_p, _ = line.part("point")
-    est_d, u_d, _ = line.part("direction")
+    _, u_d, _ = line.part("direction")
     np.testing.assert_allclose(u_p, centre.std(0, ddof=1), rtol=0.04)
     np.testing.assert_allclose(u_d[:2], n[:, :2].std(0, ddof=1), rtol=0.04)
     np.testing.assert_allclose(est_p, [0, 0, 40], atol=4 * u_p.max() / math.sqrt(M))

@@ -85,7 +85,9 @@ def test_bad_meas_fields():
     assert (exc.value.field, exc.value.line) == ("direction", 11)
     with pytest.raises(GraphError, match=r"line 13: field dist: transition m1: .*frob"):
         graph("[1.0, 0.0, 0.0]", 'dist = "frob(1)"')
-    with pytest.raises(GraphError, match="line 13: field u_probe: .*u_probe must be a number >= 0"):
+    with pytest.raises(
+        GraphError, match=r"line 13: field u_probe: .*u_probe must be a number >= 0"
+    ):
         graph("[1.0, 0.0, 0.0]", "u_probe = -1.0")
     with pytest.raises(GraphError, match="meas needs at"):
         loads_graph('[[transition]]\nname = "m"\nop = "meas"\ndirection = [1, 0, 0]\nout = "q"\n')

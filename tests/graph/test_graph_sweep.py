@@ -51,7 +51,8 @@ def test_fig14_grid_and_surrogate():
         "probe.u_axis": np.linspace(0.001, 0.005, 5),
     }
     res = sweep(g, grid, "d_ac", trials=1000, seed=14)
-    assert res.grid.shape == (25, 2) and res.u.shape == (25,)
+    assert res.grid.shape == (25, 2)
+    assert res.u.shape == (25,)
     fit = res.fit()
     assert fit.max_rel_error <= 0.05
     # each grid point is an ordinary run with the same seed

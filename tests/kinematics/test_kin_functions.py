@@ -86,7 +86,8 @@ def test_per_trial_coefficients_equal_one_at_a_time() -> None:
 def test_with_coefficients_and_errors() -> None:
     f = LegendreSeries([0.0, 1.0], low=0.0, high=10.0)
     g = f.with_coefficients([1.0, 0.0])
-    assert isinstance(g, LegendreSeries) and g.high == 10.0
+    assert isinstance(g, LegendreSeries)
+    assert g.high == 10.0
     np.testing.assert_allclose(g(np.array([3.0])), [1.0])
     with pytest.raises(InputError, match="expected 2 coefficients, got 3"):
         f.with_coefficients([1.0, 2.0, 3.0])

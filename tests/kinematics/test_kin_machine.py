@@ -161,7 +161,7 @@ def test_linear_component_errors_and_abbe(spec: str) -> None:
     o = np.array([0.0, 50.0, 20.0])
     m = Machine.from_topology(spec, tool=t, pivots={"X": o})
     q = _random_q(m, 20, _rng(5))
-    x, y, z = q.T
+    _, y, z = q.T
     p0 = m.tool_position(q)
     # positioning and straightness: the same sign whichever side X is on
     d = m.tool_position(q, {"EXX": 1e-3, "EYX": -2e-3, "EZX": 3e-3}) - p0
@@ -235,7 +235,7 @@ def test_tool_and_setup_errors() -> None:
     m = Machine.from_topology("XFYZ", tool=(0, 0, -100.0), workpiece=(200.0, 100.0, 50.0))
     q = _random_q(m, 10, _rng(8))
     p0 = m.tool_position(q)
-    np.testing.assert_allclose(p0, q + [0, 0, -100.0] - [200.0, 100.0, 50.0], atol=1e-12)
+    np.testing.assert_allclose(p0, q + np.array([0, 0, -100.0]) - [200.0, 100.0, 50.0], atol=1e-12)
     d = m.tool_position(q, {"EXT": 1e-3, "EZT": 2e-3}) - p0
     np.testing.assert_allclose(d, np.tile([1e-3, 0, 2e-3], (10, 1)), atol=1e-12)
     # the workpiece placed +EXP along x: the tool is -EXP relative to it

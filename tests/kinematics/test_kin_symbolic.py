@@ -77,5 +77,7 @@ def test_text_and_latex() -> None:
     # squareness EC0Y with Y travel enters x as -EC0Y*y (ISO 230-1 sign)
     assert "- EC0Y*y" in lines[0] or lines[0].startswith("x_W = -EC0Y*y")
     tex = eq.latex()
-    assert tex.startswith("\\begin{aligned}") and "x_W &=" in tex and "EC0Y" in tex
+    assert tex.startswith("\\begin{aligned}")
+    assert "x_W &=" in tex
+    assert "EC0Y" in tex
     assert [str(s) for s in eq.axis_symbols] == ["x", "y", "z"]

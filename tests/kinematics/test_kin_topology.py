@@ -38,8 +38,10 @@ def test_axes_canonical_order_and_sides() -> None:
     t = parse_topology("wCBXfYZt")
     assert t.axes == ("X", "Y", "Z", "B", "C")
     assert t.chain == ("C", "B", "X", "Y", "Z")
-    assert t.side("C") == "part" and t.side("Z") == "tool"
-    assert t.linear_axes == ("X", "Y", "Z") and t.rotary_axes == ("B", "C")
+    assert t.side("C") == "part"
+    assert t.side("Z") == "tool"
+    assert t.linear_axes == ("X", "Y", "Z")
+    assert t.rotary_axes == ("B", "C")
     with pytest.raises(TopologyError, match="'A' is not in wCBXfYZt"):
         t.side("A")
 

@@ -36,8 +36,12 @@ def test_adaptive_stops_within_tolerance_of_exact_values():
         lambda x1, x2: 1.7 * (x1 + x2), INPUTS, seed=5, adaptive=True, ndig=2, kind="symmetric"
     )
     h = adaptive_block_size(0.95)
-    assert r.adaptive and r.trials % h == 0 and r.trials == r.blocks * h and r.blocks >= 2
-    assert r.block_trials == h and r.samples.shape == (r.trials,)
+    assert r.adaptive
+    assert r.trials % h == 0
+    assert r.trials == r.blocks * h
+    assert r.blocks >= 2
+    assert r.block_trials == h
+    assert r.samples.shape == (r.trials,)
     u = 1.7 * math.sqrt(1.25)
     delta = numerical_tolerance(r.u, 2)
     assert r.tolerance == delta == 0.05
@@ -46,7 +50,8 @@ def test_adaptive_stops_within_tolerance_of_exact_values():
     assert abs(r.u - u) <= 2 * delta
     lo, hi = r.coverage_interval(0.95, "symmetric")
     z = stats.norm.ppf(0.975)
-    assert abs(lo - (0.85 - z * u)) <= 2 * delta and abs(hi - (0.85 + z * u)) <= 2 * delta
+    assert abs(lo - (0.85 - z * u)) <= 2 * delta
+    assert abs(hi - (0.85 + z * u)) <= 2 * delta
 
 
 def test_adaptive_matches_large_fixed_run_and_is_its_prefix():
@@ -94,7 +99,8 @@ def test_adaptive_vector_output():
     r = monte_carlo(
         lambda x1, x2: np.column_stack([x1 + x2, 10 * x2]), INPUTS, seed=5, adaptive=True, ndig=1
     )
-    assert r.dim == 2 and r.trials % 10_000 == 0
+    assert r.dim == 2
+    assert r.trials % 10_000 == 0
     assert abs(r.u[1] - 5.0) <= 2 * numerical_tolerance(5.0, 1)
 
 

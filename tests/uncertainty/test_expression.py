@@ -126,7 +126,8 @@ def test_rejects_unsafe_input_with_column(text, fragment, column):
     assert fragment in msg
     assert f"column {column}:" in msg
     assert "allowed: numbers, variable names" in msg
-    assert "sqrt" in msg and "hypot" in msg
+    assert "sqrt" in msg
+    assert "hypot" in msg
     assert info.value.column == column
 
 
@@ -160,7 +161,7 @@ def test_random_text_never_executes(text):
     replaced by traps for the duration of the parse)."""
     called = []
 
-    def trap(*args, **kwargs):
+    def trap(*args, **_kwargs):
         called.append(args)
         raise AssertionError("executed")
 

@@ -124,8 +124,10 @@ def test_product_relative_uncertainty_closed_form():
 def test_constant_input_contributes_nothing():
     res = gum(expression("a + k * b"), {"a": Normal(1, 0.1), "b": Normal(2, 0.2), "k": 3.0})
     assert res.u == pytest.approx(math.sqrt(0.01 + 9 * 0.04), rel=1e-14)
-    entry = [e for e in res.budget if e.name == "k"][0]
-    assert entry.u == 0 and entry.contribution == 0 and entry.sensitivity == pytest.approx(2.0)
+    entry = next(e for e in res.budget if e.name == "k")
+    assert entry.u == 0
+    assert entry.contribution == 0
+    assert entry.sensitivity == pytest.approx(2.0)
     assert isinstance(Constant(3.0).std, float)
 
 
@@ -239,7 +241,8 @@ def test_vector_output_covariance_is_c_ux_ct():
     np.testing.assert_allclose(res.estimate, [r0 * np.cos(phi0) + off, r0 * np.sin(phi0)])
     np.testing.assert_allclose(res.sensitivities["x"], jac[:, :2], rtol=1e-13)
     np.testing.assert_allclose(res.sensitivities["o"], jac[:, 2], atol=1e-15)
-    assert res.k.shape == (2,) and res.interval[0].shape == (2,)
+    assert res.k.shape == (2,)
+    assert res.interval[0].shape == (2,)
     shares = sum(e.share for e in res.budget)
     np.testing.assert_allclose(shares, [1.0, 1.0], rtol=1e-13)
 
@@ -274,7 +277,7 @@ def test_errors_name_the_field():
     with pytest.raises(InputError, match="input\\(s\\) not in the model: z"):
         gum(expression("a"), {"a": Normal(0, 1), "z": Normal(0, 1)})
     with pytest.raises(InputError, match="shape \\(m,\\) or \\(m, d\\)"):
-        gum(lambda a: np.zeros((2, 2, 2)), {"a": Normal(0, 1)})
+        gum(lambda a: np.zeros((2, 2, 2)), {"a": Normal(0, 1)})  # noqa: ARG005
     with pytest.raises(InputError, match="finite expectation") as info:
         gum(lambda a: a, {"a": StudentT(1.0)})
     assert info.value.field == "a"
@@ -299,7 +302,7 @@ def test_estimate_at_the_edge_of_the_domain_uses_complex_step():
 
 def test_not_differentiable_or_not_finite_is_an_error_naming_the_input():
     # not complex-safe (abs): central differences, and x - h leaves the domain of x**0.5
-    with pytest.raises(InputError, match="not differentiable .* x") as info:
+    with pytest.raises(InputError, match=r"not differentiable .* x") as info:
         gum(expression("x**0.5 * abs(y)"), {"x": Normal(0.0, 1.0), "y": Normal(1, 1)})
     assert info.value.field == "x"
     with pytest.raises(InputError, match="not finite at the input estimates"):

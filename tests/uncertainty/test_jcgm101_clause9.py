@@ -106,7 +106,8 @@ def test_9_2_3_rectangular_inputs_table_3(sampling):
     assert exact == pytest.approx(3.8794, abs=5e-5)
     # five standard errors of a sample quantile, √(p(1 - p)/M) / g(η), M the trials made
     se = math.sqrt(0.025 * 0.975 / mc.trials) / (irwin_hall_pdf(q) / (2 * a))
-    assert abs(hi - exact) <= 5 * se and abs(lo + exact) <= 5 * se
+    assert abs(hi - exact) <= 5 * se
+    assert abs(lo + exact) <= 5 * se
     # §8 comparison: d_high is |1.96 × 2 - 3.8794| = 0.041 up to the sampling error
     v = validate(g, mc, ndig=3)
     assert not v.passed
@@ -143,10 +144,12 @@ def test_9_2_4_dominant_rectangular_input_table_4(sampling):
         return sig / (2 * a) * (g_int((y + a) / sig) - g_int((y - a) / sig))
 
     exact = optimize.brentq(lambda y: cdf(y) - 0.975, 0.0, 30.0)
-    assert abs(hi - exact) <= d and abs(lo + exact) <= d
+    assert abs(hi - exact) <= d
+    assert abs(lo + exact) <= d
     v = validate(g, mc)
     assert not v.passed
-    assert v.d_low > 2.5 and v.d_high > 2.5
+    assert v.d_low > 2.5
+    assert v.d_high > 2.5
 
 
 MASS = expression("(m_rc + dm_rc) * (1 + (rho_a - 1.2) * (1 / rho_w - 1 / rho_r)) - 100000")
@@ -315,7 +318,8 @@ def test_9_4_comparison_loss_uncorrelated_vs_noncentral_chi2(x1, sampling):
         slo, shi = mc.coverage_interval(0.95, kind="shortest")
         assert 0.0 <= slo <= ref.ppf(5.0 / mc.trials)
         _within_standard_errors(mc, ref, [(0.95, shi)], moments=False)
-        assert g.u == 0.0 and not validate(g, mc).passed
+        assert g.u == 0.0
+        assert not validate(g, mc).passed
 
 
 def test_9_4_comparison_loss_correlated_inputs(sampling):

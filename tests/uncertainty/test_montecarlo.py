@@ -43,7 +43,8 @@ ADD_INPUTS = {
 
 def _same(a, b):
     np.testing.assert_array_equal(a.samples, b.samples)
-    assert a.seed == b.seed and a.trials == b.trials
+    assert a.seed == b.seed
+    assert a.trials == b.trials
 
 
 @pytest.mark.parametrize("trials", [123_457, 100_000])
@@ -82,7 +83,8 @@ def test_dict_order_irrelevant():
 
 def test_seed_none_is_recorded_and_reproduces():
     a = monte_carlo(additive, ADD_INPUTS, 10_000)
-    assert isinstance(a.seed, int) and a.seed.bit_length() > 32
+    assert isinstance(a.seed, int)
+    assert a.seed.bit_length() > 32
     _same(a, monte_carlo(additive, ADD_INPUTS, 10_000, seed=a.seed))
     b = monte_carlo(additive, ADD_INPUTS, 10_000, seed=np.random.SeedSequence(a.seed))
     _same(a, b)
@@ -92,10 +94,11 @@ def test_model_wrong_shape_is_named():
     with pytest.raises(InputError) as exc:
         monte_carlo(lambda x: x[:-1], {"x": "normal(0, 1)"}, trials=1000, seed=1, block_size=400)
     msg = str(exc.value)
-    assert "field model" in msg and "returned shape (399,) for a block of 400 trials" in msg
+    assert "field model" in msg
+    assert "returned shape (399,) for a block of 400 trials" in msg
     assert "expected (400,) or (400, d)" in msg
     with pytest.raises(InputError, match=r"returned shape \(\)"):
-        monte_carlo(lambda x: 3.0, {"x": "normal(0, 1)"}, trials=100, seed=1)
+        monte_carlo(lambda x: 3.0, {"x": "normal(0, 1)"}, trials=100, seed=1)  # noqa: ARG005
     with pytest.raises(InputError, match="could not be called with the inputs x"):
         monte_carlo(lambda y: y, {"x": "normal(0, 1)"}, trials=100, seed=1)
     with pytest.raises(InputError, match="callable"):
@@ -118,7 +121,9 @@ def test_nan_policy():
         exc.value
     )
     r = monte_carlo(model, inputs, 50_000, seed=5, nan_policy="omit")
-    assert r.omitted == nneg and r.samples.shape == (50_000 - nneg,) and r.trials == 50_000
+    assert r.omitted == nneg
+    assert r.samples.shape == (50_000 - nneg,)
+    assert r.trials == 50_000
     np.testing.assert_array_equal(r.samples, np.sqrt(ref.samples[ref.samples >= 0]))
     with pytest.raises(InputError, match="nan_policy"):
         monte_carlo(model, inputs, 100, seed=5, nan_policy="ignore")  # type: ignore[arg-type]
@@ -140,7 +145,8 @@ def test_vector_output_and_vector_input():
         return np.column_stack([p[:, 0] + s, p[:, 1] - s, p[:, 0] * 0 + 1.0])
 
     r = monte_carlo(model, {"p": MultivariateNormal([1, 2], cov), "s": "normal(0, 0.5)"}, M, 3)
-    assert r.samples.shape == (M, 3) and r.dim == 3
+    assert r.samples.shape == (M, 3)
+    assert r.dim == 3
     exact = np.array([[1.25, 0.25], [0.25, 2.25]])
     se = np.sqrt((np.outer(np.diag(exact), np.diag(exact)) + exact**2) / M)
     assert np.all(np.abs(r.cov[:2, :2] - exact) <= 5 * se)
@@ -181,7 +187,8 @@ def test_jcgm101_9_2_additive_normal():
     assert abs(r.u - 2.0) <= 5 * 2 / math.sqrt(2 * M)
     lo, hi = r.coverage_interval(0.95, "symmetric")
     se = math.sqrt(0.025 * 0.975 / M) / (stats.norm.pdf(1.96) / 2)
-    assert abs(lo + 3.92) <= 5 * se + 0.005 and abs(hi - 3.92) <= 5 * se + 0.005
+    assert abs(lo + 3.92) <= 5 * se + 0.005
+    assert abs(hi - 3.92) <= 5 * se + 0.005
 
 
 def irwin_hall(n=4):
@@ -213,7 +220,8 @@ def test_jcgm101_9_2_additive_rectangular():
     assert exact_hi == pytest.approx(3.88, abs=0.005)  # the published value
     se = math.sqrt(0.025 * 0.975 / M) / (pdf(s975) / (2 * a))
     lo, hi = r.coverage_interval(0.95, "symmetric")
-    assert abs(hi - exact_hi) <= 5 * se and abs(lo + exact_hi) <= 5 * se
+    assert abs(hi - exact_hi) <= 5 * se
+    assert abs(lo + exact_hi) <= 5 * se
 
 
 def test_jcgm101_9_3_mass_calibration():

@@ -104,7 +104,8 @@ def test_shortest_interval_of_exponential_starts_at_zero():
 def test_histogram_density_integrates_to_one():
     r = MonteCarloResult.from_samples(np.random.default_rng(1).normal(0, 1, 10_000), seed=1)
     h = r.histogram(50)
-    assert h.counts.sum() == 10_000 and h.edges.size == 51
+    assert h.counts.sum() == 10_000
+    assert h.edges.size == 51
     assert float(np.sum(h.density * np.diff(h.edges))) == pytest.approx(1.0, rel=1e-12)
 
 
@@ -124,7 +125,8 @@ def _gaussian_vector(m, seed):
 def test_vector_cov_and_components():
     x, cov = _gaussian_vector(M, 10)
     r = MonteCarloResult.from_samples(x, seed=10)
-    assert r.dim == 2 and r.cov.shape == (2, 2)
+    assert r.dim == 2
+    assert r.cov.shape == (2, 2)
     se = np.sqrt((np.outer(np.diag(cov), np.diag(cov)) + cov**2) / M)
     assert np.all(np.abs(r.cov - cov) <= 5 * se)
     np.testing.assert_allclose(r.u, np.sqrt(np.diag(r.cov)), rtol=1e-12)
@@ -185,4 +187,6 @@ def test_result_is_frozen_and_read_only():
     with pytest.raises(ValueError, match="read-only"):
         r.samples[0] = 0.0
     s = r.summary(0.5)
-    assert s["seed"] == 5 and s["trials"] == 3 and s["estimate"] == 2.0
+    assert s["seed"] == 5
+    assert s["trials"] == 3
+    assert s["estimate"] == 2.0

@@ -44,11 +44,13 @@ def _concat(blocks):
 def test_blocks_identical_to_draw(block_size, method):
     ref = draw(INPUTS, TRIALS, seed=99, normal_method=method)
     got, spans = _concat(iter_blocks(INPUTS, TRIALS, 99, block_size, normal_method=method))
-    assert spans[0][0] == 0 and spans[-1][1] == TRIALS
+    assert spans[0][0] == 0
+    assert spans[-1][1] == TRIALS
     assert all(b - a == block_size for a, b in spans[:-1])
     for k in INPUTS:
         np.testing.assert_array_equal(got[k], ref[k])
-    assert ref["v"].shape == (TRIALS, 2) and ref["x"].shape == (TRIALS,)
+    assert ref["v"].shape == (TRIALS, 2)
+    assert ref["x"].shape == (TRIALS,)
 
 
 def test_seed_block_k_is_kth_spawned_child_keyed_by_name():
@@ -104,14 +106,16 @@ def test_resolve_seed():
     assert resolve_seed(np.int64(17)) == 17
     assert resolve_seed(np.random.SeedSequence(17)) == 17
     s = resolve_seed(None)
-    assert isinstance(s, int) and s >= 0 and s.bit_length() > 32
+    assert isinstance(s, int)
+    assert s >= 0
+    assert s.bit_length() > 32
     # the recorded entropy reproduces the draws
     np.testing.assert_array_equal(draw(INPUTS, 100, s)["x"], draw(INPUTS, 100, s)["x"])
     assert resolve_seed(None) != s
 
 
 @pytest.mark.parametrize(
-    "seed,msg",
+    ("seed", "msg"),
     [
         (-1, "non-negative integer"),
         (1.5, "non-negative integer"),
@@ -132,7 +136,7 @@ def test_argument_errors():
         list(iter_blocks(INPUTS, 10, 1, 0))
     with pytest.raises(InputError, match="field normal_method"):
         draw(INPUTS, 10, 1, normal_method="polar")  # type: ignore[arg-type]
-    with pytest.raises(DistributionError, match="field q: .*unknown distribution 'foo'"):
+    with pytest.raises(DistributionError, match=r"field q: .*unknown distribution 'foo'"):
         draw({"q": "foo(1)"}, 10, 1)
     with pytest.raises(InputError, match="field seed: expected the integer seed"):
         draw(INPUTS, 10, None)  # type: ignore[arg-type]

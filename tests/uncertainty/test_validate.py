@@ -33,7 +33,9 @@ def test_validation_by_hand_normal_output_passes():
     assert v.d_high == pytest.approx(abs(mu + big_u - y_high), rel=1e-12)
     assert v.delta == 0.05  # u = 2.0 = 20 × 10⁻¹ -> δ = ½ × 10⁻¹
     assert v.passed
-    assert isinstance(v, Validation) and v.kind == "symmetric" and v.p == 0.95
+    assert isinstance(v, Validation)
+    assert v.kind == "symmetric"
+    assert v.p == 0.95
 
 
 def test_validation_by_hand_rectangular_output_fails():
@@ -49,7 +51,8 @@ def test_validation_by_hand_rectangular_output_fails():
     assert not v.passed
     # ndig = 1: u -> 3 × 10² -> δ = 50; still not validated (d ≈ 66)
     v1 = validate(g, mc, ndig=1)
-    assert v1.delta == 50.0 and not v1.passed
+    assert v1.delta == 50.0
+    assert not v1.passed
 
 
 def test_one_endpoint_off_is_enough_to_fail():
@@ -67,12 +70,14 @@ def test_one_endpoint_off_is_enough_to_fail():
     sorted_values = np.sort(x)
     assert v.d_low == pytest.approx(abs(-z - sorted_values[999]), rel=1e-12)
     assert v.d_high == pytest.approx(abs(z - sorted_values[38_999]), rel=1e-12)
-    assert v.delta == 0.05 and v.d_low <= v.delta < v.d_high
+    assert v.delta == 0.05
+    assert v.d_low <= v.delta < v.d_high
     assert abs(v.d_high - 0.1 * z) <= 0.002
     assert not v.passed
     # and mirrored: the lower endpoint off, the upper one right
     mirrored = validate(g, MonteCarloResult.from_samples(-x, seed=None))
-    assert mirrored.d_high <= mirrored.delta < mirrored.d_low and not mirrored.passed
+    assert mirrored.d_high <= mirrored.delta < mirrored.d_low
+    assert not mirrored.passed
 
 
 def test_other_p_recomputes_k_and_shortest_kind():
@@ -84,7 +89,8 @@ def test_other_p_recomputes_k_and_shortest_kind():
     k99 = stats.norm.ppf(0.995)
     assert v.d_low == pytest.approx(abs(-k99 - lo), rel=1e-12)
     assert v.d_high == pytest.approx(abs(k99 - hi), rel=1e-12)
-    assert v.kind == "shortest" and v.passed
+    assert v.kind == "shortest"
+    assert v.passed
 
 
 def test_zero_gum_uncertainty_has_zero_tolerance():
@@ -94,7 +100,8 @@ def test_zero_gum_uncertainty_has_zero_tolerance():
     g = gum(expression("x**2"), {"x": Normal(0.0, 1.0)})
     assert g.u == 0.0
     v = validate(g, mc)
-    assert v.delta == 0.0 and not v.passed
+    assert v.delta == 0.0
+    assert not v.passed
 
 
 def test_real_monte_carlo_linear_model_validates():

@@ -64,7 +64,8 @@ __all__ = [
 
 
 def _dot(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.einsum("...i,...i->...", a, b)
+    out: NDArray[np.float64] = np.einsum("...i,...i->...", a, b)
+    return out
 
 
 def _norm(a: NDArray[np.float64]) -> NDArray[np.float64]:

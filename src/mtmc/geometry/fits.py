@@ -230,7 +230,8 @@ def _orientation(orientation: npt.ArrayLike | None, m: int) -> NDArray[np.float6
 
 
 def _rms(r: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.sqrt(np.mean(r * r, axis=1))
+    rms: NDArray[np.float64] = np.sqrt(np.mean(r * r, axis=1))
+    return rms
 
 
 def _plane_block(P: NDArray[np.float64], orientation: NDArray[np.float64] | None) -> Block:

@@ -62,7 +62,8 @@ def _index(arr: NDArray[Any], idx: Any) -> NDArray[Any]:
             raise IndexError(f"trial index {idx} out of range for a batch of {m}")
         i = int(idx) % m
         return arr[i : i + 1]
-    return arr[idx]
+    out: NDArray[Any] = arr[idx]
+    return out
 
 
 def _set(obj: object, **values: NDArray[np.float64]) -> None:
@@ -180,7 +181,8 @@ class Plane:
     @property
     def offset(self) -> NDArray[np.float64]:
         """``D = -normal · point`` of the plane equation ``n · x + D = 0`` (eq. 29), shape (M,)."""
-        return -np.einsum("mi,mi->m", self.normal, self.point)
+        d: NDArray[np.float64] = -np.einsum("mi,mi->m", self.normal, self.point)
+        return d
 
 
 @dataclass(frozen=True, eq=False)

@@ -390,8 +390,8 @@ def quaternion_from_matrix(R: npt.ArrayLike) -> NDArray[np.float64]:
     allq = np.stack([w4, x4, y4, z4], axis=-2)  # (..., 4 pivots, 4 comps)
     q = np.take_along_axis(allq, pivot[..., None, None], axis=-2)[..., 0, :]
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    q = np.where(q[..., :1] < 0.0, -q, q)
-    return q
+    out: NDArray[np.float64] = np.where(q[..., :1] < 0.0, -q, q)
+    return out
 
 
 def euler_from_matrix(R: npt.ArrayLike, seq: str) -> NDArray[np.float64]:
@@ -507,7 +507,8 @@ def matrix_from_axis_angle(axis: npt.ArrayLike, angle: npt.ArrayLike) -> NDArray
     K[..., 2, 1] = n[..., 0]
     s = np.sin(th)[..., None, None]
     c = np.cos(th)[..., None, None]
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+    out: NDArray[np.float64] = np.eye(3) + s * K + (1.0 - c) * (K @ K)
+    return out
 
 
 def axis_angle_from_matrix(
@@ -583,9 +584,11 @@ def apply_htm(T: npt.ArrayLike, points: npt.ArrayLike) -> NDArray[np.float64]:
     R = A[..., :3, :3]
     t = A[..., :3, 3]
     if p.ndim == A.ndim - 1:
-        return np.einsum("...ij,...j->...i", R, p) + t
+        out: NDArray[np.float64] = np.einsum("...ij,...j->...i", R, p) + t
+        return out
     if p.ndim == A.ndim:
-        return np.einsum("...ij,...nj->...ni", R, p) + t[..., None, :]
+        out = np.einsum("...ij,...nj->...ni", R, p) + t[..., None, :]
+        return out
     raise InputError(
         f"expected points of shape (..., 3) matching T's batch or (..., n, 3), got points "
         f"{p.shape} with T {A.shape}",

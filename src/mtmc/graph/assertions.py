@@ -216,7 +216,7 @@ def _pos(x: Any, y: Any, file: str | None, line: int) -> tuple[float, float] | N
     return (_num(x, "x", file, line), _num(y, "y", file, line))
 
 
-def loads_assertions(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
+def loads_assertions(text: str, *, file: str | None = None, validate: bool = True) -> Graph:  # noqa: C901
     """Read a graph from the assertion database of Stryczek (Table 1).
 
     Parameters
@@ -445,7 +445,7 @@ def _f(v: Any) -> str:
     return repr(float(v)) if isinstance(v, float) else str(v)
 
 
-def dumps_assertions(graph: Graph) -> str:
+def dumps_assertions(graph: Graph) -> str:  # noqa: C901
     """Write a graph as the assertion database of Stryczek (with the extensions).
 
     Every place is written, the implicit ones too, so reading the text back gives the

@@ -161,7 +161,7 @@ def _err(graph: Graph, msg: str, line: int | None, fld: str | None = None) -> Gr
     return GraphError(msg, file=graph.file, line=line, field=fld)
 
 
-def check(graph: Graph, *, nominal: bool = True) -> Plan:
+def check(graph: Graph, *, nominal: bool = True) -> Plan:  # noqa: C901
     """Validate a graph and compute its types, bound variants and firing order.
 
     With ``nominal`` (default) the nominal configuration is then checked too

@@ -172,7 +172,7 @@ class Place:
     pos: tuple[float, float] | None = None
     line: int | None = field(default=None, compare=False, repr=False)
 
-    def __post_init__(self) -> None:
+    def __post_init__(self) -> None:  # noqa: C901
         _check_name(self.name, "place", self.line)
         what = f"place {self.name}"
         if self.type not in PLACE_TYPES:

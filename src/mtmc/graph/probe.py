@@ -59,7 +59,7 @@ class MeasSpec:
         File length unit in mm.
     """
 
-    __slots__ = ("at", "direction", "u_axis", "u_along", "dist", "factor")
+    __slots__ = ("at", "direction", "dist", "factor", "u_along", "u_axis")
 
     def __init__(
         self,

@@ -344,7 +344,7 @@ def sweep(
     output: str,
     *,
     trials: int = 1000,
-    seed: int | None | np.random.SeedSequence = None,
+    seed: int | np.random.SeedSequence | None = None,
     progress: Callable[[int, int | None], None] | None = None,
     workers: int = 1,
     executor: ExecutorKind | Any = "thread",

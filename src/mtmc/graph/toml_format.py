@@ -130,7 +130,7 @@ def _where(e: tomllib.TOMLDecodeError) -> tuple[int | None, int | None]:
     return (int(m.group(1)), int(m.group(2))) if m else (None, None)
 
 
-def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
+def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph:  # noqa: C901
     """Read a graph from TOML text.
 
     Parameters

@@ -153,7 +153,7 @@ def parse_error_name(name: str) -> ErrorTerm:
     return ErrorTerm(s, "location", axis, direction, angular)
 
 
-def list_error_terms(topology: Topology, *, which: str = "standard") -> tuple[ErrorTerm, ...]:
+def list_error_terms(topology: Topology, *, which: str = "standard") -> tuple[ErrorTerm, ...]:  # noqa: C901
     """The error terms of a machine, in a fixed order.
 
     Parameters

@@ -140,7 +140,8 @@ class ErrorFunction(ABC):
     def __call__(self, q: npt.ArrayLike) -> NDArray[np.float64]:
         """Evaluate at axis positions ``q`` of shape ``(M,)``; returns ``(M,)``."""
         B = self.basis(q)
-        return np.einsum("...k,...k->...", B, self.coefficients)
+        out: NDArray[np.float64] = np.einsum("...k,...k->...", B, self.coefficients)
+        return out
 
 
 def _replace(obj: Any, c: NDArray[np.float64]) -> ErrorFunction:

@@ -97,7 +97,7 @@ def _rot_axis(j: int, angle: Any, y: _F) -> _F:
     out = (
         y.copy()
         if np.ndim(c) == 0
-        else np.broadcast_to(y, np.broadcast_shapes(y.shape, np.shape(c) + (3,))).copy()
+        else np.broadcast_to(y, np.broadcast_shapes(y.shape, (*np.shape(c), 3))).copy()
     )
     yi, yk = y[..., i], y[..., k]
     out[..., i] = c * yi - s * yk
@@ -110,7 +110,7 @@ def _small_rot(e: tuple[Any, Any, Any], y: _F, sign: float) -> _F:
     a, b, c = e
     yx, yy, yz = y[..., 0], y[..., 1], y[..., 2]
     out = np.empty(
-        np.broadcast_shapes(y.shape, np.shape(a) + (3,), np.shape(b) + (3,), np.shape(c) + (3,))
+        np.broadcast_shapes(y.shape, (*np.shape(a), 3), (*np.shape(b), 3), (*np.shape(c), 3))
     )
     out[..., 0] = yx + sign * (b * yz - c * yy)
     out[..., 1] = yy + sign * (c * yx - a * yz)
@@ -315,7 +315,7 @@ class _LinearMotion(_Factor):
             if not exact:
                 v: _F = _cross_axis(j, e)
             else:
-                v = np.broadcast_to(e, np.broadcast_shapes(*(np.shape(a) for a in ang)) + (3,))
+                v = np.broadcast_to(e, (*np.broadcast_shapes(*(np.shape(a) for a in ang)), 3))
                 for i in (0, 1, 2):
                     v = _rot_axis(i, ang[i], v)
                     if i == j:

@@ -311,7 +311,7 @@ def _evaluate(
     return out
 
 
-def gum(
+def gum(  # noqa: C901
     model: Callable[..., Any],
     inputs: Mapping[str, Any],
     p: float = 0.95,
