@@ -41,7 +41,8 @@ def test_every_study_has_its_result_folder_and_the_index_links_them(quick):
         for f in ("result.json", "provenance.json", "report.html", "quantities.csv", "study.toml"):
             assert (out / s / f).is_file(), (s, f)
         result = json.loads((out / s / "result.json").read_text(encoding="utf-8"))
-        assert result["trials"] == M and result["seed"] == 101
+        assert result["trials"] == M
+        assert result["seed"] == 101
         assert result["title"] in page
     assert lines[-1] == f"Report: {index}"
     assert len(lines) == len(stems) + 2
@@ -64,7 +65,7 @@ def test_the_results_against_independent_references(quick):
 
 def test_same_seed_same_numbers(quick, tmp_path):
     out, _, _ = quick
-    demo.run_demo(tmp_path, trials=M, seed=101, studies=["axis_c.toml"], echo=lambda s: None)
+    demo.run_demo(tmp_path, trials=M, seed=101, studies=["axis_c.toml"], echo=lambda _: None)
     a = json.loads((out / "axis_c" / "result.json").read_text())
     b = json.loads((tmp_path / "axis_c" / "result.json").read_text())
     assert a == b

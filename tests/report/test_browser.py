@@ -100,5 +100,6 @@ def test_a_screenshot_is_saved(chromium, page, tmp_path_factory):
     )
     assert shot.is_file(), proc.stderr[-2000:]
     data = shot.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 50_000
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert len(data) > 50_000
     print(f"screenshot of the report: {shot}")

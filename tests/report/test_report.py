@@ -42,7 +42,7 @@ class _Cells(HTMLParser):
 
     def handle_endtag(self, tag):
         if self._open and self._open[-1][0] == tag:
-            t, key, value, text = self._open.pop()
+            _, key, value, text = self._open.pop()
             self.cells.append((key, value, "".join(text).strip()))
         if tag == "figure":
             self._plot = None
@@ -77,7 +77,8 @@ def test_every_number_shown_is_the_one_in_result_json(folder):
         want = _lookup(doc, key)
         keys.add(key)
         if isinstance(want, str):
-            assert value == want and text == want, key
+            assert value == want, key
+            assert text == want, key
         else:
             assert float(value) == want, key
             if "share" in key or "max_rel_error" in key:
@@ -115,14 +116,15 @@ def test_every_plot_is_inline_and_nothing_is_fetched(folder):
     assert set(parser.plots) == expected
     assert all(n > 0 for n in parser.plots.values()), parser.plots
     assert all(u.startswith("#") for u in parser.urls), parser.urls
-    assert "<link" not in text and "@import" not in text
+    assert "<link" not in text
+    assert "@import" not in text
     assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", text)
 
 
 def test_render_refuses_what_is_not_a_result(tmp_path):
     from mtmc.errors import InputError
 
-    with pytest.raises(InputError, match="no result.json"):
+    with pytest.raises(InputError, match=r"no result\.json"):
         render(tmp_path)
     with pytest.raises(InputError, match="mtmc-result/1"):
         html({"format": "other"})

@@ -61,9 +61,11 @@ def test_mass_calibration_is_monte_carlo_and_gum_of_the_model(results):
     assert q.mc["shortest"] == list(mc.coverage_interval(0.95, "shortest"))
     assert q.mc["symmetric"] == list(mc.coverage_interval(0.95, "symmetric"))
     g = gum(model, inputs)
-    assert q.gum["u"] == g.u and q.gum["k"] == g.k
+    assert q.gum["u"] == g.u
+    assert q.gum["k"] == g.k
     v = validate(g, mc, p=0.95, kind="shortest")
-    assert q.validation["d_low"] == v.d_low and q.validation["kind"] == "shortest"
+    assert q.validation["d_low"] == v.d_low
+    assert q.validation["kind"] == "shortest"
     # JCGM 101 Table 7: u(δm) = 0.0754 mg by MC, 0.0539 mg by the GUM
     assert q.mc["u"] == pytest.approx(0.0754, rel=_mc_tol(M))
     assert q.gum["u"] == pytest.approx(0.0539, abs=5e-5)
@@ -78,7 +80,8 @@ def test_graph_study_is_monte_carlo_of_graph_model_and_equals_run_graph(results)
     model, inputs = graph_model(g, "d_ac")
     mc = monte_carlo(model, inputs, trials=M, seed=SEED)
     q = r.quantity("d_ac")
-    assert q.mc["u"] == mc.u and q.mc["estimate"] == mc.estimate
+    assert q.mc["u"] == mc.u
+    assert q.mc["estimate"] == mc.estimate
     # a second route: the graph's own batched run draws the same trials
     res = run_graph(g, M, SEED, outputs=["d_ac", "p_o"])
     assert q.mc["u"] == pytest.approx(res.places["d_ac"].u, rel=1e-9)
@@ -124,7 +127,8 @@ def test_axis_regions_against_the_gaussian_ellipse(results, name):
     assert reg.k == pytest.approx(reg.k_chi2, rel=0.03)
     # in the region's own basis of that plane, a fraction p of the trials lies inside
     own = normal_plane_basis(direction)
-    assert np.allclose(own.T @ own, np.eye(2)) and np.allclose(own.T @ direction, 0.0)
+    assert np.allclose(own.T @ own, np.eye(2))
+    assert np.allclose(own.T @ direction, 0.0)
     dev = samples @ own - samples.mean(0) @ own
     inside = np.einsum("ij,jk,ik->i", dev, np.linalg.inv(reg.cov), dev)
     assert np.mean(inside <= reg.k**2) == pytest.approx(0.95, abs=1e-3)

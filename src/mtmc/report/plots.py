@@ -269,7 +269,8 @@ def sweep_svg(sw: dict[str, Any]) -> str:
 
     def surrogate(sig_um: np.ndarray) -> np.ndarray:
         sig = sig_um / 1e3
-        return np.sqrt(np.clip(s["c0"] + (sig**2) @ coef, 0.0, None)) * scale
+        out: np.ndarray = np.sqrt(np.clip(s["c0"] + (sig**2) @ coef, 0.0, None)) * scale
+        return out
 
     if grid.shape[1] == 2:
         fig = _figure(6.4, 4.6, left=0.0, right=0.95, bottom=0.05, top=1.0)

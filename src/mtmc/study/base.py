@@ -67,6 +67,11 @@ def _plain(obj: Any) -> Any:
     return to_jsonable(obj, nonfinite_as_null=True)
 
 
+def _plain_dict(obj: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = _plain(obj)
+    return out
+
+
 def convergence(
     samples: NDArray[np.float64], points: int = CONVERGENCE_POINTS
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
@@ -203,7 +208,7 @@ class Quantity:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (the entry of ``quantities`` in ``result.json``)."""
-        return _plain(
+        return _plain_dict(
             {
                 "name": self.name,
                 "unit": self.unit,
@@ -359,7 +364,7 @@ class Region:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (an entry of ``regions`` in ``result.json``)."""
-        return _plain(
+        return _plain_dict(
             {
                 "name": self.name,
                 "labels": list(self.labels),
@@ -514,7 +519,7 @@ class StudyResult:
 
     def to_dict(self) -> dict[str, Any]:
         """``result.json``: every summary, JSON-ready (``docs/results-format.md``)."""
-        return _plain(
+        return _plain_dict(
             {
                 "format": RESULT_FORMAT,
                 "kind": self.kind,
