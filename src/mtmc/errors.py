@@ -1,10 +1,12 @@
 """The one exception hierarchy of mtmc.
 
 Every error raised on purpose by mtmc derives from :class:`MtmcError` *and* from the
-builtin exception a caller would expect (``ValueError`` for bad values, ``KeyError``
-for unknown names, ...), so ``except ValueError`` keeps working. Each error carries
-structured fields (the file, line, field, what was expected and what was received)
-besides its message, and pickles with them, so it crosses process boundaries intact.
+builtin exception a caller would expect (``ValueError`` for bad input and degenerate
+geometry, ``RuntimeError`` for a computation that did not converge), so
+``except ValueError`` keeps working. Each error carries where the bad input is as
+structured fields (``file``, ``line``, ``column``, ``field``) besides its message, which
+says what was expected and what was received; it pickles with those fields, so it
+crosses process boundaries intact.
 
 Examples
 --------

@@ -79,10 +79,23 @@ def test_parameter_jacobian_matches_central_differences(exact: bool) -> None:
         np.testing.assert_allclose(
             J[:, :, k], fd, rtol=1e-6, atol=tol, err_msg=model.parameter_names[k]
         )
-    # the model's position equals the machine's with the same named errors
-    np.testing.assert_array_equal(
-        model.tool_position(q, theta), model.machine.tool_position(q, model.errors(theta))
-    )
+    # closed forms at A = C = 0 (no rotation between the axes and the workpiece): the
+    # constant terms of EXX (Legendre P0 = 1) and EYZ (Chebyshev T0 = 1) move the tool by
+    # their value along x and y; the linear terms by it times P1 = x/400 on [-400, 400] and
+    # T1 = (z + 200)/200 on [-400, 0]
+    q[:, 3:] = 0.0
+    p0 = model.tool_position(q, np.zeros(model.n_parameters), exact=exact)
+    one, zero = np.ones(m), np.zeros(m)
+    for name, shift in (
+        ("EXX[0]", [one, zero, zero]),
+        ("EXX[1]", [q[:, 0] / 400, zero, zero]),
+        ("EYZ[0]", [zero, one, zero]),
+        ("EYZ[1]", [zero, (q[:, 2] + 200) / 200, zero]),
+    ):
+        d = np.zeros(model.n_parameters)
+        d[model.parameter_names.index(name)] = 1e-4
+        got = model.tool_position(q, d, exact=exact) - p0
+        np.testing.assert_allclose(got, 1e-4 * np.column_stack(shift), atol=1e-12, err_msg=name)
 
 
 def test_bad_models_and_vectors() -> None:

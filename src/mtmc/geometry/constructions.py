@@ -11,7 +11,7 @@ batch size. Outputs are float64, lengths in mm, angles in rad.
 
 Degenerate input raises :class:`mtmc.errors.DegenerateGeometryError` naming the case
 and how many trials are affected. The test is relative, with tolerance
-:data:`mtmc.geometry._checks.RTOL` (``1e-10``): e.g. three points are collinear when
+:data:`mtmc.geometry.checks.RTOL` (``1e-10``): e.g. three points are collinear when
 ``|(b - a) × (c - a)| <= RTOL |b - a| |c - a|`` (the sine of the angle at ``a``). NaN
 coordinates are not checked here: they propagate to NaN results.
 
@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.geometry._checks import (
+from mtmc.geometry.checks import (
     RTOL,
     batch_size,
     check_points,
@@ -38,8 +38,8 @@ from mtmc.geometry._checks import (
     check_vectors,
     degenerate,
 )
-from mtmc.geometry._vec import cross as _cross
 from mtmc.geometry.primitives import Circle, Line, Plane
+from mtmc.geometry.vec import cross as _cross
 
 __all__ = [
     "angle_between",

@@ -36,7 +36,7 @@ non-finite coordinates with an :class:`~mtmc.errors.InputError` naming the trial
 iteration cannot converge on them).
 
 Tolerances: degeneracy is tested on the eigenvalues ``l1 <= l2 <= l3`` of the scatter
-matrix, relative, with :data:`mtmc.geometry._checks.RTOL` (``1e-10``): the eigenvalues
+matrix, relative, with :data:`mtmc.geometry.checks.RTOL` (``1e-10``): the eigenvalues
 are only accurate to about ``eps * l3``, so the test is on eigenvalue ratios (e.g.
 collinear points: ``l2 <= RTOL l3``, a ratio of the singular values of ``1e-5``).
 """
@@ -52,7 +52,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
-from mtmc.geometry._checks import (
+from mtmc.geometry.checks import (
     RTOL,
     batch_size,
     check_point_sets,
@@ -60,8 +60,8 @@ from mtmc.geometry._checks import (
     check_vectors,
     degenerate,
 )
-from mtmc.geometry._vec import cross as _cross
 from mtmc.geometry.primitives import Circle, Index, Line, Plane, Sphere, _index
+from mtmc.geometry.vec import cross as _cross
 
 __all__ = ["FitResult", "fit_circle", "fit_line", "fit_plane", "fit_sphere"]
 

@@ -7,6 +7,8 @@ of one). Shapes are checked and values coerced to float64 on construction; a sin
 ``(3,)`` point or a plain number is a batch of one, and a batch of one broadcasts
 against a batch of ``M`` (e.g. one fixed line point with ``M`` sampled directions).
 
+The arrays of a primitive are read-only, and never the caller's: an array passed in is
+copied unless it is read-only already (a primitive's own, when a sub-batch is taken).
 Directions and normals are normalised to unit length on construction; a zero-length
 one raises :class:`mtmc.errors.DegenerateGeometryError`. NaN values are not refused: they
 propagate (a Monte Carlo trial that went wrong upstream stays visible as NaN).
@@ -33,7 +35,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
-from mtmc.geometry._checks import (
+from mtmc.geometry.checks import (
     batch_size,
     broadcast_batch,
     check_points,
@@ -66,8 +68,21 @@ def _index(arr: NDArray[Any], idx: Any) -> NDArray[Any]:
     return out
 
 
+def _own(arr: NDArray[np.float64], given: Any) -> NDArray[np.float64]:
+    """``arr``, copied if it shares memory with ``given``, a writable array of the caller.
+
+    A read-only array (a primitive's own, when a sub-batch is taken) is kept without a copy.
+    """
+    if isinstance(given, np.ndarray) and given.flags.writeable and np.may_share_memory(arr, given):
+        return arr.copy()
+    return arr
+
+
 def _set(obj: object, **values: NDArray[np.float64]) -> None:
     for key, value in values.items():
+        if value.flags.writeable:
+            value = value.view()
+            value.flags.writeable = False
         object.__setattr__(obj, key, value)
 
 
@@ -105,7 +120,7 @@ class Line:
     direction: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        p = check_points(self.point, "point")
+        p = _own(check_points(self.point, "point"), self.point)
         d = check_vectors(self.direction, "direction")
         m = batch_size(point=p, direction=d)
         _set(
@@ -163,7 +178,7 @@ class Plane:
     normal: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        p = check_points(self.point, "point")
+        p = _own(check_points(self.point, "point"), self.point)
         n = check_vectors(self.normal, "normal")
         m = batch_size(point=p, normal=n)
         _set(
@@ -211,9 +226,9 @@ class Circle:
     radius: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        c = check_points(self.centre, "centre")
+        c = _own(check_points(self.centre, "centre"), self.centre)
         n = check_vectors(self.normal, "normal")
-        r = check_scalars(self.radius, "radius")
+        r = _own(check_scalars(self.radius, "radius"), self.radius)
         _check_radius(r, "radius")
         m = batch_size(centre=c, normal=n, radius=r)
         _set(
@@ -256,8 +271,8 @@ class Sphere:
     radius: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        c = check_points(self.centre, "centre")
-        r = check_scalars(self.radius, "radius")
+        c = _own(check_points(self.centre, "centre"), self.centre)
+        r = _own(check_scalars(self.radius, "radius"), self.radius)
         _check_radius(r, "radius")
         m = batch_size(centre=c, radius=r)
         _set(self, centre=broadcast_batch(m, c), radius=broadcast_batch(m, r))

@@ -47,8 +47,10 @@ character raises :class:`mtmc.errors.ParseError` with its line and column.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 from mtmc.errors import GraphError, MtmcError, ParseError
@@ -59,15 +61,17 @@ from mtmc.io import decode_utf8
 __all__ = ["loads_assertions", "load_assertions", "dumps_assertions", "TYPE_CODES"]
 
 #: Type codes of Table 1 and the place types they stand for.
-TYPE_CODES: dict[str, str] = {
-    "p": "point",
-    "v": "unit",
-    "d": "vector",
-    "x": "x",
-    "y": "y",
-    "z": "z",
-    "r": "real",
-}
+TYPE_CODES: Mapping[str, str] = MappingProxyType(
+    {
+        "p": "point",
+        "v": "unit",
+        "d": "vector",
+        "x": "x",
+        "y": "y",
+        "z": "z",
+        "r": "real",
+    }
+)
 _CODE_OF = {v: k for k, v in TYPE_CODES.items()}
 _ARITY = {
     "p": 7,

@@ -21,8 +21,10 @@ unknown op or field, a ``meas`` without a valid ``at``/``direction``/``u``/``dis
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
+from types import MappingProxyType
 
 from mtmc.errors import GraphError, MtmcError
 from mtmc.graph import ops
@@ -31,7 +33,7 @@ from mtmc.graph.places import COORDINATE_TYPES, Place, ProbeDefaults, Transition
 __all__ = ["Graph", "Plan", "Step", "check", "LENGTH_UNITS"]
 
 #: Length units a graph file may use, and their size in mm.
-LENGTH_UNITS: dict[str, float] = {"mm": 1.0, "um": 1e-3}
+LENGTH_UNITS: Mapping[str, float] = MappingProxyType({"mm": 1.0, "um": 1e-3})
 
 
 @dataclass(frozen=True)

@@ -20,19 +20,28 @@ a second variant with the same name and input types.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.errors import DegenerateGeometryError, GraphError
+from mtmc.errors import GraphError
 from mtmc.geometry import constructions as gc
 from mtmc.geometry import fits
-from mtmc.geometry._vec import cross as _cross
+from mtmc.geometry.checks import (
+    RTOL,
+    batch_size,
+    broadcast_batch,
+    check_points,
+    check_scalars,
+    degenerate,
+)
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
+from mtmc.geometry.vec import cross as _cross
 
 __all__ = [
     "Variant",
@@ -46,9 +55,9 @@ __all__ = [
 ]
 
 #: Fields (besides ``name``, ``op``, ``in``, ``out``) each op accepts in a graph file.
-OP_PARAMS: dict[str, tuple[str, ...]] = {
-    "meas": ("at", "direction", "u_axis", "u_probe", "u_perp", "dist", "coordinate"),
-}
+OP_PARAMS: Mapping[str, tuple[str, ...]] = MappingProxyType(
+    {"meas": ("at", "direction", "u_axis", "u_probe", "u_perp", "dist", "coordinate")}
+)
 
 
 @dataclass(frozen=True)
@@ -549,8 +558,14 @@ def rotary_axis(
 
     Raises
     ------
+    InputError
+        If a point is not of shape ``(M, 3)`` or ``(3,)``, ``alpha`` not of shape ``(M,)``
+        or ``()``, or the batch sizes differ (other than 1 against ``M``).
     DegenerateGeometryError
-        If the three points are collinear, ``P1`` coincides with ``P4``, or ``sin α`` is 0.
+        With the relative tolerance :data:`mtmc.geometry.checks.RTOL` (``1e-10``): if the
+        three points are collinear (``|(P2 − P1) × (P3 − P1)| <= RTOL |P2 − P1| |P3 − P1|``),
+        ``P1`` coincides with ``P4`` (``|P4 − P1| <= RTOL max(|P2 − P1|, |P3 − P1|)``), or
+        ``|sin α| <= RTOL``.
 
     Examples
     --------
@@ -561,22 +576,29 @@ def rotary_axis(
     >>> np.round(ax.point, 12) + 0.0, np.round(ax.direction, 12) + 0.0
     (array([[0., 0., 5.]]), array([[0., 0., 1.]]))
     """
-    a = np.atleast_2d(np.asarray(p1, dtype=np.float64))
-    b = np.atleast_2d(np.asarray(p2, dtype=np.float64))
-    c = np.atleast_2d(np.asarray(p3, dtype=np.float64))
-    a, b, c = np.broadcast_arrays(a, b, c)  # so the in-place steps below keep shapes
-    n = _cross(b - a, c - a)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
-    if np.any(~(_sq(n) > 0.0)):
-        raise DegenerateGeometryError("the three ball centres are collinear", field="axis")
-    if alpha is None:
+    a, b, c = (check_points(v, k) for v, k in ((p1, "p1"), (p2, "p2"), (p3, "p3")))
+    al = None if alpha is None else check_scalars(alpha, "alpha")
+    m = batch_size(p1=a, p2=b, p3=c, **({} if al is None else {"alpha": al}))
+    a, b, c = (broadcast_batch(m, v) for v in (a, b, c))
+    ab, ac = b - a, c - a
+    n = _cross(ab, ac)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
+    sab, sac = _sq(ab), _sq(ac)
+    degenerate(
+        ~(_sq(n) > RTOL**2 * sab * sac),
+        "the three ball centres are collinear",
+        "three ball centres on a circle",
+        "axis",
+    )
+    if al is None:
         circ = gc.circle_from_points(a, b, c)
         return Line(circ.centre, n)
-    al = np.atleast_1d(np.asarray(alpha, dtype=np.float64))
     s = np.sin(al)
-    if np.any(~(np.abs(s) > 1e-12)):
-        raise DegenerateGeometryError(
-            "sin(alpha) is 0: the three positions are not distinct", field="alpha"
-        )
+    degenerate(
+        ~(np.abs(s) > RTOL),
+        "sin(alpha) is 0: the three positions are not distinct",
+        "0 < alpha < pi",
+        "alpha",
+    )
     w = b + c  # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
     w *= 0.5
     w -= a
@@ -584,8 +606,12 @@ def rotary_axis(
     half_chord = np.sqrt(_sq(cb))
     half_chord *= 0.5
     length = np.sqrt(_sq(w))  # |P1 P4|, eq. 13
-    if np.any(~(length > 0.0)):
-        raise DegenerateGeometryError("P1 coincides with P4, the middle of P2 and P3", field="axis")
+    degenerate(
+        ~(length * length > RTOL**2 * np.maximum(sab, sac)),
+        "P1 coincides with P4, the middle of P2 and P3",
+        "P1 away from the chord P2 P3",
+        "axis",
+    )
     # eq. 12: R = |P3 P4| / sin(alpha); eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
     half_chord = half_chord / (length * s)  # not in place: alpha may carry the batch
     centre = w * half_chord[:, None]

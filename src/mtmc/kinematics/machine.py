@@ -53,6 +53,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
+from mtmc.frozen import frozen_mapping
 from mtmc.kinematics import _columns as _cols
 from mtmc.kinematics.error_terms import (
     ErrorTerm,
@@ -328,7 +329,7 @@ class _LinearMotion(_Factor):
 
 
 def _vec3(v: npt.ArrayLike, name: str) -> _F:
-    a = np.asarray(v, dtype=np.float64)
+    a = np.array(v, dtype=np.float64)  # a copy: the caller's array stays theirs, writable
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise InputError(f"expected 3 finite numbers (mm), got {v!r}", field=name)
     a.setflags(write=False)
@@ -351,9 +352,11 @@ class Machine:
     pivots : mapping of str to ndarray (3,)
         Per axis: for a rotary axis, a point of its nominal axis line; for a linear axis,
         the reference point about which its angular errors act. In the frame of the
-        previous body in the chain, mm. Default: the origin.
+        previous body in the chain, mm. Default: the origin. Copied on construction into
+        a read-only mapping of read-only arrays: the chain compiled from it cannot drift.
     travel : mapping of str to (float, float)
-        Optional travel of each axis (mm or rad), used by the library and the drawing.
+        Optional travel of each axis (mm or rad), used by the library and the drawing;
+        copied into a read-only mapping.
     tool_axis : ndarray, shape (3,)
         Direction of the tool axis in the tool frame (default +z).
     name : str
@@ -393,7 +396,7 @@ class Machine:
                     field="pivots",
                 )
             piv[ax] = _vec3(p, f"pivots.{ax}")
-        object.__setattr__(self, "pivots", piv)
+        object.__setattr__(self, "pivots", frozen_mapping(piv))
         trav = {}
         for ax, lim in dict(self.travel).items():
             if ax not in self.topology.chain:
@@ -405,7 +408,7 @@ class Machine:
             if not hi > lo:
                 raise InputError(f"expected low < high, got {lim!r}", field=f"travel.{ax}")
             trav[ax] = (lo, hi)
-        object.__setattr__(self, "travel", trav)
+        object.__setattr__(self, "travel", frozen_mapping(trav))
         object.__setattr__(self, "_factors", self._build())
         terms = list_error_terms(self.topology, which="all")
         object.__setattr__(self, "_terms", {t.name: t for t in terms})

@@ -31,7 +31,9 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 from mtmc.errors import TopologyError
 
@@ -48,7 +50,9 @@ __all__ = [
 LINEAR_AXES = ("X", "Y", "Z", "U", "V", "W")
 ROTARY_AXES = ("A", "B", "C")
 #: Index (0 = x, 1 = y, 2 = z) of the direction of motion or rotation of each axis letter.
-AXIS_DIRECTION = {"X": 0, "Y": 1, "Z": 2, "U": 0, "V": 1, "W": 2, "A": 0, "B": 1, "C": 2}
+AXIS_DIRECTION: Mapping[str, int] = MappingProxyType(
+    {"X": 0, "Y": 1, "Z": 2, "U": 0, "V": 1, "W": 2, "A": 0, "B": 1, "C": 2}
+)
 _CANONICAL = LINEAR_AXES + ROTARY_AXES
 
 

@@ -16,7 +16,7 @@ from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import ProgressFn, Study, StudyResult, quantity
 from mtmc.study.spec import Fields, RunSettings, register_kind
 from mtmc.uncertainty.distributions import Distribution, as_distribution, parse_distribution
-from mtmc.uncertainty.expression import Expression, expression
+from mtmc.uncertainty.expression import Expression, check_variables, expression
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.montecarlo import monte_carlo
 
@@ -121,18 +121,15 @@ def load_propagate(top: Fields) -> PropagateStudy:
     inputs_t = top.table("inputs")
     assert inputs_t is not None
     inputs = read_inputs(inputs_t)
-    missing = [n for n in model.names if n not in inputs]
-    if missing:
-        raise top.error(
-            f"the model's variable(s) {', '.join(missing)} have no input in [inputs]; expected "
-            f'{missing[0]} = "normal(...)" or a number there',
-            "model",
-        )
-    extra = [n for n in inputs if n not in model.names]
-    if extra:
-        raise inputs_t.error(
-            f"input {extra[0]} is not a variable of the model {model.text!r}", extra[0]
-        )
+    try:
+        check_variables(model, inputs)
+    except InputError as exc:
+        if exc.field in model.names:  # a variable without an input: the model line
+            raise top.error(
+                f'{exc.message}; expected {exc.field} = "normal(...)" or a number in [inputs]',
+                "model",
+            ) from None
+        raise inputs_t.error(exc.message, str(exc.field)) from None
     return PropagateStudy(
         title=top.text("title", "Propagation of distributions"),
         source=top.source,

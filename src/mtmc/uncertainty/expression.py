@@ -21,8 +21,9 @@ array([1.5 , 2.25])
 from __future__ import annotations
 
 import ast
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any, cast
 
 import numpy as np
@@ -31,27 +32,35 @@ from numpy.typing import NDArray
 
 from mtmc.errors import ExpressionError
 
-__all__ = ["Expression", "expression", "ALLOWED_FUNCTIONS", "ALLOWED_CONSTANTS"]
+__all__ = [
+    "Expression",
+    "expression",
+    "check_variables",
+    "ALLOWED_FUNCTIONS",
+    "ALLOWED_CONSTANTS",
+]
 
 #: Functions an expression may call, by name, with the number of arguments each takes.
-ALLOWED_FUNCTIONS: dict[str, tuple[Callable[..., Any], int]] = {
-    "sqrt": (np.sqrt, 1),
-    "sin": (np.sin, 1),
-    "cos": (np.cos, 1),
-    "tan": (np.tan, 1),
-    "arcsin": (np.arcsin, 1),
-    "arccos": (np.arccos, 1),
-    "arctan": (np.arctan, 1),
-    "arctan2": (np.arctan2, 2),
-    "exp": (np.exp, 1),
-    "log": (np.log, 1),
-    "log10": (np.log10, 1),
-    "abs": (np.abs, 1),
-    "hypot": (np.hypot, 2),
-}
+ALLOWED_FUNCTIONS: Mapping[str, tuple[Callable[..., Any], int]] = MappingProxyType(
+    {
+        "sqrt": (np.sqrt, 1),
+        "sin": (np.sin, 1),
+        "cos": (np.cos, 1),
+        "tan": (np.tan, 1),
+        "arcsin": (np.arcsin, 1),
+        "arccos": (np.arccos, 1),
+        "arctan": (np.arctan, 1),
+        "arctan2": (np.arctan2, 2),
+        "exp": (np.exp, 1),
+        "log": (np.log, 1),
+        "log10": (np.log10, 1),
+        "abs": (np.abs, 1),
+        "hypot": (np.hypot, 2),
+    }
+)
 
 #: Named constants an expression may use.
-ALLOWED_CONSTANTS: dict[str, float] = {"pi": float(np.pi), "e": float(np.e)}
+ALLOWED_CONSTANTS: Mapping[str, float] = MappingProxyType({"pi": float(np.pi), "e": float(np.e)})
 
 # Functions that do not carry the imaginary part of a complex argument through as an
 # analytic continuation (or refuse complex input): a model using them is not
@@ -101,6 +110,56 @@ def _describe(node: ast.AST) -> str:
         if isinstance(node, kind):
             return text
     return type(node).__name__
+
+
+def check_variables(model: Any, given: Iterable[str], *, what: str = "input") -> None:
+    """Refuse names that do not match a model's variables, naming both sides.
+
+    The one check of a model's variables against the names given for them (the inputs of
+    :func:`mtmc.uncertainty.gum`, the values passed to an :class:`Expression`, the
+    ``[inputs]`` of a study file).
+
+    Parameters
+    ----------
+    model : Expression or object with ``names``
+        The model; one without a ``names`` attribute (a plain function) is not checked.
+    given : iterable of str
+        The names given.
+    what : str
+        What a given name is, for the message (``"input"``, ``"value"``).
+
+    Raises
+    ------
+    ExpressionError
+        ``"the model's variable(s) a, b have no <what>"`` and/or ``"<what> c is not a
+        variable of the model 'x + y' (its variables: x, y)"``; ``field`` is the first
+        name missing, else the first one too many.
+
+    Examples
+    --------
+    >>> check_variables(expression("a * b"), ["a", "c"])
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.ExpressionError: field b: the model's variable(s) b have no input; input c ...
+    """
+    names = getattr(model, "names", None)
+    if names is None:
+        return
+    given = list(given)
+    missing = [n for n in names if n not in given]
+    extra = [n for n in given if n not in names]
+    parts = []
+    if missing:
+        parts.append(f"the model's variable(s) {', '.join(missing)} have no {what}")
+    if extra:
+        text = getattr(model, "text", None)
+        of = f"the model {text!r}" if text is not None else "the model"
+        parts.append(
+            f"{what} {', '.join(extra)} is not a variable of {of} "
+            f"(its variables: {', '.join(names) or 'none'})"
+        )
+    if parts:
+        raise ExpressionError("; ".join(parts), field=(missing or extra)[0])
 
 
 @dataclass(frozen=True)
@@ -157,19 +216,7 @@ class Expression:
             If a variable of the formula is missing, or an argument is not one of its
             variables.
         """
-        missing = [n for n in self.names if n not in arrays]
-        if missing:
-            raise ExpressionError(
-                f"no value given for variable(s) {', '.join(missing)} of {self.text!r}",
-                field=missing[0],
-            )
-        extra = [n for n in arrays if n not in self.names]
-        if extra:
-            raise ExpressionError(
-                f"{', '.join(extra)} is not a variable of {self.text!r} "
-                f"(its variables: {', '.join(self.names) or 'none'})",
-                field=extra[0],
-            )
+        check_variables(self, arrays, what="value")
         values = {}
         for name, value in arrays.items():
             arr = np.asarray(value)

@@ -33,8 +33,10 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
+from mtmc.frozen import frozen_value
 from mtmc.uncertainty import distributions as _distributions
 from mtmc.uncertainty import tolerance as _tolerance
+from mtmc.uncertainty.expression import check_variables
 
 __all__ = [
     "BudgetEntry",
@@ -85,6 +87,10 @@ class BudgetEntry:
     share: Any
     dof: float
 
+    def __post_init__(self) -> None:
+        for name in ("estimate", "u", "sensitivity", "contribution", "share"):
+            object.__setattr__(self, name, frozen_value(getattr(self, name)))
+
 
 @dataclass(frozen=True)
 class GumResult:
@@ -92,7 +98,8 @@ class GumResult:
 
     For a scalar output, ``estimate``, ``u``, ``dof``, ``k`` are floats and ``interval``
     a pair of floats; for an output of ``d`` components they are arrays of shape
-    ``(d,)`` (per component) and ``cov`` is the full ``(d, d)`` covariance.
+    ``(d,)`` (per component) and ``cov`` is the full ``(d, d)`` covariance. Every array
+    of the result is a read-only copy.
 
     Attributes
     ----------
@@ -112,8 +119,8 @@ class GumResult:
         Coverage probability.
     interval : tuple
         ``(y - k u, y + k u)``.
-    sensitivities : dict
-        ``name -> c`` for each input (see :class:`BudgetEntry`).
+    sensitivities : mapping
+        ``name -> c`` for each input (see :class:`BudgetEntry`), read-only.
     budget : tuple of BudgetEntry
         One entry per input, in the order of ``inputs``.
     method : str
@@ -127,9 +134,14 @@ class GumResult:
     k: Any
     p: float
     interval: tuple[Any, Any]
-    sensitivities: dict[str, Any]
+    sensitivities: Mapping[str, Any]
     budget: tuple[BudgetEntry, ...]
     method: str
+
+    def __post_init__(self) -> None:
+        # read-only copies: arrays cannot be written, ``sensitivities`` gains no keys
+        for name in ("estimate", "u", "cov", "dof", "k", "interval", "sensitivities", "budget"):
+            object.__setattr__(self, name, frozen_value(getattr(self, name)))
 
     @property
     def expanded_uncertainty(self) -> Any:
@@ -311,7 +323,7 @@ def _evaluate(
     return out
 
 
-def gum(  # noqa: C901
+def gum(
     model: Callable[..., Any],
     inputs: Mapping[str, Any],
     p: float = 0.95,
@@ -367,17 +379,7 @@ def gum(  # noqa: C901
     p = _check_p(p)
     if not inputs:
         raise InputError("expected at least one input quantity", field="inputs")
-    model_names = getattr(model, "names", None)
-    if model_names is not None:
-        missing = [n for n in model_names if n not in inputs]
-        extra = [n for n in inputs if n not in model_names]
-        if missing or extra:
-            parts = []
-            if missing:
-                parts.append(f"variable(s) without an input: {', '.join(missing)}")
-            if extra:
-                parts.append(f"input(s) not in the model: {', '.join(extra)}")
-            raise InputError("; ".join(parts), field=(missing or extra)[0])
+    check_variables(model, inputs)
     items = [_gum_input(str(name), obj) for name, obj in inputs.items()]
     offsets: list[int] = []
     n = 0

@@ -1,15 +1,15 @@
 """Input checkers for the batched geometry functions.
 
-Each ``check_*`` helper coerces its argument to a C-ordered ``float64`` array with the
-trial axis first and raises :class:`mtmc.errors.InputError` naming the argument, the
-expected shape and the received one. :func:`batch_size` and :func:`broadcast_batch`
-make arguments with a batch of 1 (a single point given as ``(3,)`` or ``(1, 3)``)
-broadcast against a batch of ``M``. :func:`degenerate` raises
+Each ``check_*`` helper coerces its argument to a ``float64`` array with the trial axis
+first (without a copy when it already is one) and raises :class:`mtmc.errors.InputError`
+naming the argument, the expected shape and the received one. :func:`batch_size` and
+:func:`broadcast_batch` make arguments with a batch of 1 (a single point given as
+``(3,)`` or ``(1, 3)``) broadcast against a batch of ``M``. :func:`degenerate` raises
 :class:`mtmc.errors.DegenerateGeometryError` naming the case and how many trials of the
 batch are affected.
 
-These helpers are public to the other subpackages of mtmc (the measurement graph and
-the kinematics use them) but not part of the user API.
+The geometry functions and the measurement graph's ops check their arguments with these
+helpers, so that one kind of input is always checked one way, with one message.
 
 Tolerance
 ---------

@@ -1,0 +1,87 @@
+"""Frozen means frozen: results, primitives, machines and module tables refuse every write."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mtmc.geometry import Circle, Line, Plane, Sphere
+from mtmc.graph.assertions import TYPE_CODES
+from mtmc.graph.model import LENGTH_UNITS
+from mtmc.graph.ops import OP_PARAMS
+from mtmc.kinematics import Machine
+from mtmc.kinematics.topology import AXIS_DIRECTION
+from mtmc.uncertainty import Normal, gum
+from mtmc.uncertainty.expression import ALLOWED_CONSTANTS, ALLOWED_FUNCTIONS
+
+
+def _writes_refused(*arrays: np.ndarray) -> None:
+    for a in arrays:
+        assert isinstance(a, np.ndarray)
+        with pytest.raises(ValueError, match="read-only"):
+            a[...] = 0.0
+
+
+def test_frozen_primitives_hold_read_only_copies() -> None:
+    p, d = np.array([1.0, 2.0, 3.0]), np.array([0.0, 0.0, 1.0])
+    line = Line(p, d)
+    assert line.point is not p
+    assert not np.shares_memory(line.point, p)
+    p[0] = 99.0  # the caller's array stays writable and the line does not see the change
+    assert line.point[0, 0] == 1.0
+    batch = np.zeros((4, 3))
+    plane = Plane(batch, [0, 0, 1])
+    batch[:] = 5.0
+    assert not plane.point.any()
+    r = np.array([1.0, 2.0])
+    circle, sphere = Circle(np.zeros((2, 3)), [0, 0, 1], r), Sphere(np.zeros(3), r)
+    r[:] = -1.0
+    assert sphere.radius.tolist() == [1.0, 2.0]
+    _writes_refused(line.point, line.direction, plane.point, plane.normal)
+    _writes_refused(circle.centre, circle.normal, circle.radius, sphere.centre, sphere.radius)
+    _writes_refused(line[1:].point, sphere[0].radius)  # sub-batches too
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        plane.normal = np.zeros((1, 3))  # type: ignore[misc]
+
+
+def test_frozen_gum_result_and_budget() -> None:
+    res = gum(
+        lambda a, b: np.stack([a + b, a - b], axis=-1),
+        {"a": Normal(1.0, 0.1), "b": Normal(2.0, 0.2)},
+    )
+    _writes_refused(res.estimate, res.u, res.cov, res.k, *res.interval)
+    _writes_refused(res.sensitivities["a"], res.budget[0].sensitivity)
+    with pytest.raises(TypeError):
+        res.sensitivities["c"] = 1.0  # type: ignore[index]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.cov = np.eye(2)  # type: ignore[misc]
+
+
+def test_frozen_machine_pivots_are_a_copy_that_cannot_change() -> None:
+    o = np.array([10.0, 0.0, 0.0])
+    m = Machine.from_topology("wCXfYZt", pivots={"C": o}, travel={"X": (0.0, 100.0)})
+    q = np.array([[1.0, 2.0, 3.0, 0.3]])
+    before = m.tool_position(q)
+    o[0] = 500.0  # the caller's array
+    assert o.flags.writeable
+    with pytest.raises(TypeError):
+        m.pivots["X"] = np.zeros(3)  # type: ignore[index]
+    with pytest.raises(TypeError):
+        m.travel["Y"] = (0.0, 1.0)  # type: ignore[index]
+    _writes_refused(m.pivots["C"], m.tool, m.workpiece, m.tool_axis)
+    np.testing.assert_array_equal(m.tool_position(q), before)
+
+
+@pytest.mark.parametrize(
+    "table",
+    [LENGTH_UNITS, TYPE_CODES, OP_PARAMS, AXIS_DIRECTION, ALLOWED_FUNCTIONS, ALLOWED_CONSTANTS],
+    ids=["LENGTH_UNITS", "TYPE_CODES", "OP_PARAMS", "AXIS_DIRECTION", "FUNCTIONS", "CONSTANTS"],
+)
+def test_frozen_module_tables(table) -> None:
+    key = next(iter(table))
+    with pytest.raises(TypeError):
+        table[key] = table[key]
+    with pytest.raises(TypeError):
+        del table[key]
