@@ -85,3 +85,17 @@ def test_frozen_module_tables(table) -> None:
         table[key] = table[key]
     with pytest.raises(TypeError):
         del table[key]
+
+
+def test_frozen_monte_carlo_result() -> None:
+    from mtmc.uncertainty import monte_carlo
+
+    res = monte_carlo(
+        lambda a, b: np.stack([a + b, a - b], axis=-1),
+        {"a": Normal(1.0, 0.1), "b": Normal(2.0, 0.2)},
+        trials=200,
+        seed=1,
+    )
+    _writes_refused(res.estimate, res.u, res.cov, res.samples)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        res.samples = np.zeros((200, 2))  # type: ignore[misc]

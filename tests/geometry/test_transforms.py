@@ -18,9 +18,11 @@ from mtmc.geometry.transforms import (
     matrix_from_axis_angle,
     matrix_from_euler,
     quaternion_from_matrix,
+    rotate_about_axis,
     rotation_x,
     rotation_y,
     rotation_z,
+    small_angle_rotate,
     small_angle_rotation,
     translation_htm,
 )
@@ -155,6 +157,50 @@ def test_small_angle_rotation_is_first_order() -> None:
     ea, eb, ec = 1e-4, 2e-4, 3e-4
     eq12 = np.array([[1, ec, -eb], [-ec, 1, ea], [eb, -ea, 1]])
     np.testing.assert_array_equal(small_angle_rotation(ea, eb, ec).T, eq12)
+
+
+def test_not_a_rotation_is_refused_by_every_conversion() -> None:
+    reflection = np.diag([1.0, 1.0, -1.0])
+    twice = 2.0 * np.eye(3)
+    sheared = np.eye(3)
+    sheared[0, 1] = 1e-6
+    for f in (
+        quaternion_from_matrix,
+        axis_angle_from_matrix,
+        lambda r: euler_from_matrix(r, "xyz"),
+    ):
+        with pytest.raises(InputError, match=r"field R: .*got a reflection \(det -1\)"):
+            f(reflection)
+        with pytest.raises(InputError, match=r"field R: .*RᵀR − I\| <= 1e-09\), got one with 3"):
+            f(twice)
+        with pytest.raises(InputError, match=r"1e-06 in 1 of 2 matrices \(first: matrix 1\)"):
+            f(np.stack([np.eye(3), sheared]))
+        with pytest.raises(InputError, match="field R"):
+            f(np.full((3, 3), np.nan))
+    # a product of many exact rotations stays far inside the tolerance
+    rng = np.random.default_rng(np.random.SeedSequence(11))
+    R = np.linalg.multi_dot(list(_random_rotations(rng, 200)))
+    ref = np.roll(Rotation.from_matrix(R).as_quat(), 1)  # scalar first
+    np.testing.assert_allclose(quaternion_from_matrix(R), ref * np.sign(ref[0]), atol=1e-12)
+
+
+def test_matrix_free_rotations_equal_the_matrices() -> None:
+    rng = np.random.default_rng(np.random.SeedSequence(12))
+    y = rng.normal(size=(5, 4, 3))
+    ang = rng.uniform(-np.pi, np.pi, size=(5, 1))
+    for axis, rot in enumerate((rotation_x, rotation_y, rotation_z)):
+        R = rot(ang[:, 0])
+        np.testing.assert_allclose(
+            rotate_about_axis(axis, ang, y), np.einsum("mij,mkj->mki", R, y), atol=1e-14
+        )
+    e = rng.normal(scale=1e-4, size=(5, 1, 3))
+    S = small_angle_rotation(e[:, 0, 0], e[:, 0, 1], e[:, 0, 2])
+    for sign, M in ((1.0, S), (-1.0, np.swapaxes(S, -1, -2))):
+        np.testing.assert_allclose(
+            small_angle_rotate(e[..., 0], e[..., 1], e[..., 2], y, sign=sign),
+            np.einsum("mij,mkj->mki", M, y),
+            atol=1e-15,
+        )
 
 
 def test_bad_input_messages() -> None:

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mtmc.errors import DegenerateGeometryError, GraphError
+from mtmc.errors import DegenerateGeometryError, GraphError, InputError
 from mtmc.graph import ops
 
 
@@ -93,6 +93,31 @@ def test_rotary_axis_degenerate():
         ops.rotary_axis([0, 0, 0], [1, 0, 0], [2, 0, 0])
     with pytest.raises(DegenerateGeometryError, match="alpha"):
         ops.rotary_axis([1, 0, 0], [0, 1, 0], [0, -1, 0], 0.0)
+
+
+def test_rotary_axis_checks_shapes_and_uses_relative_tolerances():
+    with pytest.raises(
+        InputError, match=r"field p2: expected shape \(M, 3\) or \(3,\), got \(2,\)"
+    ):
+        ops.rotary_axis([1, 0, 0], [0, 1], [0, -1, 0])
+    with pytest.raises(InputError, match=r"field p3: expected 4 trials \(as in p1\) or 1, got 2"):
+        ops.rotary_axis(np.ones((4, 3)), [0, 1, 0], np.ones((2, 3)))
+    with pytest.raises(InputError, match=r"field alpha: expected shape \(M,\) or a number"):
+        ops.rotary_axis([1, 0, 0], [0, 1, 0], [0, -1, 0], np.ones((2, 2)))
+    # the same circle at any scale: 1e-9 mm is as good as 1e9 mm
+    al = np.pi / 3
+    for scale in (1e-9, 1.0, 1e9):
+        p = scale * np.array(
+            [[1.0, 0, 0], [np.cos(al), np.sin(al), 0], [np.cos(al), -np.sin(al), 0]]
+        )
+        line = ops.rotary_axis(*p, al)
+        np.testing.assert_allclose(line.point[0], [0, 0, 0], atol=1e-12 * scale)
+        np.testing.assert_allclose(line.direction[0], [0, 0, 1], atol=1e-12)
+    # collinear to 1e-12 of the chord lengths, at any scale: refused, naming the trial
+    for scale in (1e-9, 1e9):
+        p = scale * np.array([[0, 0, 0], [1, 1e-12, 0], [2, 0, 0]])
+        with pytest.raises(DegenerateGeometryError, match=r"collinear in 1 of 1 trials"):
+            ops.rotary_axis(*p)
 
 
 def test_rotary_axis_broadcasts_constants_against_a_batch():

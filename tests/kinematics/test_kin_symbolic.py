@@ -81,3 +81,20 @@ def test_text_and_latex() -> None:
     assert "x_W &=" in tex
     assert "EC0Y" in tex
     assert [str(s) for s in eq.axis_symbols] == ["x", "y", "z"]
+
+
+def test_symbolic_rotations_are_the_numeric_ones() -> None:
+    import sympy as sp
+
+    from mtmc.geometry import rotation_x, rotation_y, rotation_z, small_angle_rotation
+    from mtmc.kinematics.symbolic import axis_rotation_matrix, small_angle_matrix
+
+    e = (2e-4, -3e-4, 5e-4)
+    S = small_angle_rotation(*e)
+    for transpose, want in ((False, S), (True, S.T)):
+        got = np.array(small_angle_matrix(*map(sp.Float, e), transpose=transpose), dtype=float)
+        np.testing.assert_array_equal(got[:3, :3], want)
+        np.testing.assert_array_equal(got[3], [0, 0, 0, 1])
+    for axis, rot in enumerate((rotation_x, rotation_y, rotation_z)):
+        got = np.array(axis_rotation_matrix(axis, sp.Float(0.7)), dtype=float)
+        np.testing.assert_allclose(got[:3, :3], rot(0.7), rtol=0, atol=1e-15)

@@ -68,6 +68,8 @@ def test_bad_topologies(spec: str, message: str) -> None:
 def test_error_names() -> None:
     assert normalise_error_name("x0c") == "EX0C"
     assert normalise_error_name("EXX") == "EXX"
+    with pytest.raises(InputError, match="field name: expected an error name such as 'EXX'"):
+        normalise_error_name(3)  # type: ignore[arg-type]
     t = parse_error_name("C0Y")
     assert (t.name, t.kind, t.axis, t.direction, t.angular) == ("EC0Y", "squareness", "Y", 2, True)
     t = parse_error_name("EX0C")

@@ -178,11 +178,19 @@ def test_welch_satterthwaite_gum_h1_combined_length_difference():
     u = np.array([5.8, 3.9, 6.7])
     nu = np.array([24.0, 5.0, 8.0])
     u_d = math.sqrt(float(np.sum(u**2)))
-    assert round(u_d, 1) == 9.7
     denom = float(np.sum(u**4 / nu))
-    assert round(9.7**4 / denom, 1) == 25.6  # as printed, from the rounded u(d)
     assert welch_satterthwaite(u**2, nu) == pytest.approx(u_d**4 / denom, rel=1e-14)
     assert round(welch_satterthwaite(u**2, nu), 1) == 25.4
+
+
+@pytest.mark.published_data
+def test_gum_h1_prints_nu_from_the_rounded_u():
+    """H.1.3.2's own arithmetic (no mtmc call): ν(d) = 25.6 comes from u(d) rounded to
+    9.7 nm, where the unrounded u(d) gives 25.4."""
+    u = np.array([5.8, 3.9, 6.7])
+    nu = np.array([24.0, 5.0, 8.0])
+    assert round(math.sqrt(float(np.sum(u**2))), 1) == 9.7
+    assert round(9.7**4 / float(np.sum(u**4 / nu)), 1) == 25.6
 
 
 def test_welch_satterthwaite_edge_cases():
@@ -271,6 +279,9 @@ def test_sensitivities_agree_with_finite_differences(x, y, ux, uy):
 
 
 def test_errors_name_the_field():
+    for bad in ("x", None, 0.0, 1.0, float("nan")):
+        with pytest.raises(InputError, match=r"field p: expected a coverage probability 0 < p < 1"):
+            gum(expression("a"), {"a": Normal(0, 1)}, p=bad)
     with pytest.raises(InputError, match=r"the model's variable\(s\) b have no input") as info:
         gum(expression("a + b"), {"a": Normal(0, 1)})
     assert info.value.field == "b"
@@ -322,10 +333,27 @@ H2 = np.array(
 )
 
 
+H2_Y = np.array([127.732, 219.847, 254.260])  # Table H.4: R, X, Z in Ω
+H2_U = np.array([0.071, 0.295, 0.236])
+H2_R = {(0, 1): -0.588, (0, 2): -0.485, (1, 2): 0.993}
+
+
 def _rxz(x):
     v, i, phi = x[:, 0], x[:, 1] * 1e-3, x[:, 2]
     z = v / i
     return np.column_stack([z * np.cos(phi), z * np.sin(phi), z])
+
+
+@pytest.mark.published_data
+def test_gum_h2_approach_2_reproduces_the_published_values():
+    """H.2.4, approach 2, computed here without mtmc: R, X, Z of each of the five sets,
+    their means and the standard deviations of the means give every printed digit."""
+    per_set = _rxz(H2)
+    np.testing.assert_allclose(per_set.mean(axis=0), H2_Y, atol=0.0005)
+    cov2 = np.cov(per_set, rowvar=False, ddof=1) / 5
+    np.testing.assert_allclose(np.sqrt(np.diag(cov2)), H2_U, atol=0.0005)
+    for (i, j), r in H2_R.items():
+        assert abs(cov2[i, j] / math.sqrt(cov2[i, i] * cov2[j, j]) - r) <= 0.0005
 
 
 def test_gum_h2_resistance_reactance_impedance_with_correlated_inputs():
@@ -334,8 +362,7 @@ def test_gum_h2_resistance_reactance_impedance_with_correlated_inputs():
     X = 219.847 Ω, Z = 254.260 Ω; u = 0.071, 0.295, 0.236 Ω; correlation coefficients
     r(R, X) = -0.588, r(R, Z) = -0.485, r(X, Z) = 0.993.
 
-    Approach 2 of H.2.4 (R, X, Z of each set; their means and the standard deviations
-    of the means), computed here independently of mtmc, reproduces every printed digit.
+    Approach 2 of H.2.4 reproduces every printed digit (checked on its own, below).
     Approach 1 (H.2.3: the means and the covariance of the means through the
     sensitivities) is what ``gum`` does: checked against the analytic Jacobian written
     out here (to 1e-9), it gives u(X) = 0.29558 Ω, which rounds to 0.296, not 0.295; the
@@ -344,16 +371,7 @@ def test_gum_h2_resistance_reactance_impedance_with_correlated_inputs():
     mean = H2.mean(axis=0)
     cov = np.cov(H2, rowvar=False, ddof=1) / 5
     g = gum(_rxz, {"x": MultivariateNormal(mean, cov)})
-    published_y = np.array([127.732, 219.847, 254.260])
-    published_u = np.array([0.071, 0.295, 0.236])
-    published_r = {(0, 1): -0.588, (0, 2): -0.485, (1, 2): 0.993}
-    # approach 2, independent of mtmc
-    per_set = _rxz(H2)
-    np.testing.assert_allclose(per_set.mean(axis=0), published_y, atol=0.0005)
-    cov2 = np.cov(per_set, rowvar=False, ddof=1) / 5
-    np.testing.assert_allclose(np.sqrt(np.diag(cov2)), published_u, atol=0.0005)
-    for (i, j), r in published_r.items():
-        assert abs(cov2[i, j] / math.sqrt(cov2[i, i] * cov2[j, j]) - r) <= 0.0005
+    published_y, published_u, published_r = H2_Y, H2_U, H2_R
     # approach 1 against the analytic Jacobian of (R, X, Z) w.r.t. (V, I in mA, φ)
     v, i_a, phi = mean[0], mean[1] * 1e-3, mean[2]
     jac = np.array(
@@ -368,3 +386,14 @@ def test_gum_h2_resistance_reactance_impedance_with_correlated_inputs():
     np.testing.assert_allclose(g.u, published_u, atol=0.001)
     for (i, j), r in published_r.items():
         assert abs(g.cov[i, j] / (g.u[i] * g.u[j]) - r) <= 0.0005
+
+
+@pytest.mark.parametrize(("a", "method"), [(9.0, "complex-step"), (11.0, "central-difference")])
+def test_complex_step_is_kept_while_it_agrees_with_central_differences(a, method):
+    # f = x + a x³ at x = 0 with u(x) = 1: the complex step gives c = 1 exactly, the central
+    # difference with h = 1e-3 u gives 1 + a h², a gap of a·1e-6 u(y) against the stated
+    # agreement of 1e-5 u(y): kept up to a = 10, replaced beyond
+    res = gum(lambda x: x + a * x**3, {"x": Normal(0.0, 1.0)})
+    assert res.method == method
+    c = 1.0 if method == "complex-step" else 1.0 + a * 1e-6
+    assert res.sensitivities["x"] == pytest.approx(c, rel=1e-12)

@@ -31,12 +31,15 @@ from numpy.typing import NDArray
 from mtmc.errors import DegenerateGeometryError, InputError
 
 __all__ = [
+    "ORTHO_TOL",
     "RTOL",
+    "as_float",
     "batch_size",
     "broadcast_batch",
     "check_frames",
     "check_point_sets",
     "check_points",
+    "check_rotation_matrices",
     "check_scalars",
     "check_vectors",
     "degenerate",
@@ -45,12 +48,26 @@ __all__ = [
 RTOL: float = 1e-10
 """Relative tolerance below which a construction is declared degenerate."""
 
+ORTHO_TOL: float = 1e-9
+"""Largest element of ``|RᵀR − I|`` of a matrix accepted as a rotation matrix.
+
+Products of a few hundred rotations in float64 stay near 1e-13; a first-order (small-angle)
+matrix ``I + [e]x`` misses by ``|e|²`` and passes for angles below about 3e-5 rad.
+"""
+
 
 def _shape_text(shape: tuple[int, ...]) -> str:
     return "(" + ", ".join(str(s) for s in shape) + (",)" if len(shape) == 1 else ")")
 
 
-def _as_float(x: npt.ArrayLike, name: str) -> NDArray[np.float64]:
+def as_float(x: npt.ArrayLike, name: str) -> NDArray[np.float64]:
+    """``x`` as a float64 array (no copy when it already is one), any shape.
+
+    Raises
+    ------
+    InputError
+        If ``x`` is not numeric, naming the field ``name``.
+    """
     try:
         arr = np.asarray(x, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -89,7 +106,7 @@ def check_points(x: npt.ArrayLike, name: str = "points") -> NDArray[np.float64]:
     ...
     mtmc.errors.InputError: field a: expected shape (M, 3) or (3,), got (1, 2)
     """
-    arr = _as_float(x, name)
+    arr = as_float(x, name)
     if arr.ndim == 1 and arr.shape[0] == 3:
         return arr.reshape(1, 3)
     if arr.ndim == 2 and arr.shape[1] == 3:
@@ -145,12 +162,69 @@ def check_scalars(x: npt.ArrayLike, name: str = "values") -> NDArray[np.float64]
     >>> check_scalars(2.5)
     array([2.5])
     """
-    arr = _as_float(x, name)
+    arr = as_float(x, name)
     if arr.ndim == 0:
         return arr.reshape(1)
     if arr.ndim == 1:
         return arr
     raise InputError(f"expected shape (M,) or a number, got {_shape_text(arr.shape)}", field=name)
+
+
+def check_rotation_matrices(x: npt.ArrayLike, name: str = "R") -> NDArray[np.float64]:
+    """Coerce rotation matrices to float64 of shape ``(..., 3, 3)`` and refuse the others.
+
+    A rotation matrix is orthogonal with determinant +1. A reflection (determinant -1) or
+    a matrix that is not orthogonal has no rotation angles, axis or quaternion: it is
+    refused rather than turned into a rotation it is not.
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 3, 3)
+        The matrices.
+    name : str
+        The argument name used in the error message.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        The matrices as float64.
+
+    Raises
+    ------
+    InputError
+        If the trailing shape is not ``(3, 3)``, a matrix is not orthogonal
+        (``max |RᵀR − I| > ORTHO_TOL``, NaN included), or it is a reflection (``det R < 0``).
+
+    Examples
+    --------
+    >>> check_rotation_matrices(np.diag([1.0, 1.0, -1.0]))
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.InputError: field R: expected a rotation matrix (det +1), got a reflection ...
+    """
+    arr = as_float(x, name)
+    if arr.ndim < 2 or arr.shape[-2:] != (3, 3):
+        raise InputError(f"expected shape (..., 3, 3), got {_shape_text(arr.shape)}", field=name)
+    flat = arr.reshape(-1, 3, 3)
+    err = np.abs(np.swapaxes(flat, -1, -2) @ flat - np.eye(3)).max(axis=(-2, -1))
+    bad = ~(err <= ORTHO_TOL)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise InputError(
+            f"expected a rotation matrix (max |RᵀR − I| <= {ORTHO_TOL:g}), got one with "
+            f"{float(err[first]):.3g} in {int(bad.sum())} of {bad.size} matrices "
+            f"(first: matrix {first})",
+            field=name,
+        )
+    refl = np.linalg.det(flat) < 0.0
+    if refl.any():
+        first = int(np.flatnonzero(refl)[0])
+        raise InputError(
+            f"expected a rotation matrix (det +1), got a reflection (det -1) in "
+            f"{int(refl.sum())} of {refl.size} matrices (first: matrix {first})",
+            field=name,
+        )
+    return arr
 
 
 def check_point_sets(
@@ -189,7 +263,7 @@ def check_point_sets(
     ...
     mtmc.errors.DegenerateGeometryError: field points: a sphere fit needs at least 4 points, got 3
     """
-    arr = _as_float(x, name)
+    arr = as_float(x, name)
     if arr.ndim == 2 and arr.shape[1] == 3:
         arr = arr.reshape(1, *arr.shape)
     if arr.ndim != 3 or arr.shape[2] != 3:
@@ -232,7 +306,7 @@ def check_frames(x: npt.ArrayLike, name: str = "frames") -> NDArray[np.float64]:
     InputError
         If the shape is wrong.
     """
-    arr = _as_float(x, name)
+    arr = as_float(x, name)
     if arr.shape == (4, 4):
         return arr.reshape(1, 4, 4)
     if arr.ndim == 3 and arr.shape[1:] == (4, 4):

@@ -28,6 +28,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import DegenerateGeometryError, InputError
+from mtmc.geometry.checks import as_float, check_rotation_matrices
 
 __all__ = [
     "rotation_x",
@@ -37,6 +38,8 @@ __all__ = [
     "htm_inverse",
     "translation_htm",
     "small_angle_rotation",
+    "small_angle_rotate",
+    "rotate_about_axis",
     "matrix_from_euler",
     "euler_from_matrix",
     "matrix_from_axis_angle",
@@ -48,14 +51,6 @@ __all__ = [
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
 
 
-def _as_float(a: npt.ArrayLike, name: str) -> NDArray[np.float64]:
-    try:
-        arr = np.asarray(a, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"expected a real number or array, got {a!r}", field=name) from exc
-    return arr
-
-
 def _check_trailing(arr: NDArray[np.float64], shape: tuple[int, ...], name: str) -> None:
     k = len(shape)
     if arr.ndim < k or arr.shape[arr.ndim - k :] != shape:
@@ -63,17 +58,54 @@ def _check_trailing(arr: NDArray[np.float64], shape: tuple[int, ...], name: str)
         raise InputError(f"expected an array of shape {want}, got shape {arr.shape}", field=name)
 
 
-def _elementary(angle: npt.ArrayLike, axis: int) -> NDArray[np.float64]:
-    a = _as_float(angle, "angle")
-    c, s = np.cos(a), np.sin(a)
-    out = np.zeros((*a.shape, 3, 3))
-    i, j = (axis + 1) % 3, (axis + 2) % 3
-    out[..., axis, axis] = 1.0
-    out[..., i, i] = c
-    out[..., j, j] = c
-    out[..., i, j] = -s
-    out[..., j, i] = s
+def rotate_about_axis(
+    axis: int, angle: npt.ArrayLike, y: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Rotate vectors ``y`` about the coordinate axis ``axis`` by ``angle`` (active, exact).
+
+    The matrix-free form of :func:`rotation_x` / :func:`rotation_y` / :func:`rotation_z`,
+    which the kinematic chain applies to ``(M, K, 3)`` arrays of points.
+
+    Parameters
+    ----------
+    axis : int
+        0, 1 or 2 for x, y or z.
+    angle : array_like
+        Angles in rad, broadcasting against ``y[..., 0]`` (e.g. ``()`` or ``(M, 1)``).
+    y : ndarray, shape (..., 3)
+        The vectors.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``R(angle) y``, a new array.
+
+    Examples
+    --------
+    >>> np.round(rotate_about_axis(2, np.pi / 2, np.array([1.0, 0.0, 0.0])), 12) + 0.0
+    array([0., 1., 0.])
+    """
+    c, s = np.cos(angle), np.sin(angle)
+    i, k = (axis + 1) % 3, (axis + 2) % 3
+    out = (
+        y.copy()
+        if np.ndim(c) == 0
+        else np.broadcast_to(y, np.broadcast_shapes(y.shape, (*np.shape(c), 3))).copy()
+    )
+    yi, yk = y[..., i], y[..., k]
+    out[..., i] = c * yi - s * yk
+    out[..., k] = s * yi + c * yk
     return out
+
+
+def _as_matrix(columns: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The matrix whose column j is ``columns[..., j, :]`` (the image of e_j)."""
+    return np.ascontiguousarray(np.swapaxes(columns, -1, -2))
+
+
+def _elementary(angle: npt.ArrayLike, axis: int) -> NDArray[np.float64]:
+    a = as_float(angle, "angle")
+    return _as_matrix(rotate_about_axis(axis, a[..., None], np.eye(3)))
 
 
 def rotation_x(angle: npt.ArrayLike) -> NDArray[np.float64]:
@@ -160,8 +192,8 @@ def htm(rotation: npt.ArrayLike, translation: npt.ArrayLike) -> NDArray[np.float
     InputError
         If the trailing shapes are not ``(3, 3)`` and ``(3,)``.
     """
-    R = _as_float(rotation, "rotation")
-    t = _as_float(translation, "translation")
+    R = as_float(rotation, "rotation")
+    t = as_float(translation, "translation")
     _check_trailing(R, (3, 3), "rotation")
     _check_trailing(t, (3,), "translation")
     batch = np.broadcast_shapes(R.shape[:-2], t.shape[:-1])
@@ -185,7 +217,7 @@ def translation_htm(translation: npt.ArrayLike) -> NDArray[np.float64]:
     ndarray, shape (..., 4, 4)
         ``[[I, t], [0, 0, 0, 1]]``.
     """
-    t = _as_float(translation, "translation")
+    t = as_float(translation, "translation")
     _check_trailing(t, (3,), "translation")
     return htm(np.eye(3), t)
 
@@ -209,7 +241,7 @@ def htm_inverse(T: npt.ArrayLike) -> NDArray[np.float64]:
     InputError
         If the trailing shape is not ``(4, 4)``.
     """
-    A = _as_float(T, "T")
+    A = as_float(T, "T")
     _check_trailing(A, (4, 4), "T")
     Rt = np.swapaxes(A[..., :3, :3], -1, -2)
     t = A[..., :3, 3]
@@ -245,20 +277,55 @@ def small_angle_rotation(
     --------
     >>> small_angle_rotation(0.0, 0.0, 1e-3)
     array([[ 1.   , -0.001,  0.   ],
-           [ 0.001,  1.   , -0.   ],
-           [-0.   ,  0.   ,  1.   ]])
+           [ 0.001,  1.   ,  0.   ],
+           [ 0.   ,  0.   ,  1.   ]])
     """
-    a, b, c = np.broadcast_arrays(_as_float(ea, "ea"), _as_float(eb, "eb"), _as_float(ec, "ec"))
-    out = np.empty((*a.shape, 3, 3))
-    out[..., 0, 0] = 1.0
-    out[..., 1, 1] = 1.0
-    out[..., 2, 2] = 1.0
-    out[..., 0, 1] = -c
-    out[..., 1, 0] = c
-    out[..., 0, 2] = b
-    out[..., 2, 0] = -b
-    out[..., 1, 2] = -a
-    out[..., 2, 1] = a
+    a, b, c = np.broadcast_arrays(as_float(ea, "ea"), as_float(eb, "eb"), as_float(ec, "ec"))
+    return _as_matrix(small_angle_rotate(a[..., None], b[..., None], c[..., None], np.eye(3)))
+
+
+def small_angle_rotate(
+    ea: npt.ArrayLike,
+    eb: npt.ArrayLike,
+    ec: npt.ArrayLike,
+    y: NDArray[np.float64],
+    *,
+    sign: float = 1.0,
+) -> NDArray[np.float64]:
+    """Apply the first-order rotation ``I + sign [e]x`` to vectors: ``y + sign (e × y)``.
+
+    The one implementation of the small-angle convention of mtmc: :func:`small_angle_rotation`
+    is this applied to the unit vectors, the kinematic chain applies it to points, and the
+    symbolic chain (:mod:`mtmc.kinematics.symbolic`) writes the same matrix.
+
+    Parameters
+    ----------
+    ea, eb, ec : array_like
+        Small rotations in rad about x, y and z, broadcasting against ``y[..., 0]``.
+    y : ndarray, shape (..., 3)
+        The vectors.
+    sign : float
+        +1 for ``I + [e]x``; -1 for its transpose ``I - [e]x`` (the passive form, and the
+        first-order inverse).
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        A new array.
+
+    Examples
+    --------
+    >>> small_angle_rotate(0.0, 0.0, 1e-3, np.array([1.0, 0.0, 0.0]))
+    array([1.   , 0.001, 0.   ])
+    """
+    a, b, c = (np.asarray(v, dtype=np.float64) for v in (ea, eb, ec))
+    yx, yy, yz = y[..., 0], y[..., 1], y[..., 2]
+    out = np.empty(
+        np.broadcast_shapes(y.shape, (*np.shape(a), 3), (*np.shape(b), 3), (*np.shape(c), 3))
+    )
+    out[..., 0] = yx + sign * (b * yz - c * yy)
+    out[..., 1] = yy + sign * (c * yx - a * yz)
+    out[..., 2] = yz + sign * (a * yy - b * yx)
     return out
 
 
@@ -316,7 +383,7 @@ def matrix_from_euler(angles: npt.ArrayLike, seq: str) -> NDArray[np.float64]:
     True
     """
     idx, extrinsic = _parse_seq(seq)
-    a = _as_float(angles, "angles")
+    a = as_float(angles, "angles")
     _check_trailing(a, (3,), "angles")
     mats = [_elementary(a[..., k], idx[k]) for k in range(3)]
     if extrinsic:
@@ -342,10 +409,11 @@ def quaternion_from_matrix(R: npt.ArrayLike) -> NDArray[np.float64]:
     Raises
     ------
     InputError
-        If the trailing shape is not ``(3, 3)``.
+        If the trailing shape is not ``(3, 3)`` or a matrix is not a rotation (a
+        reflection, or ``max |RᵀR − I| > ORTHO_TOL = 1e-9``; see
+        :func:`mtmc.geometry.checks.check_rotation_matrices`).
     """
-    M = _as_float(R, "R")
-    _check_trailing(M, (3, 3), "R")
+    M = check_rotation_matrices(R, "R")
     tr = M[..., 0, 0] + M[..., 1, 1] + M[..., 2, 2]
     cand = np.stack([tr, M[..., 0, 0], M[..., 1, 1], M[..., 2, 2]], axis=-1)
     pivot = np.argmax(cand, axis=-1)
@@ -414,7 +482,8 @@ def euler_from_matrix(R: npt.ArrayLike, seq: str) -> NDArray[np.float64]:
     Raises
     ------
     InputError
-        If ``seq`` is not a valid sequence or the trailing shape of ``R`` is not (3, 3).
+        If ``seq`` is not a valid sequence, or ``R`` is not of shape (..., 3, 3) or not a
+        rotation (as for :func:`quaternion_from_matrix`).
 
     Notes
     -----
@@ -489,9 +558,9 @@ def matrix_from_axis_angle(axis: npt.ArrayLike, angle: npt.ArrayLike) -> NDArray
     >>> np.allclose(matrix_from_axis_angle([0, 0, 2.0], 0.3), rotation_z(0.3))
     True
     """
-    n = _as_float(axis, "axis")
+    n = as_float(axis, "axis")
     _check_trailing(n, (3,), "axis")
-    th = _as_float(angle, "angle")
+    th = as_float(angle, "angle")
     norm = np.linalg.norm(n, axis=-1, keepdims=True)
     if np.any(norm == 0.0):
         raise DegenerateGeometryError(
@@ -531,7 +600,8 @@ def axis_angle_from_matrix(
     Raises
     ------
     InputError
-        If the trailing shape is not ``(3, 3)``.
+        If the trailing shape is not ``(3, 3)`` or a matrix is not a rotation (as for
+        :func:`quaternion_from_matrix`).
 
     Notes
     -----
@@ -577,8 +647,8 @@ def apply_htm(T: npt.ArrayLike, points: npt.ArrayLike) -> NDArray[np.float64]:
     InputError
         If the trailing shapes are not ``(4, 4)`` and ``(3,)``, or the ranks do not fit.
     """
-    A = _as_float(T, "T")
-    p = _as_float(points, "points")
+    A = as_float(T, "T")
+    p = as_float(points, "points")
     _check_trailing(A, (4, 4), "T")
     _check_trailing(p, (3,), "points")
     R = A[..., :3, :3]

@@ -85,7 +85,16 @@ def normalise_error_name(name: str) -> str:
     -------
     str
         The name with the leading ``E`` (not checked further; see :func:`parse_error_name`).
+
+    Raises
+    ------
+    InputError
+        If ``name`` is not a string.
     """
+    if not isinstance(name, str):
+        raise InputError(
+            f"expected an error name such as 'EXX' or 'EC0Y', got {name!r}", field="name"
+        )
     s = name.strip().upper()
     if not s.startswith("E"):
         s = "E" + s

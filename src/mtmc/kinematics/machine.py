@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_mapping
+from mtmc.geometry.transforms import rotate_about_axis, small_angle_rotate
 from mtmc.kinematics import _columns as _cols
 from mtmc.kinematics.error_terms import (
     ErrorTerm,
@@ -88,34 +89,6 @@ def _cross_axis(j: int, y: _F) -> _F:
     i, k = (j + 1) % 3, (j + 2) % 3
     out[..., i] = -y[..., k]
     out[..., k] = y[..., i]
-    return out
-
-
-def _rot_axis(j: int, angle: Any, y: _F) -> _F:
-    """Exact rotation of ``y`` about coordinate axis j by ``angle`` ((), (M,) -> (M, 1))."""
-    c, s = np.cos(angle), np.sin(angle)
-    i, k = (j + 1) % 3, (j + 2) % 3
-    out = (
-        y.copy()
-        if np.ndim(c) == 0
-        else np.broadcast_to(y, np.broadcast_shapes(y.shape, (*np.shape(c), 3))).copy()
-    )
-    yi, yk = y[..., i], y[..., k]
-    out[..., i] = c * yi - s * yk
-    out[..., k] = s * yi + c * yk
-    return out
-
-
-def _small_rot(e: tuple[Any, Any, Any], y: _F, sign: float) -> _F:
-    """``y + sign * (e x y)`` with e components () or (M, 1)."""
-    a, b, c = e
-    yx, yy, yz = y[..., 0], y[..., 1], y[..., 2]
-    out = np.empty(
-        np.broadcast_shapes(y.shape, (*np.shape(a), 3), (*np.shape(b), 3), (*np.shape(c), 3))
-    )
-    out[..., 0] = yx + sign * (b * yz - c * yy)
-    out[..., 1] = yy + sign * (c * yx - a * yz)
-    out[..., 2] = yz + sign * (a * yy - b * yx)
     return out
 
 
@@ -226,13 +199,13 @@ class _ErrorRotation(_Factor):
     def apply(self, y: _F, is_point: _F, vals: Values, q: _F, exact: bool) -> _F:
         e = self._angles(vals)
         if not exact:
-            return _small_rot(e, y, -1.0 if self.transpose else 1.0)
+            return small_angle_rotate(*e, y, sign=-1.0 if self.transpose else 1.0)
         if self.transpose:
             for j in (2, 1, 0):
-                y = _rot_axis(j, -e[j], y)
+                y = rotate_about_axis(j, -e[j], y)
             return y
         for j in (0, 1, 2):
-            y = _rot_axis(j, e[j], y)
+            y = rotate_about_axis(j, e[j], y)
         return y
 
     def partials(self, y: _F, vals: Values, q: _F, exact: bool) -> list[tuple[str, _F]]:
@@ -246,7 +219,7 @@ class _ErrorRotation(_Factor):
             # derivative w.r.t. the j-th angle: rotations before j, then G_j, then after
             z = y
             for i in order:
-                z = _rot_axis(i, sign * e[i], z)
+                z = rotate_about_axis(i, sign * e[i], z)
                 if i == j:
                     z = sign * _cross_axis(j, z)
             out.append((self.names[j], z))
@@ -261,7 +234,7 @@ class _AxisRotation(_Factor):
         self.col = col
 
     def apply(self, y: _F, is_point: _F, vals: Values, q: _F, exact: bool) -> _F:
-        return _rot_axis(self.direction, q[:, self.col, None], y)
+        return rotate_about_axis(self.direction, q[:, self.col, None], y)
 
     def lower(self, present: Mapping[str, Any], exact: bool) -> list[_cols.Op]:
         return [_cols.AxisRotation(self.direction, f"q:{self.col}", 1.0)]
@@ -293,9 +266,9 @@ class _LinearMotion(_Factor):
         shape = np.broadcast_shapes(*(np.shape(a) for a in ang))
         d = np.broadcast_to(e, (*shape, 3)).copy()
         if not exact:
-            return _small_rot(tuple(ang), d, 1.0)
+            return small_angle_rotate(ang[0], ang[1], ang[2], d)
         for j in (0, 1, 2):
-            d = _rot_axis(j, ang[j], d)
+            d = rotate_about_axis(j, ang[j], d)
         return d
 
     def apply(self, y: _F, is_point: _F, vals: Values, q: _F, exact: bool) -> _F:
@@ -318,7 +291,7 @@ class _LinearMotion(_Factor):
             else:
                 v = np.broadcast_to(e, (*np.broadcast_shapes(*(np.shape(a) for a in ang)), 3))
                 for i in (0, 1, 2):
-                    v = _rot_axis(i, ang[i], v)
+                    v = rotate_about_axis(i, ang[i], v)
                     if i == j:
                         v = _cross_axis(j, v)
             out.append((n, np.broadcast_to((qq * v)[:, None, :], y.shape).copy()))
@@ -533,7 +506,24 @@ class Machine:
 
     # -- inputs -------------------------------------------------------------------------
 
-    def _q(self, q: npt.ArrayLike | Mapping[str, npt.ArrayLike]) -> _F:
+    def positions(self, q: npt.ArrayLike | Mapping[str, npt.ArrayLike]) -> _F:
+        """Axis positions checked and stacked as an array ``(M, n_axes)`` in ``axes`` order.
+
+        Parameters
+        ----------
+        q : array_like, shape (M, n_axes) or (n_axes,), or mapping of str to array_like (M,)
+            Positions, mm for linear axes and rad for rotary ones; a mapping gives one
+            array per axis letter.
+
+        Returns
+        -------
+        ndarray, shape (M, n_axes)
+
+        Raises
+        ------
+        InputError
+            If an axis is unknown or missing, a shape is wrong, or a value is not finite.
+        """
         if isinstance(q, Mapping):
             unknown = [k for k in q if k not in self.axes]
             if unknown:
@@ -593,7 +583,7 @@ class Machine:
             On an unknown name, a name given twice, an error function for a constant
             term, or a value of the wrong shape.
         """
-        qa = self._q(q)
+        qa = self.positions(q)
         return self._values(qa, errors)
 
     def _inputs(self, errors: Mapping[str, Any] | None) -> dict[str, Any]:
@@ -676,7 +666,7 @@ class Machine:
         column, the chain lowered once into operations with the constant factors
         multiplied out (:mod:`mtmc.kinematics._columns`).
         """
-        qa = self._q(q)
+        qa = self.positions(q)
         vals = self._inputs(errors)
         m = self._batch(qa, vals)
         # constant sources are floats, the others arrays (M,) or functions of a position
@@ -830,7 +820,7 @@ class Machine:
         cols_names = (
             self.error_names if names is None else tuple(self.error_term(n).name for n in names)
         )
-        qa = self._q(q)
+        qa = self.positions(q)
         vals = self._values(qa, errors)
         m = self._batch(qa, vals)
         if qa.shape[0] != m:

@@ -228,7 +228,7 @@ class ErrorModel:
             position of its axis (chain rule; the functions are linear in their
             coefficients).
         """
-        qa = self.machine._q(q)
+        qa = self.machine.positions(q)
         errs = self.errors(theta)
         Je = self.machine.jacobian(qa, errs, names=self.error_names, exact=exact)
         m = Je.shape[0]

@@ -36,7 +36,12 @@ from mtmc.kinematics.topology import AXIS_DIRECTION, is_linear
 if TYPE_CHECKING:  # SymPy is imported where it is used: it costs ~0.3 s at import
     import sympy as sp
 
-__all__ = ["EquationOfMotion", "equation_of_motion"]
+__all__ = [
+    "EquationOfMotion",
+    "equation_of_motion",
+    "small_angle_matrix",
+    "axis_rotation_matrix",
+]
 
 _DIRS = "XYZ"
 _ROTS = "ABC"
@@ -51,7 +56,25 @@ def _T(v: Sequence[Any]) -> sp.Matrix:
     return M
 
 
-def _R(a: Any, b: Any, c: Any, transpose: bool = False) -> sp.Matrix:
+def small_angle_matrix(a: Any, b: Any, c: Any, transpose: bool = False) -> sp.Matrix:
+    """The 4 x 4 homogeneous form of the first-order rotation ``I + [e]x``, symbolic.
+
+    The same matrix as :func:`mtmc.geometry.small_angle_rotation` (the numeric chain's
+    :func:`mtmc.geometry.small_angle_rotate`), written in SymPy so that the symbolic chain
+    stays a construction independent of the numeric one; a test compares the two.
+
+    Parameters
+    ----------
+    a, b, c : sympy expression or number
+        Small rotations about x, y and z, rad.
+    transpose : bool
+        Give ``I - [e]x`` (the passive form) instead.
+
+    Returns
+    -------
+    sympy.Matrix, shape (4, 4)
+        ``[[1, -c, b, 0], [c, 1, -a, 0], [-b, a, 1, 0], [0, 0, 0, 1]]`` (or its transpose).
+    """
     import sympy as sp
 
     M = sp.eye(4)
@@ -70,7 +93,22 @@ def _truncate(expr: Any, scale: dict[Any, Any], eps: Any, order: int) -> Any:
     return sum((e.coeff(eps, k) for k in range(order + 1)), sp.Integer(0))
 
 
-def _rot(axis: int, q: Any) -> sp.Matrix:
+def axis_rotation_matrix(axis: int, q: Any) -> sp.Matrix:
+    """The 4 x 4 homogeneous active rotation about coordinate axis ``axis`` by ``q``, symbolic.
+
+    The same matrix as :func:`mtmc.geometry.rotation_x` (``y``, ``z``); a test compares them.
+
+    Parameters
+    ----------
+    axis : int
+        0, 1 or 2 for x, y or z.
+    q : sympy expression or number
+        The angle, rad.
+
+    Returns
+    -------
+    sympy.Matrix, shape (4, 4)
+    """
     import sympy as sp
 
     c, s = sp.cos(q), sp.sin(q)
@@ -148,7 +186,7 @@ class EquationOfMotion:
             tool: npt.ArrayLike | None = None,
             workpiece: npt.ArrayLike | None = None,
         ) -> NDArray[np.float64]:
-            qa = machine._q(q)
+            qa = machine.positions(q)
             vals = {machine.error_term(k).name: v for k, v in (errors or {}).items()}
             t = machine.tool if tool is None else np.asarray(tool, dtype=np.float64)
             w = machine.workpiece if workpiece is None else np.asarray(workpiece, dtype=float)
@@ -214,7 +252,7 @@ def equation_of_motion(
     tsym = sp.symbols("t_x t_y t_z", real=True)
     wsym = sp.symbols("w_x w_y w_z", real=True)
     mats: list[sp.Matrix] = []
-    mats.append(_R(E("EAP"), E("EBP"), E("ECP"), transpose=True))
+    mats.append(small_angle_matrix(E("EAP"), E("EBP"), E("ECP"), transpose=True))
     mats.append(_T([-(wsym[i] + E(f"E{_DIRS[i]}P")) for i in range(3)]))
     for ax in machine.topology.chain:
         d = AXIS_DIRECTION[ax]
@@ -227,19 +265,19 @@ def equation_of_motion(
             s = [E(f"E{_ROTS[j]}0{ax}") if j != d else 0 for j in range(3)]
             e = sp.zeros(4, 1)
             e[d] = 1
-            direction = _R(s[0], s[1], s[2]) * e
+            direction = small_angle_matrix(s[0], s[1], s[2]) * e
             mats.append(_T([axsym[ax] * direction[i] for i in range(3)]))
             mats.append(_T(comp_d))
-            mats.append(_R(comp_r[0], comp_r[1], comp_r[2]))
+            mats.append(small_angle_matrix(comp_r[0], comp_r[1], comp_r[2]))
         else:
             ld = [E(f"E{_DIRS[j]}0{ax}") if j != d else 0 for j in range(3)]
             lr = [E(f"E{_ROTS[j]}0{ax}") if j != d else 0 for j in range(3)]
             mats.append(_T(ld))
-            mats.append(_R(lr[0], lr[1], lr[2]))
+            mats.append(small_angle_matrix(lr[0], lr[1], lr[2]))
             mats.append(_T(comp_d))
-            mats.append(_R(comp_r[0], comp_r[1], comp_r[2]))
-            mats.append(_rot(d, axsym[ax]))
-            mats.append(_R(lr[0], lr[1], lr[2], transpose=True))
+            mats.append(small_angle_matrix(comp_r[0], comp_r[1], comp_r[2]))
+            mats.append(axis_rotation_matrix(d, axsym[ax]))
+            mats.append(small_angle_matrix(lr[0], lr[1], lr[2], transpose=True))
             mats.append(_T([-v for v in ld]))
         mats.append(_T([-v for v in osym]))
     mats.append(_T([tsym[i] + E(f"E{_DIRS[i]}T") for i in range(3)]))

@@ -36,6 +36,7 @@ from mtmc.errors import InputError
 from mtmc.frozen import frozen_value
 from mtmc.uncertainty import distributions as _distributions
 from mtmc.uncertainty import tolerance as _tolerance
+from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.expression import check_variables
 
 __all__ = [
@@ -207,7 +208,7 @@ def coverage_factor(p: float, dof: float) -> float:
     >>> round(coverage_factor(0.95, math.inf), 4)
     1.96
     """
-    p = _check_p(p)
+    p = check_probability(p)
     if not dof > 0:
         raise InputError(f"expected positive degrees of freedom, got {dof}", field="dof")
     from scipy import stats  # imported here: scipy.stats costs ~0.5 s at import
@@ -261,13 +262,6 @@ def welch_satterthwaite(variances: npt.ArrayLike, dofs: npt.ArrayLike) -> float:
     if denom == 0.0:
         return math.inf
     return total**2 / denom
-
-
-def _check_p(p: float) -> float:
-    p = float(p)
-    if not 0.0 < p < 1.0:
-        raise InputError(f"expected a coverage probability 0 < p < 1, got {p}", field="p")
-    return p
 
 
 @dataclass(frozen=True)
@@ -376,7 +370,7 @@ def gum(
         If an input has no finite mean or uncertainty, the names of an expression model
         and the inputs differ, the model returns the wrong shape, or ``p`` is not in (0, 1).
     """
-    p = _check_p(p)
+    p = check_probability(p)
     if not inputs:
         raise InputError("expected at least one input quantity", field="inputs")
     check_variables(model, inputs)
@@ -565,7 +559,7 @@ def validate(
     InputError
         For a vector output, an unknown ``kind``, or ``p`` outside (0, 1).
     """
-    p = _check_p(p)
+    p = check_probability(p)
     if np.ndim(gum_result.estimate) != 0:
         raise InputError(
             "JCGM 101 §8 validation is defined for a scalar output; got an output of "
