@@ -99,3 +99,32 @@ def test_frozen_monte_carlo_result() -> None:
     _writes_refused(res.estimate, res.u, res.cov, res.samples)
     with pytest.raises(dataclasses.FrozenInstanceError):
         res.samples = np.zeros((200, 2))  # type: ignore[misc]
+
+
+def test_frozen_graph_plan() -> None:
+    from pathlib import Path
+
+    from mtmc.graph import load_graph
+    from mtmc.graph.model import check
+
+    graph = Path(__file__).resolve().parents[1] / "examples" / "graphs" / "ball_centre.toml"
+    plan = check(load_graph(graph))
+    name = next(iter(plan.types))
+    with pytest.raises(TypeError):
+        plan.types[name] = "point"  # type: ignore[index]
+    with pytest.raises(TypeError):
+        plan.producer["zz"] = "t"  # type: ignore[index]
+
+
+def test_frozen_objects_pickle_and_stay_frozen() -> None:
+    import pickle
+
+    m = Machine.from_topology("wCXfYZt", pivots={"C": [10.0, 0.0, 0.0]})
+    back = pickle.loads(pickle.dumps(m))
+    np.testing.assert_array_equal(back.pivots["C"], [10.0, 0.0, 0.0])
+    with pytest.raises(TypeError):
+        back.pivots["X"] = np.zeros(3)  # type: ignore[index]
+    res = pickle.loads(pickle.dumps(gum(lambda a: 2 * a, {"a": Normal(1.0, 0.1)})))
+    assert res.sensitivities["a"] == pytest.approx(2.0)
+    with pytest.raises(TypeError):
+        res.sensitivities["b"] = 1.0  # type: ignore[index]

@@ -2,9 +2,10 @@
 
 A frozen dataclass stops rebinding its fields, not writing into them: an array field can
 still be changed in place (``r.cov[0, 0] = 0``) and a dict field can gain keys. The results
-and module-level tables therefore hold arrays with the ``writeable`` flag cleared and
-mappings wrapped in :class:`types.MappingProxyType`, made here, copied at the boundary so
-that no caller's object is frozen or shared.
+therefore hold arrays with the ``writeable`` flag cleared and read-only mappings that
+pickle (:class:`FrozenMapping`), made here, copied at the boundary so that no caller's
+object is frozen or shared. (Module-level tables, never pickled, are
+:class:`types.MappingProxyType`.)
 
 Examples
 --------
@@ -17,20 +18,19 @@ Examples
 >>> m["y"] = 2.0
 Traceback (most recent call last):
 ...
-TypeError: 'mappingproxy' object does not support item assignment
+TypeError: 'FrozenMapping' object does not support item assignment
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from types import MappingProxyType
+from collections.abc import Iterator, Mapping
 from typing import Any, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-__all__ = ["frozen_array", "frozen_mapping", "frozen_value"]
+__all__ = ["FrozenMapping", "frozen_array", "frozen_mapping", "frozen_value"]
 
 K = TypeVar("K")
 V = TypeVar("V")
@@ -69,8 +69,37 @@ def frozen_value(v: Any) -> Any:
     return v
 
 
+class FrozenMapping(Mapping[K, V]):
+    """A read-only mapping that, unlike :class:`types.MappingProxyType`, pickles.
+
+    Results and compiled models travel to worker processes (``executor="process"``,
+    Dask), so their mappings must pickle; item assignment and deletion raise
+    ``TypeError``. Built by :func:`frozen_mapping`.
+    """
+
+    __slots__ = ("_data",)
+
+    def __init__(self, data: Mapping[K, V]) -> None:
+        self._data = dict(data)
+
+    def __getitem__(self, key: K) -> V:
+        return self._data[key]
+
+    def __iter__(self) -> Iterator[K]:
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __repr__(self) -> str:
+        return f"FrozenMapping({self._data!r})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (FrozenMapping, (self._data,))
+
+
 def frozen_mapping(m: Mapping[K, V]) -> Mapping[K, V]:
-    """A read-only view of a copy of ``m`` (a :class:`types.MappingProxyType`).
+    """A read-only copy of ``m`` (a :class:`FrozenMapping`).
 
     Parameters
     ----------
@@ -80,6 +109,7 @@ def frozen_mapping(m: Mapping[K, V]) -> Mapping[K, V]:
     Returns
     -------
     mapping
-        Readable like a dict; item assignment and deletion raise ``TypeError``.
+        Readable like a dict and picklable; item assignment and deletion raise
+        ``TypeError``.
     """
-    return MappingProxyType(dict(m))
+    return m if isinstance(m, FrozenMapping) else FrozenMapping(m)

@@ -27,6 +27,7 @@ from functools import cached_property
 from types import MappingProxyType
 
 from mtmc.errors import GraphError, MtmcError
+from mtmc.frozen import frozen_mapping
 from mtmc.graph import ops
 from mtmc.graph.places import COORDINATE_TYPES, Place, ProbeDefaults, Transition
 
@@ -128,22 +129,27 @@ class Plan:
     ----------
     graph : Graph
         The graph.
-    types : dict of str to str
-        The type of every place (declared or implied).
+    types : mapping of str to str
+        The type of every place (declared or implied); copied into a read-only mapping.
     steps : tuple of Step
         The transitions in firing order.
-    producer : dict of str to str
-        The transition producing each produced place.
+    producer : mapping of str to str
+        The transition producing each produced place; copied into a read-only mapping.
     warnings : tuple of str
         One line per construction that is badly conditioned at the nominal values
         (:func:`mtmc.graph.nominal.check_nominal`).
     """
 
     graph: Graph
-    types: dict[str, str]
+    types: Mapping[str, str]
     steps: tuple[Step, ...]
-    producer: dict[str, str]
+    producer: Mapping[str, str]
     warnings: tuple[str, ...] = field(default=(), compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "types", frozen_mapping(self.types))
+        object.__setattr__(self, "producer", frozen_mapping(self.producer))
+        object.__setattr__(self, "steps", tuple(self.steps))
 
     @property
     def marked(self) -> tuple[str, ...]:
