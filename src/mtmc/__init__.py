@@ -27,7 +27,7 @@ __version__ = "0.1.0"
 # Imported after the version, which the result folders record. ``mtmc.report`` is the
 # function that renders a result (the module stays importable as ``mtmc.report``); it is
 # bound here, before any later import of the module could bind the name to the module.
-from mtmc.report import report as report  # noqa: E402
+from mtmc.report import report as report
 
 #: Names of other modules re-exported first, then those of the subpackages, in the order
 #: of ``__all__``.

@@ -210,4 +210,5 @@ def test_cos_sin_from_the_half_angle_tangent():
     c, s = _columns.cos_sin(a)
     np.testing.assert_allclose(c, np.cos(a), rtol=0, atol=2e-15)
     np.testing.assert_allclose(s, np.sin(a), rtol=0, atol=2e-15)
-    assert np.all(np.isfinite(c)) and np.all(np.isfinite(s))
+    assert np.all(np.isfinite(c))
+    assert np.all(np.isfinite(s))

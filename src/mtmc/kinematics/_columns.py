@@ -598,7 +598,7 @@ class Program:
             self.init += keys
         return ops[taken:]
 
-    def run(self, qa: _F, m: int) -> _F:
+    def run(self, qa: _F, m: int) -> _F:  # noqa: C901
         """The vectors at the ``m`` poses: array (m, n_vectors, 3)."""
         y = np.empty((m, len(self.start), 3))
         bufs: dict[int, Any] = {}  # buffers by block length, reused
