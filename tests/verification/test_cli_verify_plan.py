@@ -51,7 +51,9 @@ def test_plan_writes_the_programs_and_the_estimate(tmp_path: Path, capsys) -> No
     )
     settings = NCSettings(feed=2000.0, dwell=6.0, acceleration=500.0, output="mesh96")
     est = estimate_time(plan, settings)
-    assert data["points"] == 96 and data["measurements"] == 96 and data["axes"] == ["X", "Y", "Z"]
+    assert data["points"] == 96
+    assert data["measurements"] == 96
+    assert data["axes"] == ["X", "Y", "Z"]
     assert data["time"]["dwell_s"] == 576.0
     assert np.isclose(data["time"]["travel_s"], est.travel_s, rtol=1e-12)
     assert (out / "mesh96.nc").read_text() == iso_program(plan, settings)
@@ -59,7 +61,8 @@ def test_plan_writes_the_programs_and_the_estimate(tmp_path: Path, capsys) -> No
     assert set(data["files"]) == {"iso", "heidenhain", "points"}
     assert main(["verify", "plan", str(study), "-o", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "96 points (mesh, axes X Y Z)" in text and "dwell 9.6 min" in text
+    assert "96 points (mesh, axes X Y Z)" in text
+    assert "dwell 9.6 min" in text
 
 
 def test_plan_errors_are_one_line(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]

@@ -298,5 +298,6 @@ def test_plain_csv_errors(
         read_plain_csv(CSV.replace(*edit), "comp.csv")
     assert (info.value.line, info.value.field) == (line, field)
     t = read_plain_csv(CSV)
-    assert t.sign == "correction" and t.constants == {"EC0Y": 1e-05}
+    assert t.sign == "correction"
+    assert t.constants == {"EC0Y": 1e-05}
     assert math.isclose(t.curve("EXX").values[1], 0.002)

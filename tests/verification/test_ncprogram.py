@@ -43,7 +43,8 @@ def read_iso(text: str) -> tuple[np.ndarray, list[float], list[int]]:
     moves: list[list[float]] = []
     dwell: list[float] = []
     stops: list[int] = []
-    assert text.startswith("%\nO") and text.endswith("M30\n%\n")
+    assert text.startswith("%\nO")
+    assert text.endswith("M30\n%\n")
     for line in text.splitlines():
         code = re.sub(r"\(.*?\)", "", line).strip()
         if not code or code == "%" or code.startswith("O"):
@@ -69,7 +70,8 @@ def test_iso_program_parses_back_to_the_plan() -> None:
     s = NCSettings(feed=2000.0, dwell=6.0, program=2016)
     text = iso_program(plan, s)
     assert text.splitlines()[1].startswith("O2016 (")
-    assert "G21 G90 G94" in text and text.count("F2000.0") == 1
+    assert "G21 G90 G94" in text
+    assert text.count("F2000.0") == 1
     moves, dwell, stops = read_iso(text)
     np.testing.assert_allclose(moves, plan.moves, atol=5e-4)  # 3 decimals
     measured = np.array(dwell) > 0
@@ -78,7 +80,7 @@ def test_iso_program_parses_back_to_the_plan() -> None:
     np.testing.assert_allclose(moves[measured], plan.measurement_positions, atol=5e-4)
     assert stops == [int(np.flatnonzero(plan.move_offset == 1)[0]) - 1]
     # the X dwell word, in seconds
-    moves_x, dwell_x, _ = read_iso(iso_program(plan, NCSettings(feed=2000.0, dwell_word="X")))
+    _moves_x, dwell_x, _ = read_iso(iso_program(plan, NCSettings(feed=2000.0, dwell_word="X")))
     np.testing.assert_array_equal(dwell_x, dwell)
 
 
@@ -88,7 +90,8 @@ def test_heidenhain_program_structure() -> None:
     lines = heidenhain_program(plan, s).splitlines()
     assert [int(ln.split()[0]) for ln in lines] == list(range(len(lines)))
     body = [ln.split(" ", 1)[1] for ln in lines]
-    assert body[0] == "BEGIN PGM VERIF96 MM" and body[-1] == "END PGM VERIF96 MM"
+    assert body[0] == "BEGIN PGM VERIF96 MM"
+    assert body[-1] == "END PGM VERIF96 MM"
     moves = [b for b in body if b.startswith("L ")]
     assert len(moves) == plan.moves.shape[0] == 192
     pos = {"X": math.nan, "Y": math.nan, "Z": math.nan}
@@ -166,7 +169,8 @@ def test_time_of_the_96_point_mesh_by_hand() -> None:
     v = F / 60.0
     hand = 72 * (400.0 / v + v / a) + 23 * (500.0 / v + v / a)
     est = estimate_time(plan, NCSettings(feed=F, dwell=dwell, acceleration=a))
-    assert est.n_moves == 95 and est.path_length_mm == pytest.approx(40300.0)
+    assert est.n_moves == 95
+    assert est.path_length_mm == pytest.approx(40300.0)
     assert est.travel_s == pytest.approx(hand, rel=1e-12)
     assert est.dwell_s == 96 * 6.0
     assert est.total_s == pytest.approx(576.0 + hand, rel=1e-12)
@@ -181,7 +185,8 @@ def test_time_of_the_5408_point_mesh() -> None:
     plan = MeasurementPlan(("X", "Y", "Z"), mesh(LO, HI, step=100.0))
     est = estimate_time(plan, NCSettings(feed=2000.0, dwell=6.0, acceleration=500.0))
     assert est.n_measurements == 5408
-    assert est.dwell_s == 32448.0 and est.dwell_s / 3600.0 == pytest.approx(9.0, abs=0.02)
+    assert est.dwell_s == 32448.0
+    assert est.dwell_s / 3600.0 == pytest.approx(9.0, abs=0.02)
     # 5407 moves of 100 mm: 100/v + v/a each
     v = 2000.0 / 60.0
     assert est.travel_s == pytest.approx(5407 * (100.0 / v + v / 500.0), rel=1e-12)
@@ -269,8 +274,11 @@ X = 10000
 
 def test_nc_table() -> None:
     s = nc_from_dict(tomllib.loads(NC), "s.toml", text=NC, axes=("X", "Y", "Z"))
-    assert s.dialects == ("iso", "heidenhain") and s.dwell_word == "X" and s.program == 96
-    assert s.axis_feed == {"X": 10000.0} and s.acceleration == 400.0
+    assert s.dialects == ("iso", "heidenhain")
+    assert s.dwell_word == "X"
+    assert s.program == 96
+    assert s.axis_feed == {"X": 10000.0}
+    assert s.acceleration == 400.0
 
 
 @pytest.mark.parametrize(

@@ -28,7 +28,8 @@ def test_aguado_2016_mesh_counts_and_bounds() -> None:
     # Aguado et al. 2016 §5: 500/500/400 mm -> 96 points, 100 mm -> 5408 points
     p96 = mesh(LO, HI, step=[500.0, 500.0, 400.0])
     p5408 = mesh(LO, HI, step=100.0)
-    assert p96.shape == (96, 3) and p5408.shape == (5408, 3)
+    assert p96.shape == (96, 3)
+    assert p5408.shape == (5408, 3)
     for p in (p96, p5408):
         np.testing.assert_array_equal(p.min(axis=0), LO)
         np.testing.assert_array_equal(p.max(axis=0), HI)
@@ -99,7 +100,8 @@ def test_cloud_points_stay_in_their_cells_and_are_reproducible() -> None:
     big = cloud(LO, HI, np.random.default_rng(np.random.SeedSequence(9)), step=100.0)
     dd = (big - mesh(LO, HI, step=100.0))[:, 0]
     dd = dd[dd != 0.0] / 100.0
-    assert abs(dd.std() - 1 / np.sqrt(12)) < 0.01 and abs(dd.mean()) < 0.01
+    assert abs(dd.std() - 1 / np.sqrt(12)) < 0.01
+    assert abs(dd.mean()) < 0.01
     # the direction of motion of the mesh is kept: along the first axis of the sequence
     # (Z) consecutive points of one pass are still in the same order
     same_pass = np.all(base[1:, :2] == base[:-1, :2], axis=1)
@@ -120,7 +122,8 @@ def test_diagonals_lie_on_the_diagonals() -> None:
     for line in body.reshape(4, n, 3):
         a, b = line[0], line[-1]
         # opposite corners: every coordinate at one end of its interval, all flipped
-        assert np.all((a == LO) | (a == HI)) and np.all(a + b == LO + HI)
+        assert np.all((a == LO) | (a == HI))
+        assert np.all(a + b == LO + HI)
         t = np.linspace(0, 1, n)[:, None]
         np.testing.assert_allclose(line, a + t * (b - a), atol=1e-9)
     # the four body diagonals are distinct and cross at the centre
@@ -142,7 +145,8 @@ def test_diagonals_lie_on_the_diagonals() -> None:
 
 def test_diagonals_with_a_fixed_axis() -> None:
     d = diagonals([0, 0, 50], [400, 400, 50], 5)
-    assert d.shape == (10, 3) and np.all(d[:, 2] == 50)
+    assert d.shape == (10, 3)
+    assert np.all(d[:, 2] == 50)
     with pytest.raises(InputError, match="face diagonals need at least 3"):
         diagonals([0, 0, 50], [400, 400, 50], 5, which="face")
 
@@ -166,7 +170,8 @@ def test_unidirectional_approach_with_overshoot() -> None:
             assert last_from in (moves[i, j] - direction * [2.0, 1.0][j], *pts[:, j])
     # two offsets: the path is repeated, the offset index follows the passes
     two = MeasurementPlan(("X", "Y"), pts, offsets=[[0, 0, 0], [0, 0, 100]])
-    assert two.n_measurements == 12 and two.moves.shape == (12, 2)
+    assert two.n_measurements == 12
+    assert two.moves.shape == (12, 2)
     np.testing.assert_array_equal(two.move_offset, [0] * 6 + [1] * 6)
     np.testing.assert_array_equal(two.measurement_offsets[6:], np.tile([0, 0, 100.0], (6, 1)))
 
@@ -179,8 +184,8 @@ def test_plan_validation() -> None:
     with pytest.raises(InputError, match="overshoots >= 0"):
         MeasurementPlan(("X",), [[0.0]], overshoot=[-1.0], approach=[1])
     plan = MeasurementPlan(("X",), [[0.0], [1.0]])
-    with pytest.raises(ValueError):
-        plan.points[0, 0] = 3.0  # read-only
+    with pytest.raises(ValueError, match="read-only"):
+        plan.points[0, 0] = 3.0
 
 
 STUDY = """\
@@ -208,8 +213,11 @@ step = 400
 
 def test_workspace_table() -> None:
     plan = workspace_from_dict(tomllib.loads(STUDY), "s.toml", text=STUDY, machine_axes="XYZ")
-    assert plan.axes == ("X", "Y", "Z") and plan.kind == "cloud" and plan.seed == 2016
-    assert plan.n_points == 96 and plan.n_measurements == 192
+    assert plan.axes == ("X", "Y", "Z")
+    assert plan.kind == "cloud"
+    assert plan.seed == 2016
+    assert plan.n_points == 96
+    assert plan.n_measurements == 192
     rng = np.random.default_rng(np.random.SeedSequence(2016))
     np.testing.assert_array_equal(plan.points, cloud(LO, HI, rng, counts=[6, 4, 4]))
 

@@ -433,15 +433,19 @@ def isg_csv_text(table: CompensationTable) -> str:
     if table.constants:
         names = list(table.constants)
         blocks.append(
-            ["// position errors"]
-            + _columns([[_isg_name(n) for n in names], [_num(table.constants[n]) for n in names]])
+            [
+                "// position errors",
+                *_columns(
+                    [[_isg_name(n) for n in names], [_num(table.constants[n]) for n in names]]
+                ),
+            ]
         )
     for axis, group in _groups(table.curves):
         q = _pos_out(axis, group[0].positions)
         rows = [[axis, *(c.name for c in group)]]
         for i in range(q.size):
             rows.append([_num(q[i]), *(_num(c.values[i]) for c in group)])
-        blocks.append([f"// component errors of the {axis} axis"] + _columns(rows))
+        blocks.append([f"// component errors of the {axis} axis", *_columns(rows)])
     for i, b in enumerate(blocks):
         if i:
             out.append("#")
@@ -628,7 +632,7 @@ def _table(
         ) from None
 
 
-def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:
+def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:  # noqa: C901
     """Read a table in the ISG CSV format (see :func:`isg_csv_text`).
 
     Blocks are separated by ``#`` lines; ``//`` starts a comment. A block whose header
@@ -755,7 +759,7 @@ _BLOCK = re.compile(r"^\[\s*([A-Za-z0-9]+)\s*\]$")
 _KV = re.compile(r"^([A-Za-z_]+)\s*=\s*(.*)$")
 
 
-def read_etalon(text: str, file: str = "<etalon>") -> CompensationTable:
+def read_etalon(text: str, file: str = "<etalon>") -> CompensationTable:  # noqa: C901
     """Read a table in the Etalon exchange format (see :func:`etalon_text`).
 
     Parameters

@@ -179,7 +179,8 @@ class NCSettings:
 def _display(plan: MeasurementPlan) -> NDArray[np.float64]:
     """Commanded positions in controller units: mm, and degrees for rotary axes."""
     scale = np.array([180.0 / np.pi if is_rotary(a) else 1.0 for a in plan.axes])
-    return np.asarray(plan.moves) * scale
+    out: NDArray[np.float64] = np.asarray(plan.moves) * scale
+    return out
 
 
 def _comment_iso(text: str) -> str:
@@ -269,7 +270,7 @@ def iso_program(plan: MeasurementPlan, settings: NCSettings) -> str:
         *settings.preamble,
     ]
     dwell = (
-        f"G04 P{int(round(settings.dwell * 1000.0))}"
+        f"G04 P{round(settings.dwell * 1000.0)}"
         if settings.dwell_word == "P"
         else f"G04 {settings.dwell_word}{settings.dwell:.3f}"
     )
@@ -873,7 +874,8 @@ def loads_plan_study(text: str, file: str = "<study>") -> tuple[MeasurementPlan,
     axes = _machine_axes(top)
     ws = top.table("workspace")
     nc = top.table("nc")
-    assert ws is not None and nc is not None
+    assert ws is not None
+    assert nc is not None
     plan = read_workspace(ws, axes)
     return plan, read_nc(nc, plan.axes)
 

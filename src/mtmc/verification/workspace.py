@@ -138,7 +138,7 @@ def axis_values(
     if not (np.isfinite(step) and step > 0):
         raise InputError(f"expected a step > 0, got {step!r}", field="step")
     k = span / step
-    n = int(round(k))
+    n = round(k)
     if n < 1 or abs(k - n) > _TOL * max(1.0, k):
         raise InputError(
             f"the interval {lo:g} .. {hi:g} is not a whole number of steps of {step:g} "
@@ -645,7 +645,9 @@ _WS_KEYS = (
 _AXIS_KEYS = ("start", "end", "step", "count", "overshoot", "approach")
 
 
-def read_workspace(ws: Fields, machine_axes: Sequence[str] | None = None) -> MeasurementPlan:
+def read_workspace(  # noqa: C901
+    ws: Fields, machine_axes: Sequence[str] | None = None
+) -> MeasurementPlan:
     """Read a ``[workspace]`` table of a study file into a :class:`MeasurementPlan`.
 
     The table (``docs/verification-planning.md``)::
