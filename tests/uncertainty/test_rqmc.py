@@ -45,8 +45,10 @@ def test_numbers_do_not_depend_on_blocks_workers_or_input_order():
     r2 = monte_carlo(SUM, INPUTS, m, seed=5, sampling="sobol", block_size=5000, workers=2)
     swapped = {"x2": INPUTS["x2"], "x1": INPUTS["x1"]}
     r3 = monte_carlo(SUM, swapped, m, seed=5, sampling="sobol", block_size=777)
-    assert np.array_equal(r.samples, r2.samples) and np.array_equal(r.samples, r3.samples)
-    assert r.sampling == "sobol" and r.trials == m
+    assert np.array_equal(r.samples, r2.samples)
+    assert np.array_equal(r.samples, r3.samples)
+    assert r.sampling == "sobol"
+    assert r.trials == m
     # the first trials of a longer run are those of a shorter one
     r4 = monte_carlo(SUM, INPUTS, 3 * SEED_BLOCK_SIZE, seed=5, sampling="sobol")
     assert np.array_equal(r4.samples[:m], r.samples)
@@ -85,18 +87,21 @@ def test_correlated_normals_through_the_cholesky_factor():
 def test_adaptive_stops_on_independent_scramblings():
     kw = {"adaptive": True, "ndig": 3, "kind": "symmetric"}
     r = monte_carlo(SUM, INPUTS, seed=3, sampling="sobol", **kw)
-    assert r.block_trials == SEED_BLOCK_SIZE and r.trials == r.blocks * SEED_BLOCK_SIZE
+    assert r.block_trials == SEED_BLOCK_SIZE
+    assert r.trials == r.blocks * SEED_BLOCK_SIZE
     exact_u = math.sqrt(1.25)
     assert abs(r.u - exact_u) <= r.tolerance
     assert abs(r.coverage_interval(0.95, "symmetric")[1] - (0.5 + 1.959964 * exact_u)) <= 0.005
     plain = monte_carlo(SUM, INPUTS, seed=3, **kw)
-    assert r.blocks == RQMC_MIN_BLOCKS and r.trials * 5 <= plain.trials
+    assert r.blocks == RQMC_MIN_BLOCKS
+    assert r.trials * 5 <= plain.trials
 
 
 def test_layout_block_size_and_bad_arguments():
     layout = sobol_layout({"b": Uniform(0, 1), "a": MultivariateNormal([0, 0], np.eye(2))})
     assert layout == {"a": (0, 2), "b": (2, 1)}
-    assert sobol_block_trials(1) == SEED_BLOCK_SIZE and sobol_block_trials(100) == 8192
+    assert sobol_block_trials(1) == SEED_BLOCK_SIZE
+    assert sobol_block_trials(100) == 8192
     with pytest.raises(InputError, match="sampling"):
         monte_carlo(SUM, INPUTS, 100, seed=1, sampling="halton")
     with pytest.raises(InputError, match="normal_method"):
