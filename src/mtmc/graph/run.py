@@ -357,7 +357,7 @@ def random_inputs(plan: Plan) -> dict[str, Distribution]:
     return out
 
 
-def _marked_value(p: Place, factor: float, samples: Mapping[str, Any], m: int) -> Any:
+def _marked_value(p: Place, factor: float, samples: Mapping[str, Any]) -> Any:
     """The value of a marked place: ``(m,)``/``(m, 3)`` if random, a batch of one if constant."""
     f = _place_factor(p, factor)
     vec = p.type in ("point", "vector", "unit")
@@ -448,7 +448,7 @@ def evaluate(
     values: dict[str, Any] = {}
     for pl in g.places:
         if pl.marked:
-            values[pl.name] = _marked_value(pl, g.factor, samples, m)
+            values[pl.name] = _marked_value(pl, g.factor, samples)
     for i, s in enumerate(plan.steps):
         t = s.transition
         if t.op == "meas":
@@ -544,7 +544,7 @@ class GraphModel:
 def run_graph(
     graph: Graph | Plan,
     trials: int = 100_000,
-    seed: int | None | np.random.SeedSequence = None,
+    seed: int | np.random.SeedSequence | None = None,
     *,
     outputs: Iterable[str] | None = None,
     keep: Iterable[str] = (),

@@ -30,13 +30,13 @@ from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
 from mtmc.parallel import ExecutorKind, map_blocks
+from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.distributions import Distribution, NormalMethod
 from mtmc.uncertainty.results import (
     MAX_COV_DIM,
     Moments,
     MonteCarloResult,
     MonteCarloResults,
-    _check_p,
 )
 from mtmc.uncertainty.sampling import (
     DEFAULT_BLOCK_SIZE,
@@ -86,7 +86,7 @@ def adaptive_block_size(p: float) -> int:
     >>> adaptive_block_size(0.95), adaptive_block_size(0.999)
     (10000, 100000)
     """
-    pf = _check_p(p)
+    pf = check_probability(p)
     return max(10**4, math.ceil(100.0 / (1.0 - pf) - 1e-6))
 
 
@@ -488,7 +488,7 @@ class _Runner:
 
 
 def _check_names(value: Any, field: str, allowed: tuple[Any, ...]) -> Any:
-    if value in allowed and not isinstance(value, int | float) or isinstance(value, bool):
+    if (value in allowed and not isinstance(value, int | float)) or isinstance(value, bool):
         return value
     if isinstance(value, str) or not isinstance(value, Iterable):
         raise InputError(
@@ -507,7 +507,7 @@ def monte_carlo(
     model: Callable[..., Any],
     inputs: Mapping[str, Any],
     trials: int | None = None,
-    seed: int | None | np.random.SeedSequence = None,
+    seed: int | np.random.SeedSequence | None = None,
     *,
     adaptive: bool = False,
     tolerance: float | None = None,
@@ -698,7 +698,7 @@ def monte_carlo(
             runner,
             seed_int,
             method,
-            p=_check_p(p),
+            p=check_probability(p),
             ndig=_check_int(ndig, "ndig", 1),
             tolerance=tolerance,
             nan_policy=nan_policy,
@@ -798,7 +798,7 @@ def _adaptive(
             kept.append(vals)
             flat = np.concatenate([v.reshape(v.shape[0], -1) for v in vals.values()], axis=1)
             stats.append(_block_stats(flat, p, kind))
-            bm = Moments.of(flat) if flat.shape[1] <= MAX_COV_DIM else Moments.of(flat)
+            bm = Moments.of(flat)
             total = bm if total is None else total.merge(bm)
             nblocks = n + i + 1
             if progress is not None:

@@ -39,6 +39,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
+from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.sketch import QuantileSketch
 
 __all__ = [
@@ -52,18 +53,6 @@ __all__ = [
 ]
 
 IntervalKind = Literal["shortest", "symmetric"]
-
-
-def _check_p(p: Any) -> float:
-    try:
-        pf = float(p)
-    except (TypeError, ValueError):
-        raise InputError(
-            f"expected a coverage probability 0 < p < 1, got {p!r}", field="p"
-        ) from None
-    if not 0.0 < pf < 1.0:
-        raise InputError(f"expected a coverage probability 0 < p < 1, got {p!r}", field="p")
-    return pf
 
 
 def coverage_indices(m: int, p: float) -> tuple[int, int]:
@@ -95,7 +84,7 @@ def coverage_indices(m: int, p: float) -> tuple[int, int]:
     >>> coverage_indices(1001, 0.95)
     (951, 25)
     """
-    pf = _check_p(p)
+    pf = check_probability(p)
     # pM is an integer exactly when round(pM) reproduces it (within rounding of p).
     pm = pf * m
     q = round(pm) if abs(pm - round(pm)) <= 1e-9 * max(1.0, pm) else math.floor(pm + 0.5)
@@ -219,7 +208,8 @@ def _mahalanobis2(
             field="cov",
         ) from None
     w = np.linalg.solve(chol, diff.T)
-    return np.einsum("ij,ij->j", w, w)
+    d2: NDArray[np.float64] = np.einsum("ij,ij->j", w, w)
+    return d2
 
 
 #: Vector outputs of up to this many components keep their full covariance when their
@@ -710,7 +700,7 @@ class MonteCarloResult:
                 "a coverage ellipsoid needs a vector output (M, d); use coverage_interval",
                 field="samples",
             )
-        pf = _check_p(p)
+        pf = check_probability(p)
         centre = np.asarray(self.estimate, dtype=np.float64)
         cov = np.array(self.cov)
         if method == "mc":

@@ -141,7 +141,7 @@ def seed_block_trials(dim: int) -> int:
     return max(1, MAX_SEED_BLOCK_VALUES // width)
 
 
-def resolve_seed(seed: int | None | np.random.SeedSequence) -> int:
+def resolve_seed(seed: int | np.random.SeedSequence | None) -> int:
     """The integer entropy that a run records, so that any run can be repeated.
 
     Parameters
