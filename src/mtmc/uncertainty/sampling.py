@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterator, Mapping
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -326,7 +326,7 @@ def sobol_points(seed: int, block: int, dims: int, n: int) -> NDArray[np.float64
     eng = qmc.Sobol(
         dims, scramble=True, bits=_SOBOL_BITS, rng=np.random.Generator(np.random.PCG64(ss))
     )
-    u = eng.random_base2(n.bit_length() - 1)
+    u: NDArray[np.float64] = eng.random_base2(n.bit_length() - 1)
     u += 2.0 ** -(_SOBOL_BITS + 1)
     return u
 
@@ -343,7 +343,7 @@ def _check_sampling(sampling: Any, method: str) -> Sampling:
             "mapped through the normal quantile function",
             field="normal_method",
         )
-    return sampling
+    return cast(Sampling, sampling)
 
 
 def _check_int(value: Any, field: str, minimum: int) -> int:
