@@ -446,7 +446,7 @@ class PointField:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (an entry of ``fields`` in ``result.json``)."""
-        return _plain(
+        return _plain_dict(
             {
                 "name": self.name,
                 "title": self.title,
