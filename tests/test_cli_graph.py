@@ -197,8 +197,10 @@ def test_progress_keeps_stdout_json(capsys):
     quiet = capsys.readouterr()
     assert main([*args, "--json", "--progress"]) == 0
     loud = capsys.readouterr()
-    assert loud.out == quiet.out and json.loads(loud.out)["trials"] == 40000
-    assert quiet.err == "" and "40000/40000 trials" in loud.err
+    assert loud.out == quiet.out
+    assert json.loads(loud.out)["trials"] == 40000
+    assert quiet.err == ""
+    assert "40000/40000 trials" in loud.err
     sweep = ["graph", "sweep", str(EXAMPLES / "ball_centre.toml"), "--quantity", "cx"]
     sweep += ["--vary", "probe.u_probe=0.001:0.002:2", "-n", "300", "--seed", "1", "--json"]
     assert main([*sweep, "--progress"]) == 0

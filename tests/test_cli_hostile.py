@@ -14,8 +14,9 @@ EXAMPLES = Path(__file__).resolve().parent / ".." / "examples" / "graphs"
 
 
 def _one_line(capsys) -> str:
-    out, err = capsys.readouterr()
-    assert err.startswith("mtmc: error: ") and err.count("\n") == 1, err
+    _out, err = capsys.readouterr()
+    assert err.startswith("mtmc: error: "), err
+    assert err.count("\n") == 1, err
     return err
 
 
@@ -103,4 +104,5 @@ def test_sweep_error_names_the_file_and_the_key(capsys):
 def test_empty_error_name_names_the_option(capsys):
     assert main(["kinematics", "equation", "XFYZ", "-e", ""]) == 2
     err = _one_line(capsys)
-    assert "--error: unknown error name ''" in err and "field :" not in err
+    assert "--error: unknown error name ''" in err
+    assert "field :" not in err

@@ -22,8 +22,11 @@ def test_propagate_nan_is_one_line_naming_the_option(capsys):
     argv = ["propagate", "log(x)", "-i", "x=normal(0.1, 1)", "-n", "1000", "--seed", "1"]
     assert main(argv) == 2
     out, err = capsys.readouterr()
-    assert out == "" and err.count("\n") == 1, err
-    assert "in 4" in err and "--nan-policy omit" in err and "RuntimeWarning" not in err
+    assert out == "", err
+    assert err.count("\n") == 1, err
+    assert "in 4" in err
+    assert "--nan-policy omit" in err
+    assert "RuntimeWarning" not in err
 
 
 def test_propagate_nan_policy_omit_leaves_those_trials_out(capsys):
@@ -52,14 +55,15 @@ def test_graph_run_has_the_nan_policy_option(capsys):
 def test_ctrl_c_in_a_subcommand_is_one_line_exit_130_and_no_file(tmp_path, capsys, monkeypatch):
     import mtmc.graph.draw
 
-    def interrupted(*args, **kwargs):
+    def interrupted(*_args, **_kwargs):
         raise KeyboardInterrupt
 
     monkeypatch.setattr(mtmc.graph.draw, "draw", interrupted)
     out_file = tmp_path / "g.svg"
     assert main(["graph", "draw", str(EXAMPLES / "ball_centre.toml"), "-o", str(out_file)]) == 130
     out, err = capsys.readouterr()
-    assert out == "" and err == "mtmc: interrupted\n"
+    assert out == ""
+    assert err == "mtmc: interrupted\n"
     assert list(tmp_path.iterdir()) == []
 
 
@@ -101,6 +105,6 @@ def test_real_sigint_to_a_running_graph_run():
     assert proc.stdout.readline() == b"ready\n"
     time.sleep(1.0)
     proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=120)
+    _out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
     assert err.decode() == "mtmc: interrupted\n"

@@ -51,7 +51,9 @@ def test_json_equals_library_result(capsys):
     assert got["p"] == 0.95
     assert got["shortest"] == list(mc.coverage_interval(0.95, kind="shortest"))
     assert got["symmetric"] == list(mc.coverage_interval(0.95, kind="symmetric"))
-    assert got["trials"] == 50_000 and got["seed"] == 17 and got["omitted"] == mc.omitted == 0
+    assert got["trials"] == 50_000
+    assert got["seed"] == 17
+    assert got["omitted"] == mc.omitted == 0
     assert got["gum"] == {
         "estimate": g.estimate,
         "u": g.u,

@@ -130,7 +130,7 @@ def deferred_interrupt() -> Iterator[None]:
         yield
         return
     seen: list[int] = []
-    previous = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    previous = signal.signal(signal.SIGINT, lambda signum, _frame: seen.append(signum))
     try:
         yield
     finally:

@@ -36,7 +36,8 @@ out = "ab"
 def test_toml_point_takes_one_u_per_coordinate():
     g = loads_graph(TOML, file="g.toml")
     a, b = g.place("a"), g.place("b")
-    assert a is not None and b is not None
+    assert a is not None
+    assert b is not None
     assert a.u == (0.5, 2.0, 0.0)
     np.testing.assert_array_equal(a.coordinate_u(g.factor), [0.5e-3, 2.0e-3, 0.0])
     np.testing.assert_array_equal(b.coordinate_u(g.factor), [1.5e-3] * 3)
@@ -61,7 +62,8 @@ def test_coordinate_u_round_trips_through_both_formats():
 def test_bad_coordinate_u_names_the_field(change, message):
     with pytest.raises(GraphError, match=message) as exc:
         loads_graph(TOML.replace("u = [0.5, 2.0, 0.0]", change), file="g.toml")
-    assert exc.value.field == "u" and exc.value.line == 7
+    assert exc.value.field == "u"
+    assert exc.value.line == 7
 
 
 def test_a_scalar_place_takes_one_u():
@@ -81,14 +83,17 @@ u(1, 0.001, 0.002, 0.003).
 def test_r_place_reads_all_three_numbers():
     g = loads_assertions(FACTS.format(r="1.5, -2, 0.25", out="p"), file="f.pl")
     r = g.place("p2")
-    assert r is not None and r.type == "vector" and r.value == (1.5, -2.0, 0.25)
+    assert r is not None
+    assert r.type == "vector"
+    assert r.value == (1.5, -2.0, 0.25)
     assert g.place("p1").u == (0.001, 0.002, 0.003)
     assert g.place("p1").coordinate_u().tolist() == [0.001, 0.002, 0.003]
 
 
 def test_r_place_with_one_number_is_a_real():
     g = loads_assertions(FACTS.format(r="2.5, 0, 0", out="p"), file="f.pl", validate=False)
-    assert g.place("p2").type == "real" and g.place("p2").value == 2.5
+    assert g.place("p2").type == "real"
+    assert g.place("p2").value == 2.5
 
 
 def test_u_fact_with_two_numbers_is_refused_with_its_line():

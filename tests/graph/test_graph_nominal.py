@@ -28,10 +28,12 @@ def test_collinear_points_into_plane_are_refused_by_name_before_running():
     with pytest.raises(DegenerateGeometryError) as exc:
         loads_graph(text, file="p.toml")
     e = exc.value
-    assert e.file == "p.toml" and e.field == "in"
+    assert e.file == "p.toml"
+    assert e.field == "in"
     assert text.splitlines()[e.line - 1] == 'in = ["p1", "p2", "p3"]'
     assert "transition t_plane (plane): at the nominal values" in str(e)
-    assert "collinear" in str(e) and "trials" not in str(e)
+    assert "collinear" in str(e)
+    assert "trials" not in str(e)
 
 
 def test_identical_points_into_circle_are_refused_by_name(tmp_path):
@@ -64,7 +66,8 @@ def test_condition_number_of_a_thin_triangle_against_its_closed_form():
         warnings.simplefilter("ignore", ConditioningWarning)
         kappa = check_nominal(plan).condition["t_plane"]
     assert kappa == pytest.approx(size / e, rel=1e-4)
-    assert len(plan.warnings) == 1 and plan.warnings[0].startswith("p.toml:")
+    assert len(plan.warnings) == 1
+    assert plan.warnings[0].startswith("p.toml:")
 
 
 def test_examples_are_well_conditioned_and_differences_have_condition_one():
@@ -76,7 +79,8 @@ def test_examples_are_well_conditioned_and_differences_have_condition_one():
     plan = check(loads_graph((EXAMPLES / "bcs_origin.toml").read_text(), validate=False))
     cond = check_nominal(plan).condition
     vector_ops = [s.transition.name for s in plan.steps if s.transition.op == "vector"]
-    assert vector_ops and all(cond[n] == pytest.approx(1.0, rel=1e-6) for n in vector_ops)
+    assert vector_ops
+    assert all(cond[n] == pytest.approx(1.0, rel=1e-6) for n in vector_ops)
 
 
 def test_axis_angle_typed_in_radians_in_a_degree_place_is_refused(tmp_path, capsys):
@@ -89,7 +93,9 @@ def test_axis_angle_typed_in_radians_in_a_degree_place_is_refused(tmp_path, caps
     f.write_text(bad)
     assert main(["graph", "run", str(f), "-n", "10", "--seed", "1"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "60" in err and "alpha_c" in err
+    assert err.count("\n") == 1
+    assert "60" in err
+    assert "alpha_c" in err
 
 
 def test_axis_angle_within_the_tolerance_passes():

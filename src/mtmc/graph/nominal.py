@@ -239,7 +239,7 @@ def check_nominal(plan: Plan, *, max_condition: float = MAX_CONDITION) -> Nomina
     values: dict[str, NDArray[np.float64]] = {}
     for p in g.places:
         if p.marked:
-            values[p.name] = flatten(p.type, _marked_value(p, g.factor, samples, 1), 1)[0]
+            values[p.name] = flatten(p.type, _marked_value(p, g.factor, samples), 1)[0]
     condition: dict[str, float] = {}
     notes: list[str] = []
     for step in plan.steps:
