@@ -102,8 +102,11 @@ def _nominal_samples(plan: Plan) -> dict[str, Any]:
         mean = np.asarray(parse_distribution(p.dist).mean, dtype=np.float64)
         mean = np.where(np.isfinite(mean), mean, 0.0)
         vec = p.type in ("point", "vector", "unit")
+        flat = mean.reshape(-1)
+        if vec and flat.size == 1:  # one scalar law, drawn for each coordinate
+            flat = np.repeat(flat, 3)
         for i, c in enumerate("xyz" if vec else ("",)):
-            samples[f"{p.name}.{c}" if c else p.name] = mean.reshape(-1)[i : i + 1]
+            samples[f"{p.name}.{c}" if c else p.name] = flat[i : i + 1]
     return samples
 
 
