@@ -1,0 +1,734 @@
+"""An artefact study: the file, the simulation, the Monte Carlo and the GUM beside it.
+
+A study (``docs/artefact.md``, e.g. ``examples/studies/wang2022.toml``) names an artefact,
+a machine with its probe offset and its (chosen) geometric errors, the real setup errors,
+the probing (patch, repeatability, calibrated or free radius), the plan of rotary poses
+and repetitions, and which uncertainty sources vary from trial to trial.
+
+:func:`simulate` probes the artefact on the modelled machine, noise-free, with the full
+chain (:meth:`~mtmc.artefact.model.FiducialSetup.measure`), analyses it
+(:func:`~mtmc.artefact.analysis.analyse`), then runs :func:`mtmc.uncertainty.monte_carlo`
+over a vectorised model of the same analysis whose inputs are
+
+- ``probe``: ``iid(normal(0, 1), R·P·N·n·3)``, the probing noise of every coordinate of every
+  point, scaled by the per-axis repeatability along the machine's linear axes and carried
+  into ``W`` by the axis map ``A`` (layout: repetition, pose, ball, point, axis, C order);
+- ``cmm``: ``mvnormal(0, V)``, the calibrated centres' errors (artefact frame; ``V`` of
+  :meth:`~mtmc.artefact.artefact.Artefact.centre_covariance`);
+- ``repeat`` (optional): ``iid(normal(0, 1), R·P·N·3)``, the machine's repeatability: one
+  shift of the linear axes per probing of a ball;
+- ``setup`` (optional): ``iid(normal(0, 1), 3 + 3N)``, the setup errors varying about the
+  injected ones.
+
+The fitted centre of each trial is the noise-free one plus the fit's linear map applied to
+the point displacements (:func:`~mtmc.artefact.probing.fit_sensitivity`; the difference
+from a converged fit, 2·10⁻⁴ µm here, is shown by the tests, and ``exact_fit=True`` runs
+the full Gauss–Newton fit for every trial instead). Everything after the centres —
+identification, distances, ``r_max``, ``r_avg``, the rigid best fit — is evaluated
+exactly, trial by trial in one batch, so the non-linear outputs keep their bias: the MC
+mean is reported beside the noise-free value.
+
+The GUM (:func:`mtmc.uncertainty.gum`) propagates the covariance of the centres (exact:
+they are linear in the inputs) and of the calibration through the same analysis.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mtmc.artefact.analysis import ANALYSIS_OUTPUTS, Analysis, analyse
+from mtmc.artefact.artefact import SHIPPED, Artefact, load_artefact, pairs, shipped_artefact
+from mtmc.artefact.model import FiducialSetup, Measurement, identify, setup_error_names
+from mtmc.artefact.probing import PAPER_REPEATABILITY_UM, patch_offsets
+from mtmc.errors import InputError, ParseError
+from mtmc.geometry.fits import fit_sphere
+from mtmc.kinematics import Machine
+from mtmc.kinematics.functions import PolynomialFunction
+from mtmc.kinematics.library import library_machine
+from mtmc.kinematics.topology import is_linear
+
+__all__ = [
+    "ArtefactResult",
+    "ArtefactStudy",
+    "gum_outputs",
+    "load_artefact_study",
+    "loads_artefact_study",
+    "simulate",
+    "study_model",
+]
+
+_F = NDArray[np.float64]
+UM = 1e-3  # mm per um
+URAD = 1e-6  # rad per urad
+
+
+@dataclass(frozen=True, eq=False)
+class ArtefactStudy:
+    """Everything a simulation of the fiducial measurement needs.
+
+    Attributes
+    ----------
+    title : str
+        A label.
+    setup : FiducialSetup
+        Machine (with the probe offset), mounted artefact, probed patch.
+    poses : ndarray, shape (P, R_axes)
+        Rotary positions, rad, columns :attr:`FiducialSetup.rotary` (mtmc's ISO 841 sign).
+    repetitions : int
+        Repetitions ``R`` of the whole plan.
+    errors : mapping
+        The machine's geometric errors (ISO 230 names; numbers in mm/rad or error
+        functions), chosen for the study.
+    setup_errors : ndarray, shape (3 + 3N,)
+        The real setup errors ``ΔE`` (eq. 18), mm.
+    repeatability : ndarray, shape (3,)
+        Probing repeatability along the linear axes, mm (standard deviations).
+    free_radius : bool
+        Fit the radius too (default: the calibrated radius).
+    cmm : bool
+        Vary the calibrated centres with the CMM covariance.
+    machine_repeatability : ndarray, shape (3,), or None
+        Per-probing repeatability of the linear axes, mm.
+    setup_u : float or None
+        Standard deviation of the setup errors about ``setup_errors``, mm.
+    trials : int
+        Default number of Monte Carlo trials.
+    seed : int or None
+        Default seed.
+    file : str
+        Where the study was read from.
+    """
+
+    title: str
+    setup: FiducialSetup
+    poses: _F
+    repetitions: int = 3
+    errors: Mapping[str, Any] = field(default_factory=dict)
+    setup_errors: _F | None = None
+    repeatability: _F = field(default_factory=lambda: np.array(PAPER_REPEATABILITY_UM) * UM)
+    free_radius: bool = False
+    cmm: bool = True
+    machine_repeatability: _F | None = None
+    setup_u: float | None = None
+    trials: int = 10_000
+    seed: int | None = None
+    file: str = ""
+
+    def __post_init__(self) -> None:
+        n = self.setup.artefact.n_balls
+        E = np.zeros(3 + 3 * n) if self.setup_errors is None else self.setup_errors
+        E = np.asarray(E, dtype=np.float64)
+        if E.shape != (3 + 3 * n,):
+            raise InputError(f"expected {3 + 3 * n} setup errors", field="setup_errors")
+        object.__setattr__(self, "setup_errors", E)
+        object.__setattr__(self, "poses", self.setup.check_poses(self.poses))
+        if self.repetitions < 1:
+            raise InputError("expected at least one repetition", field="repetitions")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Setup-error names (eq. 18)."""
+        return setup_error_names(self.setup.artefact.names)
+
+
+# ----------------------------------------------------------------------------------------
+# the model
+
+
+@dataclass(frozen=True, eq=False)
+class _Prepared:
+    meas: Measurement
+    pinv: _F
+    Jp: _F
+    J: _F
+    Kp: _F  # (R P N, 3, 3n): standard normals of the points -> centre shift
+    Arep: _F  # (P, 3, 3): standard normals of a probing shift -> centre shift
+    cal: _F  # (N, 3) mounted calibrated centres
+
+
+def _prepare(study: ArtefactStudy) -> _Prepared:
+    s = study.setup
+    meas = s.measure(study.poses, study.errors, study.setup_errors, free_radius=study.free_radius)
+    P, N = meas.centres.shape[:2]
+    R = study.repetitions
+    J1 = s.setup_jacobian(study.poses)
+    J = np.tile(J1, (R, 1))
+    pinv = np.asarray(np.linalg.pinv(J), dtype=np.float64)
+    Jp = s.probe_jacobian(study.poses)
+    A = meas.axis_map  # (P, 3, 3)
+    AS = A * study.repeatability[None, None, :]  # axis noise (std normal) -> W
+    k = meas.points.shape[2]
+    K = meas.sensitivity.reshape(P, N, 3, k, 3)
+    # (P, N, 3, k, 3): d centre / d (standard normal of point k, axis i)
+    Kp1 = np.einsum("pnckj,pji->pncki", K, AS)
+    Kp = np.broadcast_to(Kp1.reshape(1, P * N, 3, 3 * k), (R, P * N, 3, 3 * k))
+    Arep = (
+        A * study.machine_repeatability[None, None, :]
+        if study.machine_repeatability is not None
+        else np.zeros_like(A)
+    )
+    return _Prepared(
+        meas,
+        pinv,
+        Jp,
+        J1,
+        np.ascontiguousarray(Kp.reshape(R * P * N, 3, 3 * k)),
+        Arep,
+        s.artefact.mounted_centres(),
+    )
+
+
+def study_model(
+    study: ArtefactStudy,
+    *,
+    exact_fit: bool = False,
+    split: bool = False,
+    noise: str = "points",
+) -> tuple[Callable[..., dict[str, _F]], dict[str, Any], _Prepared]:
+    """The vectorised Monte Carlo model of a study and its inputs.
+
+    Parameters
+    ----------
+    study : ArtefactStudy
+    exact_fit : bool
+        Fit every trial's points with :func:`mtmc.geometry.fit_sphere` (slow) instead of
+        the fit's linear map.
+    split : bool
+        Return the per-pose outputs one pose at a time
+        (:meth:`~mtmc.artefact.analysis.Analysis.by_pose`): the engine then keeps the
+        covariance within each pose only, ``P`` times less work than across all poses.
+    noise : {"points", "centres"}
+        ``"points"``: draw the noise of every coordinate of every probed point (input
+        ``probe`` of ``R·P·N·n·3`` standard normals). ``"centres"``: draw, for each fit,
+        three standard normals times the Cholesky factor of its centre covariance
+        ``K' K'ᵀ`` (``R·P·N·3`` values): the same Gaussian law of the centres as the
+        linearised fit of Gaussian points, ``n`` times fewer random numbers.
+
+    Returns
+    -------
+    model : callable
+        ``model(probe, cmm=..., repeat=..., setup=...)`` returning the outputs of
+        :data:`~mtmc.artefact.analysis.ANALYSIS_OUTPUTS`, each ``(m, d)`` in mm.
+    inputs : dict
+        The inputs for :func:`mtmc.uncertainty.monte_carlo`.
+    prepared : object
+        The noise-free measurement and the maps the model uses.
+    """
+    from mtmc.uncertainty.distributions import IID, MultivariateNormal, Normal
+
+    pr = _prepare(study)
+    meas = pr.meas
+    P, N, k = meas.points.shape[:3]
+    R = study.repetitions
+    art = study.setup.artefact
+    if noise not in ("points", "centres"):
+        raise InputError(f"expected noise 'points' or 'centres', got {noise!r}", field="noise")
+    if exact_fit and noise != "points":
+        raise InputError("an exact fit needs the noise of the points", field="noise")
+    per = k * 3 if noise == "points" else 3
+    inputs: dict[str, Any] = {"probe": IID(Normal(0.0, 1.0), R * P * N * per)}
+    # centres: the Cholesky factor of each fit's centre covariance K' K'^T (same law)
+    L = np.linalg.cholesky(np.matmul(pr.Kp, pr.Kp.transpose(0, 2, 1)))
+    if study.cmm:
+        inputs["cmm"] = MultivariateNormal(np.zeros(3 * N), art.centre_covariance())
+    if study.machine_repeatability is not None:
+        inputs["repeat"] = IID(Normal(0.0, 1.0), R * P * N * 3)
+    if study.setup_u is not None:
+        inputs["setup"] = IID(Normal(0.0, 1.0), 3 + 3 * N)
+    c0 = meas.centres
+    A = meas.axis_map
+    AS = A * study.repeatability[None, None, :]
+
+    def model(
+        probe: _F,
+        cmm: _F | None = None,
+        repeat: _F | None = None,
+        setup: _F | None = None,
+    ) -> dict[str, _F]:
+        m = probe.shape[0]
+        z = probe.reshape(m, R * P * N, per)
+        if noise == "centres":
+            dc = np.matmul(z.transpose(1, 0, 2), L.transpose(0, 2, 1))  # (RPN, m, 3)
+            centres = c0[None, None] + dc.transpose(1, 0, 2).reshape(m, R, P, N, 3)
+        elif exact_fit:
+            eps = np.einsum("pij,mrpnkj->mrpnki", AS, z.reshape(m, R, P, N, k, 3))
+            pts = meas.points[None, None] + eps
+            fit = fit_sphere(
+                pts.reshape(-1, k, 3),
+                None if study.free_radius else np.full(m * R * P * N, art.radius),
+            )
+            centres = fit.geometry.centre.reshape(m, R, P, N, 3)  # type: ignore[union-attr]
+        else:
+            dc = np.matmul(z.transpose(1, 0, 2), pr.Kp.transpose(0, 2, 1))  # (RPN, m, 3)
+            centres = c0[None, None] + dc.transpose(1, 0, 2).reshape(m, R, P, N, 3)
+        if repeat is not None:
+            centres = centres + np.einsum(
+                "pij,mrpnj->mrpni", pr.Arep, repeat.reshape(m, R, P, N, 3)
+            )
+        if setup is not None and study.setup_u is not None:
+            dE = setup * study.setup_u  # (m, 3 + 3N)
+            dm = -(dE @ pr.J.T).reshape(m, 1, P, N, 3)
+            centres = centres + dm
+        cal = pr.cal[None]
+        if cmm is not None:
+            cal = cal + cmm.reshape(m, N, 3) @ art.rotation.T
+        a = analyse(centres, cal, pr.pinv, pr.Jp)
+        return a.by_pose() if split else a.flat()
+
+    return model, inputs, pr
+
+
+def _centre_covariance(study: ArtefactStudy, pr: _Prepared) -> _F:
+    """Covariance of the measured centres (R P N 3), mm²: exact, they are linear."""
+    P, N = pr.meas.centres.shape[:2]
+    R = study.repetitions
+    n = R * P * N
+    V = np.zeros((n, 3, n, 3))
+    blocks = np.matmul(pr.Kp, pr.Kp.transpose(0, 2, 1))  # (n, 3, 3)
+    rep = np.matmul(pr.Arep, pr.Arep.transpose(0, 2, 1))  # (P, 3, 3)
+    rep = np.broadcast_to(rep[None, :, None], (R, P, N, 3, 3)).reshape(n, 3, 3)
+    idx = np.arange(n)
+    V[idx, :, idx, :] = blocks + rep
+    V = V.reshape(3 * n, 3 * n)
+    if study.setup_u is not None:
+        JJ = np.tile(pr.J, (R, 1))
+        V = V + study.setup_u**2 * JJ @ JJ.T
+    return V
+
+
+def gum_outputs(study: ArtefactStudy, pr: _Prepared | None = None) -> dict[str, Any]:
+    """The GUM (first-order) uncertainties of the analysis outputs, mm.
+
+    The centres are linear in the probing noise, the repeatability and the setup
+    errors, so their covariance is exact; it and the calibration's covariance are
+    propagated through :func:`~mtmc.artefact.analysis.analyse` by
+    :func:`mtmc.uncertainty.gum`.
+
+    Returns
+    -------
+    dict
+        Output name to ``(estimate, u)`` arrays, shapes ``(d,)``.
+    """
+    from mtmc.uncertainty.distributions import MultivariateNormal
+    from mtmc.uncertainty.gum import gum
+
+    pr = _prepare(study) if pr is None else pr
+    P, N = pr.meas.centres.shape[:2]
+    R = study.repetitions
+    art = study.setup.artefact
+    c0 = pr.meas.centres
+    Vm = _centre_covariance(study, pr)
+    inputs: dict[str, Any] = {"dm": MultivariateNormal(np.zeros(Vm.shape[0]), Vm)}
+    if study.cmm:
+        inputs["cmm"] = MultivariateNormal(np.zeros(3 * N), art.centre_covariance())
+    sizes: dict[str, int] = {}
+
+    def model(dm: _F, cmm: _F | None = None) -> _F:
+        m = dm.shape[0]
+        centres = c0[None, None] + dm.reshape(m, R, P, N, 3)
+        cal = pr.cal[None]
+        if cmm is not None:
+            cal = cal + cmm.reshape(m, N, 3) @ art.rotation.T
+        out = analyse(centres, cal, pr.pinv, pr.Jp).flat()
+        sizes.update({k: v.shape[1] for k, v in out.items()})
+        return np.concatenate([out[k] for k in ANALYSIS_OUTPUTS], axis=1)
+
+    g = gum(model, inputs)
+    est, u = np.atleast_1d(g.estimate), np.atleast_1d(g.u)
+    res: dict[str, Any] = {}
+    start = 0
+    for name in ANALYSIS_OUTPUTS:
+        d = sizes[name]
+        res[name] = (est[start : start + d], u[start : start + d])
+        start += d
+    return res
+
+
+# ----------------------------------------------------------------------------------------
+# results
+
+
+@dataclass(frozen=True, eq=False)
+class ArtefactResult:
+    """A simulated artefact study: the noise-free values, the MC and the GUM.
+
+    Attributes
+    ----------
+    study : ArtefactStudy
+    measurement : Measurement
+        The noise-free probing.
+    nominal : Analysis
+        The analysis of the noise-free centres (``M = 1``).
+    identification : Identification
+        The noise-free identification, its covariance ``J⁺ V J⁺ᵀ`` from the covariance
+        ``V`` of ``ΔF`` (the centres' and the calibration's): the GUM of eq. 20.
+    mc_mean, mc_u : dict of str to ndarray
+        Monte Carlo mean and standard uncertainty of each output of
+        :data:`~mtmc.artefact.analysis.ANALYSIS_OUTPUTS` (flattened, mm).
+    gum_u : dict of str to ndarray
+        GUM standard uncertainties of the same outputs, mm.
+    trials : int
+    seed : int or None
+    """
+
+    study: ArtefactStudy
+    measurement: Measurement
+    nominal: Analysis
+    identification: Any
+    mc_mean: Mapping[str, _F]
+    mc_u: Mapping[str, _F]
+    gum_u: Mapping[str, _F]
+    trials: int
+    seed: int | None
+
+    def pose_labels(self) -> list[dict[str, float]]:
+        """Each pose's rotary positions in degrees, keyed ``b_deg``, ``c_deg`` ..."""
+        axes = self.study.setup.rotary
+        return [
+            {
+                f"{a.lower()}_deg": float(np.round(np.degrees(v), 12))
+                for a, v in zip(axes, row, strict=True)
+            }
+            for row in self.study.poses
+        ]
+
+    def to_json(self) -> dict[str, Any]:
+        """The JSON of ``mtmc artefact simulate --json`` (µm)."""
+
+        def eu(name: str, i: int, nominal: _F) -> dict[str, float]:
+            out = {
+                "estimate": float(self.mc_mean[name][i] / UM),
+                "u": float(self.mc_u[name][i] / UM),
+                "noise_free": float(nominal.reshape(-1)[i] / UM),
+            }
+            if name in self.gum_u:
+                out["gum_u"] = float(self.gum_u[name][i] / UM)
+            return out
+
+        poses = []
+        for i, lab in enumerate(self.pose_labels()):
+            row: dict[str, Any] = dict(lab)
+            row["r_max_um"] = eu("r_max_measured", i, self.nominal.r_max_measured)
+            row["r_avg_um"] = eu("r_avg_measured", i, self.nominal.r_avg_measured)
+            row["r_max_model_um"] = eu("r_max_model", i, self.nominal.r_max_model)
+            row["r_avg_model_um"] = eu("r_avg_model", i, self.nominal.r_avg_model)
+            poses.append(row)
+        setup = {
+            n: eu("setup", j, self.nominal.setup)
+            | {"injected": float(self.study.setup_errors[j] / UM)}  # type: ignore[index]
+            for j, n in enumerate(self.study.names)
+        }
+        names = self.study.setup.artefact.names
+        vol = self.nominal.volumetric[0]
+        return {
+            "title": self.study.title,
+            "trials": self.trials,
+            "seed": self.seed,
+            "units": "um",
+            "poses": poses,
+            "setup_errors": setup,
+            "pairs": [f"{names[i]}-{names[j]}" for i, j in pairs(len(names))],
+            "volumetric_um": (vol / UM).tolist(),
+            "table3_um": (self.nominal.table3[0] / UM).tolist(),
+            "volumetric_mean_um": float(np.linalg.norm(vol, axis=2).mean() / UM),
+        }
+
+
+def _joined(res: Any, attr: str, n_poses: int) -> dict[str, _F]:
+    """Per-output arrays (flattened, pose-major) from the per-pose outputs of a run."""
+    out = {}
+    for k in ANALYSIS_OUTPUTS:
+        if k in res.outputs:
+            out[k] = np.asarray(getattr(res[k], attr), dtype=np.float64).reshape(-1)
+        else:
+            parts = [getattr(res[f"{k}/{p}"], attr) for p in range(n_poses)]
+            out[k] = np.concatenate([np.atleast_1d(np.asarray(v, np.float64)) for v in parts])
+    return out
+
+
+def simulate(
+    study: ArtefactStudy,
+    trials: int | None = None,
+    seed: int | None = None,
+    *,
+    exact_fit: bool = False,
+    gum_too: bool = True,
+    noise: str = "points",
+    **engine: Any,
+) -> ArtefactResult:
+    """Simulate a study: noise-free chain, Monte Carlo (and the GUM beside it).
+
+    Parameters
+    ----------
+    study : ArtefactStudy
+    trials : int, optional
+        Default ``study.trials``.
+    seed : int, optional
+        Default ``study.seed``.
+    exact_fit : bool
+        Converged sphere fits in every trial (slow; see :func:`study_model`).
+    gum_too : bool
+        Also compute the GUM uncertainties.
+    noise : {"points", "centres"}
+        How the probing noise is drawn (see :func:`study_model`).
+    **engine
+        Passed to :func:`mtmc.uncertainty.monte_carlo` (``workers``, ``executor``,
+        ``scheduler``, ``progress``, ``block_size``).
+
+    Returns
+    -------
+    ArtefactResult
+    """
+    from mtmc.uncertainty.montecarlo import monte_carlo
+
+    model, inputs, pr = study_model(study, exact_fit=exact_fit, split=True, noise=noise)
+    P, N = pr.meas.centres.shape[:2]
+    R = study.repetitions
+    nominal = analyse(pr.meas.centres[None, None].repeat(R, axis=1), pr.cal, pr.pinv, pr.Jp)
+    n = trials if trials is not None else study.trials
+    s = seed if seed is not None else study.seed
+    res = monte_carlo(model, inputs, trials=n, seed=s, keep=False, **engine)
+    mean = _joined(res, "estimate", P)
+    u = _joined(res, "u", P)
+    gum_u: dict[str, _F] = {}
+    Vm = _centre_covariance(study, pr)
+    if gum_too:
+        gum_u = {k: v[1] for k, v in gum_outputs(study, pr).items()}
+    dF = (pr.cal[None, None] - pr.meas.centres[None]).repeat(R, axis=0).reshape(-1)
+    VF = Vm
+    if study.cmm:  # dF = calibrated - measured: the calibration's covariance, every row
+        art = study.setup.artefact
+        Rb = np.kron(np.eye(N), art.rotation)
+        Vc = Rb @ art.centre_covariance() @ Rb.T
+        T = np.tile(np.eye(3 * N), (R * P, 1))
+        VF = Vm + T @ Vc @ T.T
+    ident = identify(np.tile(pr.J, (R, 1)), dF, study.names, VF)
+    return ArtefactResult(study, pr.meas, nominal, ident, mean, u, gum_u, res.trials, res.seed)
+
+
+# ----------------------------------------------------------------------------------------
+# the study file
+
+
+def _error_value(f: Any, name: str, machine: Machine, key: str) -> Any:
+    term = machine.error_term(name)
+    unit = URAD if term.angular else UM
+    v = f.data[key]
+    if isinstance(v, bool):
+        raise f.error(f"expected a number or an array of coefficients, got {v!r}", key)
+    if isinstance(v, int | float):
+        if not math.isfinite(v):
+            raise f.error(f"expected a finite number, got {v!r}", key)
+        return float(v) * unit
+    if (
+        isinstance(v, list)
+        and v
+        and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
+    ):
+        if term.kind != "component":
+            raise f.error(f"{term.name} is a {term.kind} error, a constant: expected a number", key)
+        scale = 1.0 if is_linear(term.axis) else 180.0 / math.pi  # per deg^k -> per rad^k
+        coeffs = [float(c) * unit * scale**i for i, c in enumerate(v)]
+        return PolynomialFunction(np.array(coeffs))
+    raise f.error(
+        f"expected a number (um or urad) or an array of polynomial coefficients, got {v!r}",
+        key,
+    )
+
+
+def _vec(f: Any, key: str, default: Any = None, n: int = 3, positive: bool = False) -> Any:
+    if not f.has(key):
+        return default
+    v = f.data[key]
+    ok = (
+        isinstance(v, list)
+        and len(v) == n
+        and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
+        and all(math.isfinite(x) for x in v)
+    )
+    if ok and positive:
+        ok = all(x >= 0 for x in v)
+    if not ok:
+        what = "non-negative " if positive else ""
+        raise f.error(f"expected {n} finite {what}numbers, got {v!r}", key)
+    return np.array(v, dtype=np.float64)
+
+
+def loads_artefact_study(
+    text: str, file: str = "<study>", folder: Path | None = None
+) -> ArtefactStudy:
+    """Read an artefact study from TOML text (format: ``docs/artefact.md``).
+
+    Raises
+    ------
+    ParseError
+        If the text is not TOML.
+    InputError
+        On a missing, unknown or malformed field: the message names the file, the line
+        and the field, and says what was expected.
+    """
+    from mtmc.study.spec import Fields, Source
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParseError(f"not valid TOML: {exc}", file=file) from None
+    src = Source.from_text(text, file=file, folder=folder)
+    top = Fields(src, data)
+    top.only(
+        ("title", "artefact", "machine", "setup_errors", "probing", "plan", "uncertainty", "run")
+    )
+    title = top.text("title", "")
+    art_f = top.table("artefact")
+    assert art_f is not None
+    art_f.only(("file", "shipped", "position", "rotation_deg", "patch_axis"))
+    if art_f.has("file") == art_f.has("shipped"):
+        raise art_f.error("expected exactly one of file (a path) or shipped (a name)")
+    if art_f.has("file"):
+        art: Artefact = load_artefact(src.resolve(art_f.text("file"), (*art_f.path, "file")))
+    else:
+        art = shipped_artefact(art_f.text("shipped", choices=SHIPPED))
+    pos = _vec(art_f, "position", np.zeros(3))
+    rot_deg = _vec(art_f, "rotation_deg", np.zeros(3))
+    from mtmc.geometry.transforms import matrix_from_euler
+
+    rot = matrix_from_euler(np.radians(rot_deg), "zyx") if np.any(rot_deg) else np.eye(3)
+    art = art.mounted(pos, np.asarray(rot).reshape(3, 3))
+    axis = _vec(art_f, "patch_axis", np.array([0.0, 0.0, 1.0]))
+    if not np.linalg.norm(axis) > 0:
+        raise art_f.error("expected a non-zero direction", "patch_axis")
+
+    mf = top.table("machine")
+    assert mf is not None
+    mf.only(("library", "topology", "probe", "errors"))
+    if mf.has("library") == mf.has("topology"):
+        raise mf.error("expected exactly one of library (a machine name) or topology")
+    probe = _vec(mf, "probe", np.zeros(3))
+    try:
+        if mf.has("library"):
+            base = library_machine(mf.text("library"))
+            machine = Machine.from_topology(
+                base.topology, tool=probe, pivots=base.pivots, travel=base.travel
+            )
+        else:
+            machine = Machine.from_topology(mf.text("topology"), tool=probe)
+    except InputError as exc:
+        key = "library" if mf.has("library") else "topology"
+        raise mf.error(exc.message, key) from None
+    errors: dict[str, Any] = {}
+    ef = mf.table("errors", required=False)
+    if ef is not None:
+        for key in ef.data:
+            try:
+                name = machine.error_term(key).name
+            except InputError as exc:
+                raise ef.error(exc.message, key) from None
+            if name in ("EXT", "EYT", "EZT"):
+                raise ef.error(f"{name} is the probe's setup error: give it in [setup_errors]", key)
+            errors[name] = _error_value(ef, name, machine, key)
+
+    pf = top.table("probing", required=False)
+    cols, rows, size, rep, free = 6, 5, 6.0, np.array(PAPER_REPEATABILITY_UM), False
+    if pf is not None:
+        pf.only(("columns", "rows", "size_mm", "repeatability_um", "radius"))
+        cols = pf.integer("columns", cols, minimum=1)
+        rows = pf.integer("rows", rows, minimum=1)
+        size = pf.number("size_mm", size, low=0.0, open_low=True)
+        rep = _vec(pf, "repeatability_um", rep, positive=True)
+        free = pf.text("radius", "calibrated", choices=("calibrated", "free")) == "free"
+    if 0.5 * size * math.sqrt(2.0) >= art.radius:
+        raise (pf or top).error(
+            f"expected a patch that fits on the ball (radius {art.radius} mm), got {size} mm",
+            "size_mm" if pf is not None else None,
+        )
+    setup = FiducialSetup(machine, art, axis, patch_offsets(cols, rows, size))
+
+    plan = top.table("plan")
+    assert plan is not None
+    plan.only(("poses_deg", "repetitions"))
+    n_rot = len(setup.rotary)
+    raw = plan.data.get("poses_deg")
+    if not (
+        isinstance(raw, list)
+        and raw
+        and all(
+            isinstance(r, list)
+            and len(r) == n_rot
+            and all(isinstance(x, int | float) and not isinstance(x, bool) for x in r)
+            for r in raw
+        )
+    ):
+        raise plan.error(
+            f"expected a list of poses, each [{', '.join(a.lower() for a in setup.rotary)}] "
+            "in degrees",
+            "poses_deg",
+        )
+    poses = np.radians(np.array(raw, dtype=np.float64).reshape(len(raw), n_rot))
+    reps = plan.integer("repetitions", 1, minimum=1)
+
+    names = setup_error_names(art.names)
+    E = np.zeros(len(names))
+    sf = top.table("setup_errors", required=False)
+    if sf is not None:
+        sf.only(names)
+        for j, nm in enumerate(names):
+            E[j] = sf.number(nm, 0.0) * UM
+
+    uf = top.table("uncertainty", required=False)
+    cmm, mrep, su = True, None, None
+    if uf is not None:
+        uf.only(("cmm", "machine_repeatability_um", "setup_errors_um"))
+        cmm = uf.flag("cmm", True)
+        mrep = _vec(uf, "machine_repeatability_um", None, positive=True)
+        if mrep is not None:
+            mrep = mrep * UM
+        if uf.has("setup_errors_um"):
+            su = uf.number("setup_errors_um", low=0.0, open_low=True) * UM
+
+    trials, seed = 10_000, None
+    rf = top.table("run", required=False)
+    if rf is not None:
+        rf.only(("trials", "seed"))
+        trials = rf.integer("trials", trials, minimum=2)
+        seed = rf.integer("seed", None, minimum=0)
+
+    return ArtefactStudy(
+        title,
+        setup,
+        poses,
+        reps,
+        errors,
+        E,
+        rep * UM,
+        free,
+        cmm,
+        mrep,
+        su,
+        trials,
+        seed,
+        file,
+    )
+
+
+def load_artefact_study(path: str | Path) -> ArtefactStudy:
+    """Read an artefact study file (see :func:`loads_artefact_study`).
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read, or on a bad field (file, line and field named).
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read the study file: {exc.strerror}", file=str(p)) from None
+    return loads_artefact_study(text, str(p), p.parent)

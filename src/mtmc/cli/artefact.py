@@ -1,0 +1,219 @@
+"""``mtmc artefact``: simulate a fiducial-artefact study, fit a ball to probed points.
+
+A thin shell over :mod:`mtmc.artefact` (Wang, Cheung and Kong 2022). Errors print one
+line (``mtmc: error: FILE:LINE: field F: ...``) and exit with status 2; figures are
+written atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from mtmc.cli.common import (
+    EXECUTOR_OPTION,
+    PROGRESS_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    fail,
+    parallel_options,
+    print_json,
+    progress_bar,
+)
+from mtmc.errors import MtmcError
+
+app = typer.Typer(
+    help="Fiducial artefacts (Wang, Cheung and Kong 2022): simulate a study, fit probed balls.",
+    no_args_is_help=True,
+)
+
+FIG_SUFFIXES = (".svg", ".png", ".pdf")
+
+
+@app.command("simulate")
+def simulate_cmd(
+    study: Path = typer.Argument(..., help="Artefact study file (.toml)."),
+    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
+    seed: int | None = typer.Option(None, "--seed", min=0, help="Seed (default: the study's)."),
+    figure: Path | None = typer.Option(
+        None, "--figure", help="Write the error-vector plot (Fig. 7) here: .svg, .png, .pdf."
+    ),
+    magnification: float = typer.Option(
+        10_000.0, "--magnification", min=1.0, help="Factor the error vectors are drawn at."
+    ),
+    no_gum: bool = typer.Option(False, "--no-gum", help="Skip the GUM beside the Monte Carlo."),
+    noise: str = typer.Option(
+        "points",
+        "--noise",
+        help="points: draw every probed coordinate's noise; centres: each fit's centre "
+        "noise from its covariance (same Gaussian law, 30 times fewer draws).",
+    ),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (µm)."),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
+) -> None:
+    """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties."""
+    from mtmc.artefact.study import load_artefact_study, simulate
+
+    if figure is not None and figure.suffix.lower() not in FIG_SUFFIXES:
+        fail(f"{figure}: expected a file ending in {', '.join(FIG_SUFFIXES)}")
+    try:
+        st = load_artefact_study(study)
+        with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
+            res = simulate(
+                st,
+                trials,
+                seed,
+                gum_too=not no_gum,
+                noise=noise,
+                progress=bar,
+                **parallel_options(workers, executor, scheduler),
+            )
+        if figure is not None:
+            from mtmc.artefact.plot import plot_error_vectors
+
+            try:
+                plot_error_vectors(res, figure, magnification=magnification)
+            except OSError as exc:
+                fail(f"{figure}: cannot write: {exc}")
+    except MtmcError as exc:
+        fail(exc)
+    out = res.to_json()
+    if as_json:
+        print_json(out)
+        return
+    con = Console()
+    t = Table(title=f"{st.title}: errors of the fiducial distances (µm), Table 2 layout")
+    axes = [a.lower() for a in st.setup.rotary]
+    for a in axes:
+        t.add_column(a, justify="right")
+    for col in ("① r_max", "① r_avg", "② r_max", "② r_avg", "①–② r_max", "①–② r_avg"):
+        t.add_column(col, justify="right")
+    for row in out["poses"]:
+        m1, a1 = row["r_max_um"], row["r_avg_um"]
+        m2, a2 = row["r_max_model_um"], row["r_avg_model_um"]
+        t.add_row(
+            *(f"{row[f'{a}_deg']:g}°" for a in axes),
+            f"{m1['estimate']:.2f} ± {m1['u']:.2f}",
+            f"{a1['estimate']:.2f} ± {a1['u']:.2f}",
+            f"{m2['estimate']:.2f} ± {m2['u']:.2f}",
+            f"{a2['estimate']:.2f} ± {a2['u']:.2f}",
+            f"{m1['estimate'] - m2['estimate']:.2f}",
+            f"{a1['estimate'] - a2['estimate']:.2f}",
+        )
+    con.print(t)
+    s = Table(title="Setup errors (µm): injected, identified (noise-free), MC mean ± u, GUM u")
+    for col in ("name", "injected", "noise-free", "MC", "GUM u"):
+        s.add_column(col, justify="right")
+    for name, v in out["setup_errors"].items():
+        s.add_row(
+            name,
+            f"{v['injected']:.3f}",
+            f"{v['noise_free']:.3f}",
+            f"{v['estimate']:.3f} ± {v['u']:.3f}",
+            f"{v['gum_u']:.3f}" if "gum_u" in v else "-",
+        )
+    con.print(s)
+    typer.echo(
+        f"mean volumetric error {out['volumetric_mean_um']:.2f} µm; "
+        f"trials {out['trials']}  seed {out['seed']}"
+    )
+
+
+@app.command("fit")
+def fit_cmd(
+    points: Path = typer.Argument(..., help="CSV of probed points x,y,z (header optional)."),
+    radius: float | None = typer.Option(
+        None, "--radius", help="Calibrated radius, in --units (default: fitted)."
+    ),
+    units: str = typer.Option("mm", "--units", help="Unit of the file and --radius: mm, m or um."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (mm)."),
+) -> None:
+    """Fit a sphere to POINTS (orthogonal distances), with standard uncertainties."""
+    from mtmc.artefact.probing import UNITS, fit_points, read_points
+
+    if units not in UNITS:
+        fail(f"--units: expected mm, m or um, got {units!r}")
+    if radius is not None and not radius > 0:
+        fail(f"--radius: expected a radius > 0, got {radius}")
+    try:
+        P = read_points(points, units)
+        f = fit_points(P, None if radius is None else radius * UNITS[units])
+    except MtmcError as exc:
+        fail(exc)
+    if as_json:
+        print_json(
+            {
+                "centre": list(f.centre),
+                "radius": f.radius,
+                "u_centre": list(f.u_centre),
+                "u_radius": f.u_radius,
+                "rms": f.rms,
+                "n": f.n,
+                "units": "mm",
+                "radius_known": f.radius_known,
+            }
+        )
+        return
+    c, u = f.centre, f.u_centre
+    typer.echo(f"{points.name}: {f.n} points, sphere fit (orthogonal distances), mm")
+    typer.echo(f"centre  {c[0]:.6f} {c[1]:.6f} {c[2]:.6f}   u {u[0]:.2e} {u[1]:.2e} {u[2]:.2e}")
+    known = " (given)" if f.radius_known else f"   u {f.u_radius:.2e}"
+    typer.echo(f"radius  {f.radius:.6f}{known}")
+    typer.echo(f"rms     {f.rms:.3e}")
+
+
+@app.command("gravity")
+def gravity_cmd(
+    measurements: Path = typer.Argument(
+        ..., help="CSV with the header orientation,ball,x,y,z (H, O, V; mm)."
+    ),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (µm)."),
+) -> None:
+    """The gravity effect between mountings (eqs. 1-2): O-H and V-H per ball and mean."""
+    from mtmc.artefact.gravity import read_gravity
+
+    try:
+        g = read_gravity(measurements)
+    except MtmcError as exc:
+        fail(exc)
+    out: dict[str, dict[str, Any]] = {
+        f"{o}-H": {
+            "balls": {
+                b: {
+                    "dx_um": float(g.delta[k, i, 0] * 1e3),
+                    "dy_um": float(g.delta[k, i, 1] * 1e3),
+                    "dz_um": float(g.delta[k, i, 2] * 1e3),
+                    "dd_um": float(g.delta_d[k, i] * 1e3),
+                }
+                for i, b in enumerate(g.balls)
+            },
+            "mean_abs_dx_um": float(g.mean_abs[k, 0] * 1e3),
+            "mean_abs_dy_um": float(g.mean_abs[k, 1] * 1e3),
+            "mean_abs_dz_um": float(g.mean_abs[k, 2] * 1e3),
+            "mean_dd_um": float(g.mean_d[k] * 1e3),
+        }
+        for k, o in enumerate(g.orientations)
+    }
+    if as_json:
+        print_json(out)
+        return
+    con = Console()
+    for key, v in out.items():
+        t = Table(title=f"{key} (µm), eqs. 1-2")
+        for col in ("ball", "Δx", "Δy", "Δz", "Δd"):
+            t.add_column(col, justify="right")
+        for b, d in v["balls"].items():
+            t.add_row(b, *(f"{d[c]:.3f}" for c in ("dx_um", "dy_um", "dz_um", "dd_um")))
+        t.add_row(
+            "mean |.|",
+            *(f"{v[c]:.3f}" for c in ("mean_abs_dx_um", "mean_abs_dy_um", "mean_abs_dz_um")),
+            f"{v['mean_dd_um']:.3f}",
+        )
+        con.print(t)
