@@ -32,7 +32,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.artefact.artefact import distances
+from mtmc.artefact.artefact import _ro, distances
 
 __all__ = ["ANALYSIS_OUTPUTS", "Analysis", "analyse", "rigid_fit_residuals"]
 
@@ -158,12 +158,6 @@ class Analysis:
                 part = a[:, p]
                 out[f"{name}/{p}"] = part if part.ndim == 1 else part.reshape(a.shape[0], -1)
         return out
-
-
-def _ro(a: _F) -> _F:
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    a.setflags(write=False)
-    return a
 
 
 def analyse(

@@ -46,7 +46,8 @@ __all__ = [
 _F = NDArray[np.float64]
 
 
-def _frozen(a: npt.ArrayLike) -> _F:
+def _ro(a: npt.ArrayLike) -> _F:
+    """A read-only float64 copy (the arrays of the frozen results)."""
     out = np.array(a, dtype=np.float64)
     out.setflags(write=False)
     return out
@@ -160,9 +161,9 @@ class Artefact:
         if np.linalg.det(r) < 0:
             raise InputError("expected a proper rotation (det = +1)", field="rotation")
         object.__setattr__(self, "names", tuple(self.names))
-        object.__setattr__(self, "centres", _frozen(c))
-        object.__setattr__(self, "position", _frozen(p))
-        object.__setattr__(self, "rotation", _frozen(r))
+        object.__setattr__(self, "centres", _ro(c))
+        object.__setattr__(self, "position", _ro(p))
+        object.__setattr__(self, "rotation", _ro(r))
         object.__setattr__(self, "diameter", float(self.diameter))
 
     @property

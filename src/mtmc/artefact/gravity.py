@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.artefact.artefact import _ro
 from mtmc.errors import InputError
 
 __all__ = ["GravityEffect", "gravity_effect", "read_gravity"]
@@ -61,12 +62,6 @@ class GravityEffect:
     mean_abs: _F
     mean_d: _F
     counts: dict[tuple[str, str], int]
-
-
-def _ro(a: _F) -> _F:
-    a = np.array(a, dtype=np.float64)
-    a.setflags(write=False)
-    return a
 
 
 def gravity_effect(rows: list[tuple[str, str, float, float, float]]) -> GravityEffect:

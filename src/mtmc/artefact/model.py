@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.artefact.artefact import Artefact
+from mtmc.artefact.artefact import Artefact, _ro
 from mtmc.artefact.probing import fit_sensitivity, patch_offsets, patch_points
 from mtmc.errors import InputError
 from mtmc.geometry.fits import fit_sphere
@@ -312,12 +312,6 @@ class FiducialSetup:
             _ro(K.reshape(p, n, 3, 3 * k)),
             _ro(A),
         )
-
-
-def _ro(a: npt.ArrayLike) -> _F:
-    out = np.array(a, dtype=np.float64)
-    out.setflags(write=False)
-    return out
 
 
 @dataclass(frozen=True, eq=False)
