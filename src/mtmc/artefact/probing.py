@@ -81,8 +81,8 @@ def _frame(axis: npt.ArrayLike) -> _F:
     if n.shape != (3,) or not norm > 0 or not np.isfinite(norm):
         raise InputError(f"expected a non-zero direction of 3 numbers, got {axis!r}", field="axis")
     n = n / norm
-    helper = np.eye(3)[int(np.argmin(np.abs(n)))]
-    e1 = np.cross(helper, n)
+    ref = np.eye(3)[int(np.argmin(np.abs(n)))]
+    e1 = np.cross(ref, n)
     e1 /= np.linalg.norm(e1)
     return np.stack([e1, np.cross(n, e1), n])
 
