@@ -109,7 +109,8 @@ def test_gravity_against_hand_computation(tmp_path: Path) -> None:
         ("O", "2", -10.0, 1.0, 5.9994),
     ]
     g = gravity_effect(rows)
-    assert g.orientations == ("O", "V") and g.balls == ("1", "2")
+    assert g.orientations == ("O", "V")
+    assert g.balls == ("1", "2")
     # by hand, um: V-H ball 1 (1, 0, 2), ball 2 (0, -1.5, 0)
     # O-H ball 1 (0, 0.2, 0), ball 2 (0, 0, -0.5)
     np.testing.assert_allclose(g.delta[1] * 1e3, [[1, 0, 2], [0, -1.5, 0]], atol=1e-9)

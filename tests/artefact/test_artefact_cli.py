@@ -44,7 +44,8 @@ def test_simulate_json_contract(capsys: pytest.CaptureFixture[str], tmp_path: Pa
     assert len(j["setup_errors"]) == 18
     assert all({"estimate", "u"} <= set(v) for v in j["setup_errors"].values())
     assert (j["trials"], j["seed"]) == (300, 3)
-    assert fig.read_text().lstrip().startswith("<?xml") and "magnified" in fig.read_text()
+    assert fig.read_text().lstrip().startswith("<?xml")
+    assert "magnified" in fig.read_text()
     # the same seed gives the same numbers
     main(
         ["artefact", "simulate", str(STUDY), "--trials", "300", "--seed", "3", "--json", "--no-gum"]
@@ -55,12 +56,15 @@ def test_simulate_json_contract(capsys: pytest.CaptureFixture[str], tmp_path: Pa
 def test_simulate_table_and_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     assert main(["artefact", "simulate", str(STUDY), "--trials", "200", "--seed", "1"]) == 0
     out = capsys.readouterr().out
-    assert "r_max" in out and "dpx" in out
+    assert "r_max" in out
+    assert "dpx" in out
     bad = tmp_path / "bad.toml"
     bad.write_text(STUDY.read_text().replace("repetitions = 3", "repetitions = -1"))
     assert main(["artefact", "simulate", str(bad), "--trials", "10"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("mtmc: error: ") and "bad.toml:" in err and "plan.repetitions" in err
+    assert err.startswith("mtmc: error: ")
+    assert "bad.toml:" in err
+    assert "plan.repetitions" in err
 
 
 def test_fit_json_contract(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
@@ -72,10 +76,12 @@ def test_fit_json_contract(capsys: pytest.CaptureFixture[str], tmp_path: Path) -
     j = json.loads(capsys.readouterr().out)
     assert set(j) >= {"centre", "radius", "u_centre", "u_radius", "rms", "n"}
     np.testing.assert_allclose(j["centre"], c, atol=1e-9)  # mm whatever the input unit
-    assert j["radius"] == pytest.approx(4.9985, abs=1e-9) and j["n"] == 30
+    assert j["radius"] == pytest.approx(4.9985, abs=1e-9)
+    assert j["n"] == 30
     assert main(["artefact", "fit", str(f), "--units", "m", "--radius", "0.0049985", "--json"]) == 0
     j = json.loads(capsys.readouterr().out)
-    assert j["u_radius"] == 0.0 and j["radius"] == pytest.approx(4.9985)
+    assert j["u_radius"] == 0.0
+    assert j["radius"] == pytest.approx(4.9985)
     assert main(["artefact", "fit", str(f), "--units", "m"]) == 0
     assert "centre" in capsys.readouterr().out
     g = tmp_path / "g.csv"

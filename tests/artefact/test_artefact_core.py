@@ -84,10 +84,12 @@ def test_artefact_file_errors_name_file_line_field() -> None:
     assert (e.value.file, e.value.line, e.value.field) == ("a.toml", 5, "ball[0].centre")
     with pytest.raises(InputError) as e:
         loads_artefact(text.replace("diameter = 10.0", "").replace("[1, 2]", "[0, 0, 0]"), "b.toml")
-    assert "diameter" in str(e.value) and e.value.file == "b.toml"
+    assert "diameter" in str(e.value)
+    assert e.value.file == "b.toml"
     with pytest.raises(InputError) as e:
         loads_artefact("diameter = -1\n", file="c.toml")
-    assert e.value.line == 1 and e.value.field == "diameter"
+    assert e.value.line == 1
+    assert e.value.field == "diameter"
 
 
 def _odr_longdouble(P: np.ndarray, radius: float | None) -> np.ndarray:
@@ -161,7 +163,8 @@ def test_thirty_exact_points_give_the_centre_to_1e9_mm(radius: float | None) -> 
         assert sorted(span)[1] == pytest.approx(5.0, abs=0.1) or max(span) < 6.1
         f = fit_points(P, radius)
         np.testing.assert_allclose(f.centre, centre, rtol=0, atol=1e-9)
-        assert f.rms < 1e-9 and f.n == 30
+        assert f.rms < 1e-9
+        assert f.n == 30
 
 
 def test_fit_covariance_against_monte_carlo() -> None:
@@ -223,8 +226,10 @@ def test_read_points_csv_units_header_and_partial_cap(tmp_path: Path) -> None:
     P = read_points(f, "m")
     np.testing.assert_allclose(P, pts, rtol=1e-15, atol=1e-12)
     fit = fit_points(P)
-    assert abs(fit.radius - R) < 5e-4 and np.abs(np.array(fit.centre) - c).max() < 5e-4
-    assert fit.u_radius > 0 and fit.n == n
+    assert abs(fit.radius - R) < 5e-4
+    assert np.abs(np.array(fit.centre) - c).max() < 5e-4
+    assert fit.u_radius > 0
+    assert fit.n == n
     g = tmp_path / "plain.csv"
     g.write_text("\n".join(f"{x!r} {y!r} {z!r}" for x, y, z in (pts[:10] * 1e3).tolist()))
     np.testing.assert_allclose(read_points(g, "um"), pts[:10], rtol=1e-12)
@@ -232,6 +237,7 @@ def test_read_points_csv_units_header_and_partial_cap(tmp_path: Path) -> None:
     bad.write_text("x,y,z\n1,2,3\n1,2\n")
     with pytest.raises(InputError) as e:
         read_points(bad)
-    assert e.value.line == 3 and e.value.file == str(bad)
+    assert e.value.line == 3
+    assert e.value.file == str(bad)
     with pytest.raises(InputError):
         read_points(g, "inch")

@@ -68,7 +68,8 @@ def test_noise_free_setup_errors_recovered(topology: str) -> None:
     meas = s.measure(NINE, setup=E)
     dF = (s.artefact.mounted_centres()[None] - meas.centres).reshape(-1)
     idn = identify(s.setup_jacobian(NINE), dF, setup_error_names(s.artefact.names))
-    assert idn.full_rank and idn.rank == 18
+    assert idn.full_rank
+    assert idn.rank == 18
     assert np.abs(idn.estimate - E).max() < 1e-9  # mm, i.e. 1e-6 um
     assert not idn.estimate.flags.writeable
 
@@ -90,10 +91,12 @@ def test_single_pose_rank_deficiency_and_its_combinations() -> None:
     conly = identify(s.setup_jacobian(NINE[:3]), np.zeros(45), names)
     assert conly.rank == 17
     assert conly.unidentifiable() == ["+1·dpz +1·dw1z +1·dw2z +1·dw3z +1·dw4z +1·dw5z"]
-    assert np.isfinite(conly.u[:2]).all() and np.isinf(conly.u[2])
+    assert np.isfinite(conly.u[:2]).all()
+    assert np.isinf(conly.u[2])
     # the nine-pose plan is full rank
     nine = identify(s.setup_jacobian(NINE), np.zeros(135), names)
-    assert nine.full_rank and nine.null_space.shape == (0, 18)
+    assert nine.full_rank
+    assert nine.null_space.shape == (0, 18)
 
 
 def test_identification_covariance_against_explicit_formula() -> None:

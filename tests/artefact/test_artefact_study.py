@@ -28,7 +28,8 @@ def study():  # type: ignore[no-untyped-def]
 
 def test_shipped_study(study) -> None:  # type: ignore[no-untyped-def]
     assert (ROOT / "src/mtmc/data/studies/wang2022.toml").read_text() == STUDY.read_text()
-    assert study.poses.shape == (9, 2) and study.repetitions == 3
+    assert study.poses.shape == (9, 2)
+    assert study.repetitions == 3
     np.testing.assert_allclose(np.degrees(study.poses[7]), [10, 5])
     assert study.setup.machine.axes == ("X", "Y", "Z", "B", "C")
     assert isinstance(study.errors["EXX"], PolynomialFunction)
@@ -54,19 +55,19 @@ def test_magnitudes_resemble_table2(study) -> None:  # type: ignore[no-untyped-d
 
 
 @pytest.mark.parametrize(
-    ("old", "new", "line", "field"),
+    ("old", "new", "field"),
     [
-        ("repetitions = 3", "repetitions = 0", None, "plan.repetitions"),
-        ("EB0Z = 4.0", "EQ0Z = 4.0", None, "machine.errors.EQ0Z"),
-        ("EX0C = 3.0", "EX0C = [1.0, 2.0]", None, "machine.errors.EX0C"),
-        ("dpz = 0.8", "dpq = 0.8", None, "setup_errors.dpq"),
-        ("size_mm = 6.0", "size_mm = 9.0", None, "probing.size_mm"),
-        ('radius = "calibrated"', 'radius = "fitted"', None, "probing.radius"),
-        ("[0, 0], [0, 5]", "[0, 0, 1], [0, 5]", None, "plan.poses_deg"),
-        ('library = "wbzfxyct"', 'library = "nope"', None, "machine.library"),
+        ("repetitions = 3", "repetitions = 0", "plan.repetitions"),
+        ("EB0Z = 4.0", "EQ0Z = 4.0", "machine.errors.EQ0Z"),
+        ("EX0C = 3.0", "EX0C = [1.0, 2.0]", "machine.errors.EX0C"),
+        ("dpz = 0.8", "dpq = 0.8", "setup_errors.dpq"),
+        ("size_mm = 6.0", "size_mm = 9.0", "probing.size_mm"),
+        ('radius = "calibrated"', 'radius = "fitted"', "probing.radius"),
+        ("[0, 0], [0, 5]", "[0, 0, 1], [0, 5]", "plan.poses_deg"),
+        ('library = "wbzfxyct"', 'library = "nope"', "machine.library"),
     ],
 )
-def test_study_errors_name_file_line_field(old: str, new: str, line: None, field: str) -> None:
+def test_study_errors_name_file_line_field(old: str, new: str, field: str) -> None:
     text = STUDY.read_text()
     assert old in text
     bad = text.replace(old, new)
@@ -77,7 +78,8 @@ def test_study_errors_name_file_line_field(old: str, new: str, line: None, field
         for i, t in enumerate(bad.splitlines(), 1)
         if new.split(" =")[0] in t and not t.lstrip().startswith("#")
     )
-    assert e.value.file == "w.toml" and e.value.field == field
+    assert e.value.file == "w.toml"
+    assert e.value.field == field
     assert e.value.line == want_line
 
 
@@ -89,7 +91,7 @@ def _noise_free(study, **kw):  # type: ignore[no-untyped-def]
 
 def test_noise_free_study_recovers_injected_setup_errors(study) -> None:  # type: ignore[no-untyped-def]
     s = _noise_free(study, errors={})
-    model, inputs, pr = study_model(s)
+    model, inputs, _pr = study_model(s)
     z = {k: np.zeros((1, d.dim)) for k, d in inputs.items()}
     out = model(**z)
     np.testing.assert_allclose(out["setup"][0], s.setup_errors, rtol=0, atol=1e-9)  # 1e-6 um

@@ -88,7 +88,7 @@ def rigid_fit_residuals(points: npt.ArrayLike, reference: npt.ArrayLike) -> _F:
     H = np.swapaxes(X - xc, -1, -2) @ (Y - yc)  # (..., 3, 3)
     U, _, Vt = np.linalg.svd(H)
     d = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
-    D = np.ones(d.shape + (3,))
+    D = np.ones((*d.shape, 3))
     D[..., 2] = np.where(d == 0, 1.0, d)
     Rm = np.swapaxes(Vt, -1, -2) @ (D[..., :, None] * np.swapaxes(U, -1, -2))
     moved = (X - xc) @ np.swapaxes(Rm, -1, -2) + yc
@@ -185,7 +185,7 @@ def analyse(
     Analysis
     """
     m = np.asarray(measured, dtype=np.float64)
-    M, R, P, N = m.shape[:4]
+    M, _R, _P, N = m.shape[:4]
     cal = np.broadcast_to(np.asarray(calibrated, dtype=np.float64), (M, N, 3))
     dF = (cal[:, None, None] - m).reshape(M, -1)
     E = dF @ np.asarray(pinv, dtype=np.float64).T  # (M, 3 + 3N)

@@ -96,7 +96,7 @@ def distances(centres: npt.ArrayLike) -> _F:
     c = np.asarray(centres, dtype=np.float64)
     i, j = np.array(pairs(c.shape[-2]), dtype=np.intp).reshape(-1, 2).T
     d = c[..., i, :] - c[..., j, :]
-    return np.sqrt(np.einsum("...k,...k->...", d, d))
+    return np.asarray(np.sqrt(np.einsum("...k,...k->...", d, d)), dtype=np.float64)
 
 
 @dataclass(frozen=True, eq=False)

@@ -169,7 +169,7 @@ def fit_sensitivity(points: npt.ArrayLike, centre: npt.ArrayLike, free_radius: b
     J = np.concatenate([N, np.ones((b, n, 1))], axis=2) if free_radius else N
     G = np.linalg.solve(np.matmul(J.transpose(0, 2, 1), J), J.transpose(0, 2, 1))[:, :3, :]
     K = G[:, :, :, None] * N[:, None, :, :]
-    return K.reshape(b, 3, 3 * n)
+    return np.asarray(K.reshape(b, 3, 3 * n), dtype=np.float64)
 
 
 @dataclass(frozen=True)

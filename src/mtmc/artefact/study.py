@@ -562,7 +562,7 @@ def _vec(f: Any, key: str, default: Any = None, n: int = 3, positive: bool = Fal
     return np.array(v, dtype=np.float64)
 
 
-def loads_artefact_study(
+def loads_artefact_study(  # noqa: C901
     text: str, file: str = "<study>", folder: Path | None = None
 ) -> ArtefactStudy:
     """Read an artefact study from TOML text (format: ``docs/artefact.md``).
