@@ -31,6 +31,7 @@ __all__ = [
     "GraphError",
     "TopologyError",
     "ConvergenceError",
+    "IdentifiabilityError",
 ]
 
 
@@ -131,3 +132,15 @@ class TopologyError(InputError):
 
 class ConvergenceError(MtmcError, RuntimeError):
     """An iterative computation (adaptive Monte Carlo, a non-linear fit) did not converge."""
+
+
+class IdentifiabilityError(InputError):
+    """Parameters that a measurement cannot separate (a rank-deficient identification).
+
+    ``combinations`` lists, per null direction of the scaled Jacobian, the parameter
+    names with their weights.
+    """
+
+    def __init__(self, message: str, *, combinations: tuple[str, ...] = (), **where: Any) -> None:
+        self.combinations = combinations
+        super().__init__(message, **where)

@@ -1,0 +1,590 @@
+"""Monte Carlo of a whole laser-tracker verification (Aguado et al. 2017), and its GUM twin.
+
+One trial re-creates one verification: the machine (its true errors, possibly richer than
+the identification model) moves the reflector to the ``N`` points; the tracker reads each
+point with noise in spherical coordinates (range ``a + b·L``, azimuth and elevation
+constant; Aguado et al. 2016 eqs. 22–24); the error functions and (optionally) the tracker
+pose are identified from the readings (eq. 17); the volumetric errors before and after,
+the coefficients and the error left after compensation at every point are recorded. The
+trials run through the engine :func:`mtmc.uncertainty.monte_carlo` (seeded blocks); the
+model is vectorised over trials.
+
+Identification of the ``M`` trials (a shared factorisation, exact enough)
+--------------------------------------------------------------------------
+The noise-free verification is identified once, exactly (:func:`identify`): solution
+``(θ̄, R̄, t̄)``, Jacobian ``J₀`` (3N × p) with QR factors giving ``A = J₀⁺``. Each trial
+is then solved by chord Gauss–Newton iterations ``δ = −A r(θ, R, t)`` with the residual
+computed per trial: the pose part exactly (``x = Rᵀ(p − t)``, ``R ← R Exp(δω)``), the
+machine part as ``p = p̄ + J_p (θ − θ̄)``. The neglected terms are the second-order terms
+of the machine model in ``θ − θ̄`` (products of noise-sized errors, below 1e-9 mm here)
+and the change of ``J₀`` over the trials' spread, which the chord iteration corrects
+through the residual. The result agrees with the exact per-trial solution of
+:func:`identify` to better than 1e-6 relative (tested; figures in
+``docs/verification.md``).
+
+Inputs of the engine (named): ``noise``, ``iid(normal(0, 1), 3N)``, the standard normal
+numbers of ``(L, α, β)`` of each point; optionally ``repeatability`` (``3N`` standard
+normals times the machine's repeatability, base frame), ``pose`` (6 standard normals
+times the standard uncertainties of the tracker pose: rotation vector, rad; position,
+mm) and ``reflector`` (3 standard normals times the uncertainty of the reflector offset,
+mm, taken to first order through the machine's EXT EYT EZT Jacobian).
+
+Outputs (named, mm and the coefficients' units):
+
+- ``ve`` ``(m, 6)``: initial volumetric error max, mean, min over the points, then the
+  residual max, mean, min (:data:`VE_NAMES`);
+- ``coef`` ``(m, p)``: the identified parameters (:attr:`Identification.names`);
+- ``comp`` ``(m, 3·Ne)``: at each evaluation point, the compensated position minus the
+  true one, ``p(q; θ̂) − p_true`` (x, y, z per point): its mean is the model's bias,
+  its standard deviation the calibration uncertainty of the point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from numpy.typing import NDArray
+
+from mtmc.errors import ConvergenceError, InputError
+from mtmc.instruments.laser_tracker import LaserTracker
+from mtmc.kinematics.parameters import ErrorModel
+from mtmc.uncertainty.distributions import IID, Normal
+from mtmc.uncertainty.gum import Validation, gum, validate
+from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.verification.identify import (
+    POSE_NAMES,
+    Identification,
+    _problem,
+    _skew,
+    expmap,
+    identify,
+    ve_stats,
+)
+
+__all__ = [
+    "VE_NAMES",
+    "Verification",
+    "VerificationModel",
+    "VerificationMC",
+    "VerificationGUM",
+    "simulate",
+    "gum_verification",
+    "validate_verification",
+]
+
+_F = NDArray[np.float64]
+
+#: Columns of the ``ve`` output.
+VE_NAMES: tuple[str, ...] = (
+    "initial.max",
+    "initial.mean",
+    "initial.min",
+    "residual.max",
+    "residual.mean",
+    "residual.min",
+)
+
+
+@dataclass(frozen=True)
+class Verification:
+    """A verification to simulate.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The identification model.
+    q : ndarray, shape (N, n_axes)
+        Commanded positions of the measured points.
+    tracker : LaserTracker
+        Nominal pose and noise (required).
+    true_errors : mapping
+        The machine's errors, as :meth:`Machine.tool_position` takes them (may be
+        richer than ``model``).
+    pose : bool
+        Identify the tracker pose.
+    fixed : mapping or sequence of str
+        Parameters of ``model`` held (see :func:`identify`).
+    eval_q : ndarray, shape (Ne, n_axes), optional
+        Where the compensation is evaluated (default ``q``).
+    exact : bool
+        Exact error rotations.
+    """
+
+    model: ErrorModel
+    q: _F
+    tracker: LaserTracker
+    true_errors: Mapping[str, Any]
+    pose: bool = True
+    fixed: Mapping[str, float] | Sequence[str] = ()
+    eval_q: _F | None = None
+    exact: bool = False
+
+    def __post_init__(self) -> None:
+        if self.tracker.noise is None:
+            raise InputError("the tracker has no noise model", field="tracker.noise")
+        q = np.array(self.q, dtype=np.float64)
+        q.setflags(write=False)
+        object.__setattr__(self, "q", q)
+        if self.eval_q is not None:
+            e = np.array(self.eval_q, dtype=np.float64)
+            e.setflags(write=False)
+            object.__setattr__(self, "eval_q", e)
+
+    @property
+    def n_points(self) -> int:
+        """Number of measured points ``N``."""
+        return int(self.q.shape[0])
+
+    def true_positions(self) -> _F:
+        """``(N, 3)`` true positions of the reflector, base frame, mm."""
+        return self.model.machine.tool_position(self.q, self.true_errors, exact=self.exact)
+
+    def readings(self) -> _F:
+        """``(N, 3)`` noise-free tracker readings, mm."""
+        return self.tracker.to_tracker(self.true_positions())
+
+
+@dataclass(frozen=True)
+class VerificationModel:
+    """The vectorised model of one verification per trial (see the module notes).
+
+    Build it with :meth:`build`; call it with the engine's arrays.
+    """
+
+    names: tuple[str, ...]
+    n_theta: int
+    pose: bool
+    x_true: _F  # (N, 3) true readings
+    p_true: _F  # (N, 3) true positions, base frame
+    p_fit: _F  # (N, 3) model positions at the reference solution
+    Jp: _F  # (N, 3, n_theta) d p / d theta_free at the reference
+    est0: _F  # (p,)
+    R_ref: _F
+    t_ref: _F
+    R_nom: _F
+    t_nom: _F
+    A: _F  # (p, 3N)
+    x_nom: _F  # (N, 3) nominal readings (nominal machine, nominal pose)
+    J_tool: _F  # (N, 3, 3) d p / d (EXT, EYT, EZT)
+    pe_fit: _F  # (Ne, 3)
+    pe_true: _F  # (Ne, 3)
+    Jpe: _F  # (Ne, 3, n_theta)
+    noise: Any
+    repeatability: float
+    pose_u: _F  # (6,)
+    reflector_u: float
+    iterations: int = 3
+
+    @classmethod
+    def build(
+        cls,
+        ver: Verification,
+        reference: Identification,
+        *,
+        repeatability: float = 0.0,
+        pose_u: npt.ArrayLike | None = None,
+        reflector_u: float = 0.0,
+    ) -> VerificationModel:
+        """Precompute the reference solution's factors.
+
+        Parameters
+        ----------
+        ver : Verification
+        reference : Identification
+            The noise-free identification of ``ver`` (one set of readings).
+        repeatability : float
+            Standard deviation of the machine's positioning per coordinate, mm.
+        pose_u : array_like, shape (6,), optional
+            Standard uncertainties of the tracker pose (rotation vector, rad; position, mm).
+        reflector_u : float
+            Standard uncertainty of each component of the reflector offset, mm.
+
+        Returns
+        -------
+        VerificationModel
+        """
+        prob = _problem(ver.model, ver.q, ver.tracker, ver.pose, ver.fixed, ver.exact)
+        th = reference.theta[:1]
+        n_th = prob.free.size
+        J0 = reference.jacobian[0]
+        Q, R = np.linalg.qr(J0)
+        A = np.linalg.solve(R, Q.T)
+        m = ver.model
+        Jp = m.jacobian(ver.q, th[0], exact=ver.exact)[:, :, prob.free]
+        eq = ver.q if ver.eval_q is None else ver.eval_q
+        Jpe = m.jacobian(eq, th[0], exact=ver.exact)[:, :, prob.free]
+        pu = np.zeros(6) if pose_u is None else np.asarray(pose_u, dtype=np.float64)
+        if pu.shape != (6,) or np.any(pu < 0):
+            raise InputError("expected 6 standard uncertainties >= 0", field="pose_u")
+        nominal = m.machine.tool_position(ver.q)
+        J_tool = m.machine.jacobian(
+            ver.q, ver.true_errors, names=("EXT", "EYT", "EZT"), exact=ver.exact
+        )
+        return cls(
+            names=reference.names,
+            n_theta=n_th,
+            pose=ver.pose,
+            x_true=ver.readings(),
+            p_true=ver.true_positions(),
+            p_fit=m.tool_position(ver.q, th[0], exact=ver.exact),
+            Jp=Jp,
+            est0=np.array(reference.estimate[0]),
+            R_ref=np.array(reference.rotation[0]),
+            t_ref=np.array(reference.position[0]),
+            R_nom=ver.tracker.rotation,
+            t_nom=ver.tracker.position,
+            A=A,
+            x_nom=ver.tracker.to_tracker(nominal),
+            J_tool=J_tool,
+            pe_fit=m.tool_position(eq, th[0], exact=ver.exact),
+            pe_true=m.machine.tool_position(eq, ver.true_errors, exact=ver.exact),
+            Jpe=Jpe,
+            noise=ver.tracker.noise,
+            repeatability=float(repeatability),
+            pose_u=pu,
+            reflector_u=float(reflector_u),
+        )
+
+    def inputs(self) -> dict[str, IID]:
+        """The engine's inputs: standard normals, scaled inside the model."""
+        n3 = 3 * self.x_true.shape[0]
+        out = {"noise": IID(Normal(0.0, 1.0), n3)}
+        if self.repeatability > 0:
+            out["repeatability"] = IID(Normal(0.0, 1.0), n3)
+        if np.any(self.pose_u > 0):
+            out["pose"] = IID(Normal(0.0, 1.0), 6)
+        if self.reflector_u > 0:
+            out["reflector"] = IID(Normal(0.0, 1.0), 3)
+        return out
+
+    def true_readings(
+        self,
+        m: int,
+        repeatability: _F | None = None,
+        pose: _F | None = None,
+        reflector: _F | None = None,
+    ) -> Any:
+        """True readings of ``m`` trials ``(m, N, 3)`` with the optional inputs applied."""
+        N = self.x_true.shape[0]
+        if repeatability is None and pose is None and reflector is None:
+            return np.broadcast_to(self.x_true, (m, N, 3))
+        p = np.broadcast_to(self.p_true, (m, N, 3))
+        if repeatability is not None:
+            p = p + self.repeatability * repeatability.reshape(m, N, 3)
+        if reflector is not None:
+            p = p + np.einsum("nij,mj->mni", self.J_tool, self.reflector_u * reflector)
+        R = np.broadcast_to(self.R_nom, (m, 3, 3))
+        t = np.broadcast_to(self.t_nom, (m, 3))
+        if pose is not None:
+            dp = pose * self.pose_u
+            R = self.R_nom @ expmap(dp[:, :3])
+            t = self.t_nom + dp[:, 3:]
+        return np.einsum("mij,mni->mnj", R, p - t[:, None, :])
+
+    def solve(self, x_meas: Any) -> tuple[Any, Any]:
+        """Identify ``m`` sets of readings ``(m, N, 3)``: parameters (m, p), residuals (m, N, 3)."""
+        m, N = x_meas.shape[:2]
+        k = self.n_theta
+        est = np.broadcast_to(self.est0, (m, self.est0.size)).copy()
+        R = np.broadcast_to(self.R_ref, (m, 3, 3)).copy()
+        t = np.broadcast_to(self.t_ref, (m, 3)).copy()
+        for _ in range(self.iterations):  # chord iterations, all trials at once
+            p = self.p_fit + np.einsum("nik,mk->mni", self.Jp, est[:, :k] - self.est0[:k])
+            r = np.einsum("mij,mni->mnj", R, p - t[:, None, :]) - x_meas
+            d = -r.reshape(m, 3 * N) @ self.A.T
+            est += d
+            if self.pose:
+                R = R @ expmap(d[:, k : k + 3])
+                t = t + d[:, k + 3 : k + 6]
+        p = self.p_fit + np.einsum("nik,mk->mni", self.Jp, est[:, :k] - self.est0[:k])
+        r = np.einsum("mij,mni->mnj", R, p - t[:, None, :]) - x_meas
+        return est, r
+
+    def __call__(
+        self,
+        noise: Any,
+        repeatability: Any = None,
+        pose: Any = None,
+        reflector: Any = None,
+    ) -> dict[str, Any]:
+        """One verification per trial; see the module notes for inputs and outputs."""
+        m = noise.shape[0]
+        N = self.x_true.shape[0]
+        x = self.true_readings(m, repeatability, pose, reflector)
+        x_meas = self.noise.perturb(x, noise.reshape(m, N, 3))
+        est, r = self.solve(x_meas)
+        init = np.sqrt(np.sum((x_meas - self.x_nom) ** 2, axis=-1))
+        res = np.sqrt(np.sum(r * r, axis=-1))
+        ve = np.concatenate([ve_stats(init), ve_stats(res)], axis=1)
+        k = self.n_theta
+        comp = (
+            self.pe_fit
+            + np.einsum("nik,mk->mni", self.Jpe, est[:, :k] - self.est0[:k])
+            - self.pe_true
+        )
+        return {"ve": ve, "coef": est, "comp": comp.reshape(m, -1)}
+
+
+def _ro(a: Any) -> _F:
+    out = np.array(a, dtype=np.float64)
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True)
+class VerificationGUM:
+    """GUM linearisation of the identification (JCGM 100 §5, JCGM 102 §6.2).
+
+    Attributes
+    ----------
+    names : tuple of str
+    cov : ndarray, shape (p, p)
+        ``A Σ Aᵀ``: ``A = J₀⁺`` the sensitivity of the parameters to the readings at the
+        reference solution, ``Σ`` the readings' covariance (tracker noise linearised
+        through the spherical coordinates, plus the optional inputs).
+    u : ndarray, shape (p,)
+    point_cov : ndarray, shape (Ne, 3, 3)
+        ``J_p Cov(θ) J_pᵀ`` of the compensated position at each evaluation point, mm².
+    point_u : ndarray, shape (Ne,)
+        ``√trace`` of :attr:`point_cov`, mm.
+    """
+
+    names: tuple[str, ...]
+    cov: _F
+    u: _F
+    point_cov: _F = field(repr=False)
+    point_u: _F = field(repr=False)
+
+
+def gum_verification(vm: VerificationModel) -> VerificationGUM:
+    """The GUM covariance of the identified parameters and compensated points.
+
+    Parameters
+    ----------
+    vm : VerificationModel
+
+    Returns
+    -------
+    VerificationGUM
+    """
+    N = vm.x_true.shape[0]
+    C = vm.noise.covariance(vm.x_true)  # (N, 3, 3)
+    if vm.repeatability > 0:
+        C = C + vm.repeatability**2 * np.eye(3)
+    A3 = vm.A.reshape(-1, N, 3)
+    cov = np.einsum("pni,nij,qnj->pq", A3, C, A3)
+    extra = []
+    if np.any(vm.pose_u > 0):
+        G = np.concatenate(
+            [_skew(vm.x_true), -np.broadcast_to(vm.R_nom.T, (N, 3, 3))], axis=-1
+        )  # (N, 3, 6)
+        extra.append(G * vm.pose_u)
+    if vm.reflector_u > 0:
+        extra.append(np.einsum("ji,njk->nik", vm.R_nom, vm.J_tool) * vm.reflector_u)
+    for G in extra:
+        AG = np.einsum("pni,nik->pk", A3, G)
+        cov = cov + AG @ AG.T
+    k = vm.n_theta
+    pc = np.einsum("nik,kl,njl->nij", vm.Jpe, cov[:k, :k], vm.Jpe)
+    return VerificationGUM(
+        vm.names,
+        _ro(cov),
+        _ro(np.sqrt(np.diag(cov))),
+        _ro(pc),
+        _ro(np.sqrt(np.trace(pc, axis1=1, axis2=2))),
+    )
+
+
+@dataclass(frozen=True)
+class VerificationMC:
+    """Result of :func:`simulate` (arrays read-only; lengths in mm).
+
+    Attributes
+    ----------
+    trials, seed : int
+    names : tuple of str
+        The identified parameters.
+    ve_estimate, ve_u : ndarray, shape (6,)
+        Mean and standard deviation over the trials of the :data:`VE_NAMES` statistics.
+    ve_samples : ndarray, shape (M, 6)
+    coef_estimate, coef_u : ndarray, shape (p,)
+    coef_cov : ndarray, shape (p, p)
+    coef_samples : ndarray, shape (M, p)
+    comp_bias : ndarray, shape (Ne, 3)
+        Mean over trials of the compensated minus the true position.
+    comp_u : ndarray, shape (Ne, 3)
+        Its standard deviation per coordinate (the calibration uncertainty).
+    point_u : ndarray, shape (Ne,)
+        ``√(u_x² + u_y² + u_z²)`` per point.
+    gum : VerificationGUM
+    reference : Identification
+        The noise-free identification.
+    """
+
+    trials: int
+    seed: int | None
+    names: tuple[str, ...]
+    ve_estimate: _F
+    ve_u: _F
+    ve_samples: _F = field(repr=False)
+    coef_estimate: _F = field(repr=False)
+    coef_u: _F = field(repr=False)
+    coef_cov: _F = field(repr=False)
+    coef_samples: _F = field(repr=False)
+    comp_bias: _F = field(repr=False)
+    comp_u: _F = field(repr=False)
+    point_u: _F = field(repr=False)
+    gum: VerificationGUM = field(repr=False)
+    reference: Identification = field(repr=False)
+
+    def ve(self, which: str) -> tuple[float, float]:
+        """``(estimate, u)`` of one of :data:`VE_NAMES`."""
+        i = VE_NAMES.index(which)
+        return float(self.ve_estimate[i]), float(self.ve_u[i])
+
+
+def reference_identification(ver: Verification, *, max_iter: int = 100) -> Identification:
+    """The noise-free identification of a verification (exact, one set of readings).
+
+    Raises
+    ------
+    ConvergenceError
+        If it does not converge.
+    IdentifiabilityError
+        If the model cannot be identified from these points.
+    """
+    ref = identify(
+        ver.model,
+        ver.q,
+        ver.readings(),
+        ver.tracker,
+        pose=ver.pose,
+        fixed=ver.fixed,
+        max_iter=max_iter,
+        exact=ver.exact,
+    )
+    if not ref.converged[0]:
+        raise ConvergenceError(
+            f"the noise-free identification did not converge: {ref.messages()[0]}",
+            field="model",
+        )
+    return ref
+
+
+def simulate(
+    ver: Verification,
+    trials: int,
+    seed: int | None,
+    *,
+    repeatability: float = 0.0,
+    pose_u: npt.ArrayLike | None = None,
+    reflector_u: float = 0.0,
+    workers: int = 1,
+    executor: Any = "thread",
+    scheduler: Any = None,
+    progress: Callable[[int, int | None], None] | None = None,
+) -> VerificationMC:
+    """Monte Carlo of ``trials`` verifications through :func:`mtmc.uncertainty.monte_carlo`.
+
+    Parameters
+    ----------
+    ver : Verification
+    trials : int
+    seed : int or None
+    repeatability, pose_u, reflector_u
+        Optional further inputs (see :meth:`VerificationModel.build`).
+    workers, executor, scheduler, progress
+        Passed to the engine.
+
+    Returns
+    -------
+    VerificationMC
+    """
+    ref = reference_identification(ver)
+    vm = VerificationModel.build(
+        ver, ref, repeatability=repeatability, pose_u=pose_u, reflector_u=reflector_u
+    )
+    res = monte_carlo(
+        vm,
+        vm.inputs(),
+        trials,
+        seed,
+        keep=["ve", "coef"],
+        workers=workers,
+        executor=executor,
+        scheduler=scheduler,
+        progress=progress,
+    )
+    ve, coef, comp = res["ve"], res["coef"], res["comp"]
+    cu = np.asarray(comp.u, dtype=np.float64).reshape(-1, 3)
+    return VerificationMC(
+        trials=int(res.trials),
+        seed=res.seed,
+        names=vm.names,
+        ve_estimate=_ro(ve.estimate),
+        ve_u=_ro(ve.u),
+        ve_samples=_ro(ve.samples),
+        coef_estimate=_ro(coef.estimate),
+        coef_u=_ro(coef.u),
+        coef_cov=_ro(coef.cov),
+        coef_samples=_ro(coef.samples),
+        comp_bias=_ro(np.asarray(comp.estimate).reshape(-1, 3)),
+        comp_u=_ro(cu),
+        point_u=_ro(np.sqrt(np.sum(cu * cu, axis=1))),
+        gum=gum_verification(vm),
+        reference=ref,
+    )
+
+
+def validate_verification(
+    vm: VerificationModel,
+    name: str,
+    trials: int,
+    seed: int | None,
+    *,
+    p: float = 0.95,
+    ndig: int = 2,
+) -> Validation:
+    """JCGM 101 §8 validation of the GUM by Monte Carlo for one identified parameter.
+
+    The GUM of :func:`mtmc.uncertainty.gum` (sensitivities of the whole verification model
+    by differences, stacked in one call) against the engine's Monte Carlo, same model and
+    inputs.
+
+    Parameters
+    ----------
+    vm : VerificationModel
+    name : str
+        One of ``vm.names``.
+    trials, seed
+        Of the Monte Carlo run.
+    p, ndig
+        As :func:`mtmc.uncertainty.validate`.
+
+    Returns
+    -------
+    Validation
+
+    Raises
+    ------
+    InputError
+        For an unknown name.
+    """
+    if name not in vm.names:
+        raise InputError(f"unknown parameter {name!r}; expected one of {', '.join(vm.names)}")
+    j = vm.names.index(name)
+
+    def scalar(**kw: Any) -> Any:
+        return vm(**kw)["coef"][:, j]
+
+    inputs = vm.inputs()
+    g = gum(scalar, inputs, p=p)
+    mc = monte_carlo(scalar, inputs, trials, seed)
+    return validate(g, mc, p=p, ndig=ndig)
+
+
+__all__ += ["reference_identification", "POSE_NAMES"]

@@ -1,0 +1,93 @@
+"""Monte Carlo of a verification: shared factorisation vs exact; MC vs GUM; JCGM 101 §8."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mtmc.errors import InputError
+from mtmc.instruments import LaserTracker
+from mtmc.verification.identify import identify
+from mtmc.verification.simulate import (
+    VE_NAMES,
+    Verification,
+    VerificationModel,
+    gum_verification,
+    reference_identification,
+    simulate,
+    validate_verification,
+)
+
+
+def _ver(s, **kw):  # type: ignore[no-untyped-def]
+    return Verification(
+        s["model"], s["q"], s["tracker"], s["model"].errors(s["theta"]), fixed=s["fixed"], **kw
+    )
+
+
+def test_shared_factorisation_matches_exact_identification(setup) -> None:  # type: ignore[no-untyped-def]
+    s = setup
+    ver = _ver(s)
+    ref = reference_identification(ver)
+    vm = VerificationModel.build(ver, ref)
+    rng = np.random.default_rng(np.random.SeedSequence(21))
+    z = rng.normal(size=(6, ver.n_points, 3))
+    x = vm.noise.perturb(np.broadcast_to(vm.x_true, z.shape), z)
+    est, r = vm.solve(x)
+    exact = identify(s["model"], s["q"], x, s["tracker"], fixed=s["fixed"])
+    assert exact.converged.all()
+    dev = np.abs(est - exact.estimate) / exact.u
+    assert dev.max() < 1e-3  # in units of the coefficient's standard uncertainty
+    # the linearised machine model leaves out products of errors: < 0.01 µm here
+    assert np.abs(np.linalg.norm(r, axis=-1) - exact.residual_ve).max() < 1e-5
+
+
+def test_noise_free_machine_in_model_gives_zero_residual_and_true_coefficients(setup) -> None:  # type: ignore[no-untyped-def]
+    s = setup
+    ref = reference_identification(_ver(s))
+    free = [s["model"].parameter_names.index(n) for n in ref.names[:-6]]
+    assert np.abs(ref.estimate[0, :-6] / s["theta"][free] - 1).max() < 1e-9
+    assert ref.residual_ve.max() < 1e-10
+
+
+def test_monte_carlo_against_gum(setup) -> None:  # type: ignore[no-untyped-def]
+    s = setup
+    ver = _ver(s)
+    r = simulate(ver, 3000, 2026, repeatability=0.002, pose_u=[0, 0, 0, 0.01, 0.01, 0.01])
+    assert r.coef_samples.shape == (3000, len(r.names)) and not r.coef_u.flags.writeable
+    # standard uncertainty of each coefficient: MC vs GUM within the MC's sampling error
+    assert np.allclose(r.coef_u, r.gum.u, rtol=0.08)
+    assert np.allclose(r.point_u, r.gum.point_u, rtol=0.08)
+    # the noise raises the initial error and leaves a residual (Aguado et al. 2017 Fig. 5, 6)
+    assert r.ve("residual.mean")[0] < r.ve("initial.mean")[0]
+    assert len(VE_NAMES) == r.ve_estimate.size == 6
+    # the bias of the compensation is zero when the model represents the machine
+    assert np.abs(r.comp_bias).max() < 4 * r.comp_u.max() / np.sqrt(3000) + 1e-9
+
+
+def test_gum_of_the_engine_agrees_with_the_analytic_linearisation(setup) -> None:  # type: ignore[no-untyped-def]
+    """mtmc.uncertainty.gum (differences through the whole model) vs A Σ Aᵀ."""
+    from mtmc.uncertainty import gum
+
+    s = setup
+    ver = _ver(s)
+    vm = VerificationModel.build(ver, reference_identification(ver))
+    g = gum(lambda noise: vm(noise)["coef"], vm.inputs())
+    assert np.allclose(g.u, gum_verification(vm).u, rtol=1e-4)
+
+
+def test_jcgm101_validation_of_a_near_linear_case(setup) -> None:  # type: ignore[no-untyped-def]
+    s = setup
+    vm = VerificationModel.build(_ver(s), reference_identification(_ver(s)))
+    v = validate_verification(vm, "EC0Y", 5000, 7, ndig=1)
+    assert v.passed, v
+
+
+def test_same_seed_same_numbers(setup) -> None:  # type: ignore[no-untyped-def]
+    s = setup
+    a = simulate(_ver(s), 200, 5)
+    b = simulate(_ver(s), 200, 5)
+    assert np.array_equal(a.coef_samples, b.coef_samples)
+    bare = LaserTracker(s["tracker"].rotation, s["tracker"].position)
+    with pytest.raises(InputError, match="noise"):
+        Verification(s["model"], s["q"], bare, {})
