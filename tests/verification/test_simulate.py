@@ -33,7 +33,7 @@ def test_shared_factorisation_matches_exact_identification(setup) -> None:  # ty
     rng = np.random.default_rng(np.random.SeedSequence(21))
     z = rng.normal(size=(6, ver.n_points, 3))
     x = vm.noise.perturb(np.broadcast_to(vm.x_true, z.shape), z)
-    est, r = vm.solve(x)
+    est, r, _, _ = vm.solve(x)
     exact = identify(s["model"], s["q"], x, s["tracker"], fixed=s["fixed"])
     assert exact.converged.all()
     dev = np.abs(est - exact.estimate) / exact.u
@@ -53,16 +53,28 @@ def test_noise_free_machine_in_model_gives_zero_residual_and_true_coefficients(s
 def test_monte_carlo_against_gum(setup) -> None:  # type: ignore[no-untyped-def]
     s = setup
     ver = _ver(s)
-    r = simulate(ver, 3000, 2026, repeatability=0.002, pose_u=[0, 0, 0, 0.01, 0.01, 0.01])
+    r = simulate(ver, 3000, 2026, repeatability=0.002)
     assert r.coef_samples.shape == (3000, len(r.names)) and not r.coef_u.flags.writeable
     # standard uncertainty of each coefficient: MC vs GUM within the MC's sampling error
     assert np.allclose(r.coef_u, r.gum.u, rtol=0.08)
     assert np.allclose(r.point_u, r.gum.point_u, rtol=0.08)
     # the noise raises the initial error and leaves a residual (Aguado et al. 2017 Fig. 5, 6)
     assert r.ve("residual.mean")[0] < r.ve("initial.mean")[0]
-    assert len(VE_NAMES) == r.ve_estimate.size == 6
+    assert len(VE_NAMES) == r.ve_estimate.size == 9
     # the bias of the compensation is zero when the model represents the machine
     assert np.abs(r.comp_bias).max() < 4 * r.comp_u.max() / np.sqrt(3000) + 1e-9
+
+
+def test_monte_carlo_against_gum_pose_known(setup) -> None:  # type: ignore[no-untyped-def]
+    """Pose not identified: its uncertainty and the reflector offset's are inputs."""
+    s = setup
+    ver = _ver(s, pose=False)
+    pu = [2e-6, 2e-6, 2e-6, 0.005, 0.005, 0.005]
+    r = simulate(ver, 3000, 99, pose_u=pu, reflector_u=0.003)
+    assert np.allclose(r.coef_u, r.gum.u, rtol=0.08)
+    assert np.allclose(r.point_u, r.gum.point_u, rtol=0.08)
+    with pytest.raises(InputError, match="absorbed"):
+        simulate(_ver(s), 10, 1, pose_u=pu)
 
 
 def test_gum_of_the_engine_agrees_with_the_analytic_linearisation(setup) -> None:  # type: ignore[no-untyped-def]

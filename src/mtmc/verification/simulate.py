@@ -31,12 +31,18 @@ mm, taken to first order through the machine's EXT EYT EZT Jacobian).
 
 Outputs (named, mm and the coefficients' units):
 
-- ``ve`` ``(m, 6)``: initial volumetric error max, mean, min over the points, then the
-  residual max, mean, min (:data:`VE_NAMES`);
+- ``ve`` ``(m, 9)``: max, mean, min over the points of the initial volumetric error
+  (readings against the nominal machine, Aguado et al. 2016 eq. 17 before
+  identification), of the residual (eq. 17 after) and of the compensated error (below)
+  (:data:`VE_NAMES`);
 - ``coef`` ``(m, p)``: the identified parameters (:attr:`Identification.names`);
-- ``comp`` ``(m, 3·Ne)``: at each evaluation point, the compensated position minus the
-  true one, ``p(q; θ̂) − p_true`` (x, y, z per point): its mean is the model's bias,
-  its standard deviation the calibration uncertainty of the point.
+- ``comp`` ``(m, 3·Ne)``: at each evaluation point, the position the identified model
+  predicts minus the true one, both in the tracker frame,
+  ``R̂ᵀ(p(q; θ̂) − t̂) − R₀ᵀ(p_true − t₀)`` (x, y, z per point): the error the machine
+  keeps after compensation with the identified functions. Its mean is the model's bias
+  (zero when the model represents the machine), its standard deviation the calibration
+  uncertainty of the point. In the tracker frame, the rigid motion that the tracker pose
+  absorbs (constant terms, turns) does not count.
 """
 
 from __future__ import annotations
@@ -79,13 +85,8 @@ __all__ = [
 _F = NDArray[np.float64]
 
 #: Columns of the ``ve`` output.
-VE_NAMES: tuple[str, ...] = (
-    "initial.max",
-    "initial.mean",
-    "initial.min",
-    "residual.max",
-    "residual.mean",
-    "residual.min",
+VE_NAMES: tuple[str, ...] = tuple(
+    f"{a}.{b}" for a in ("initial", "residual", "compensated") for b in ("max", "mean", "min")
 )
 
 
@@ -172,6 +173,7 @@ class VerificationModel:
     J_tool: _F  # (N, 3, 3) d p / d (EXT, EYT, EZT)
     pe_fit: _F  # (Ne, 3)
     pe_true: _F  # (Ne, 3)
+    xe_true: _F  # (Ne, 3) true readings at the evaluation points
     Jpe: _F  # (Ne, 3, n_theta)
     noise: Any
     repeatability: float
@@ -199,7 +201,8 @@ class VerificationModel:
         repeatability : float
             Standard deviation of the machine's positioning per coordinate, mm.
         pose_u : array_like, shape (6,), optional
-            Standard uncertainties of the tracker pose (rotation vector, rad; position, mm).
+            Standard uncertainties of the tracker pose (rotation vector, rad; position, mm);
+            only when the pose is not identified.
         reflector_u : float
             Standard uncertainty of each component of the reflector offset, mm.
 
@@ -220,6 +223,12 @@ class VerificationModel:
         pu = np.zeros(6) if pose_u is None else np.asarray(pose_u, dtype=np.float64)
         if pu.shape != (6,) or np.any(pu < 0):
             raise InputError("expected 6 standard uncertainties >= 0", field="pose_u")
+        if ver.pose and np.any(pu > 0):
+            raise InputError(
+                "the tracker pose is identified, so its uncertainty is absorbed exactly; "
+                "give pose_u only when the pose is not identified (pose = false)",
+                field="pose_u",
+            )
         nominal = m.machine.tool_position(ver.q)
         J_tool = m.machine.jacobian(
             ver.q, ver.true_errors, names=("EXT", "EYT", "EZT"), exact=ver.exact
@@ -242,6 +251,9 @@ class VerificationModel:
             J_tool=J_tool,
             pe_fit=m.tool_position(eq, th[0], exact=ver.exact),
             pe_true=m.machine.tool_position(eq, ver.true_errors, exact=ver.exact),
+            xe_true=ver.tracker.to_tracker(
+                m.machine.tool_position(eq, ver.true_errors, exact=ver.exact)
+            ),
             Jpe=Jpe,
             noise=ver.tracker.noise,
             repeatability=float(repeatability),
@@ -285,8 +297,17 @@ class VerificationModel:
             t = self.t_nom + dp[:, 3:]
         return np.einsum("mij,mni->mnj", R, p - t[:, None, :])
 
-    def solve(self, x_meas: Any) -> tuple[Any, Any]:
-        """Identify ``m`` sets of readings ``(m, N, 3)``: parameters (m, p), residuals (m, N, 3)."""
+    def solve(self, x_meas: Any) -> tuple[Any, Any, Any, Any]:
+        """Identify ``m`` sets of readings ``(m, N, 3)``.
+
+        Returns
+        -------
+        est : ndarray, shape (m, p)
+        residuals : ndarray, shape (m, N, 3)
+            Model minus reading.
+        R, t : ndarray, shape (m, 3, 3) and (m, 3)
+            The identified tracker pose.
+        """
         m, N = x_meas.shape[:2]
         k = self.n_theta
         est = np.broadcast_to(self.est0, (m, self.est0.size)).copy()
@@ -302,7 +323,7 @@ class VerificationModel:
                 t = t + d[:, k + 3 : k + 6]
         p = self.p_fit + np.einsum("nik,mk->mni", self.Jp, est[:, :k] - self.est0[:k])
         r = np.einsum("mij,mni->mnj", R, p - t[:, None, :]) - x_meas
-        return est, r
+        return est, r, R, t
 
     def __call__(
         self,
@@ -316,16 +337,14 @@ class VerificationModel:
         N = self.x_true.shape[0]
         x = self.true_readings(m, repeatability, pose, reflector)
         x_meas = self.noise.perturb(x, noise.reshape(m, N, 3))
-        est, r = self.solve(x_meas)
+        est, r, R, t = self.solve(x_meas)
         init = np.sqrt(np.sum((x_meas - self.x_nom) ** 2, axis=-1))
         res = np.sqrt(np.sum(r * r, axis=-1))
-        ve = np.concatenate([ve_stats(init), ve_stats(res)], axis=1)
         k = self.n_theta
-        comp = (
-            self.pe_fit
-            + np.einsum("nik,mk->mni", self.Jpe, est[:, :k] - self.est0[:k])
-            - self.pe_true
-        )
+        pe = self.pe_fit + np.einsum("nik,mk->mni", self.Jpe, est[:, :k] - self.est0[:k])
+        comp = np.einsum("mij,mni->mnj", R, pe - t[:, None, :]) - self.xe_true
+        ce = np.sqrt(np.sum(comp * comp, axis=-1))
+        ve = np.concatenate([ve_stats(init), ve_stats(res), ve_stats(ce)], axis=1)
         return {"ve": ve, "coef": est, "comp": comp.reshape(m, -1)}
 
 
@@ -348,7 +367,8 @@ class VerificationGUM:
         through the spherical coordinates, plus the optional inputs).
     u : ndarray, shape (p,)
     point_cov : ndarray, shape (Ne, 3, 3)
-        ``J_p Cov(θ) J_pᵀ`` of the compensated position at each evaluation point, mm².
+        ``G Cov G ᵀ`` of the compensated position at each evaluation point (tracker
+        frame; ``G`` its derivative with respect to the parameters and pose), mm².
     point_u : ndarray, shape (Ne,)
         ``√trace`` of :attr:`point_cov`, mm.
     """
@@ -388,8 +408,12 @@ def gum_verification(vm: VerificationModel) -> VerificationGUM:
     for G in extra:
         AG = np.einsum("pni,nik->pk", A3, G)
         cov = cov + AG @ AG.T
-    k = vm.n_theta
-    pc = np.einsum("nik,kl,njl->nij", vm.Jpe, cov[:k, :k], vm.Jpe)
+    G = np.einsum("ji,njk->nik", vm.R_ref, vm.Jpe)  # R̂ᵀ ∂p/∂θ at the evaluation points
+    if vm.pose:
+        xe = np.einsum("ji,nj->ni", vm.R_ref, vm.pe_fit - vm.t_ref)
+        Ne = xe.shape[0]
+        G = np.concatenate([G, _skew(xe), -np.broadcast_to(vm.R_ref.T, (Ne, 3, 3))], axis=-1)
+    pc = np.einsum("nik,kl,njl->nij", G, cov, G)
     return VerificationGUM(
         vm.names,
         _ro(cov),
@@ -408,14 +432,14 @@ class VerificationMC:
     trials, seed : int
     names : tuple of str
         The identified parameters.
-    ve_estimate, ve_u : ndarray, shape (6,)
+    ve_estimate, ve_u : ndarray, shape (9,)
         Mean and standard deviation over the trials of the :data:`VE_NAMES` statistics.
-    ve_samples : ndarray, shape (M, 6)
+    ve_samples : ndarray, shape (M, 9)
     coef_estimate, coef_u : ndarray, shape (p,)
     coef_cov : ndarray, shape (p, p)
     coef_samples : ndarray, shape (M, p)
     comp_bias : ndarray, shape (Ne, 3)
-        Mean over trials of the compensated minus the true position.
+        Mean over trials of the compensated minus the true position (tracker frame).
     comp_u : ndarray, shape (Ne, 3)
         Its standard deviation per coordinate (the calibration uncertainty).
     point_u : ndarray, shape (Ne,)
