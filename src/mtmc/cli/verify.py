@@ -7,14 +7,24 @@ files are written atomically (:mod:`mtmc.io`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import typer
 
-from mtmc.cli.common import fail, print_json
+from mtmc.cli.common import (
+    EXECUTOR_OPTION,
+    PROGRESS_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    fail,
+    parallel_options,
+    print_json,
+    progress_bar,
+)
 from mtmc.errors import MtmcError
 
 app = typer.Typer(
-    help="Laser-tracker volumetric verification: plan the points and the NC program.",
+    help="Laser-tracker volumetric verification: plan, simulate, identify.",
     no_args_is_help=True,
 )
 
@@ -71,3 +81,208 @@ def plan_cmd(
     )
     for kind, path in files.items():
         typer.echo(f"{kind}: {path}")
+
+
+def _stats_um(est: Any, u: Any, base: int) -> dict[str, dict[str, float]]:
+    return {
+        k: {"estimate": float(est[base + i]) * 1e3, "u": float(u[base + i]) * 1e3}
+        for i, k in enumerate(("max", "mean", "min"))
+    }
+
+
+def _coef_unit(model: Any, name: str) -> tuple[str, float]:
+    """File unit of a parameter: µm for lengths, µrad for angles (pose: µrad and µm)."""
+    from mtmc.verification.identify import POSE_NAMES
+
+    if name in POSE_NAMES:
+        return ("urad", 1e6) if name[3] == "r" else ("um", 1e3)
+    term = model.machine.error_term(name.split("[")[0])
+    return ("urad", 1e6) if term.angular else ("um", 1e3)
+
+
+@app.command("simulate")
+def simulate_cmd(
+    study: Path = STUDY,
+    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Trials (tests)."),
+    seed: int | None = typer.Option(None, "--seed", "-s", min=0, help="Random seed."),
+    points: str | None = typer.Option(None, "--points", help="A point set of the study."),
+    tracker: str | None = typer.Option(None, "--tracker", help="A tracker position of the study."),
+    as_json: bool = JSON_OPTION,
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
+) -> None:
+    """Monte Carlo of the whole verification: volumetric errors, coefficients, point u."""
+    from mtmc.verification.simulate import simulate
+    from mtmc.verification.study import load_verification_study
+
+    try:
+        st = load_verification_study(study)
+        ver = st.verification(points, tracker)
+        par = parallel_options(workers, executor, scheduler)
+        m = st.trials if trials is None else trials
+        s = st.seed if seed is None else seed
+        with progress_bar(f"{study.name}: verifications", progress) as bar:
+            r = simulate(
+                ver, m, s, repeatability=st.repeatability, reflector_u=st.reflector_u,
+                pose_u=None if st.pose else st.pose_u, progress=bar, **par,
+            )  # fmt: skip
+    except MtmcError as exc:
+        fail(exc)
+    coefs = {}
+    gum_u = {}
+    for i, n in enumerate(r.names):
+        unit, f = _coef_unit(st.model, n)
+        coefs[n] = {
+            "estimate": float(r.coef_estimate[i]) * f,
+            "u": float(r.coef_u[i]) * f,
+            "unit": unit,
+        }
+        gum_u[n] = {"u": float(r.gum.u[i]) * f, "unit": unit}
+    out: dict[str, Any] = {
+        "trials": r.trials,
+        "seed": r.seed,
+        "points": ver.n_points,
+        "point_set": points or st.default_points,
+        "tracker": tracker or st.default_tracker,
+        "initial_ve_um": _stats_um(r.ve_estimate, r.ve_u, 0),
+        "residual_ve_um": _stats_um(r.ve_estimate, r.ve_u, 3),
+        "compensated_ve_um": _stats_um(r.ve_estimate, r.ve_u, 6),
+        "coefficients": coefs,
+        "gum": gum_u,
+        "point_u_um": {"max": float(r.point_u.max()) * 1e3, "mean": float(r.point_u.mean()) * 1e3},
+        "point_u_gum_um": {
+            "max": float(r.gum.point_u.max()) * 1e3,
+            "mean": float(r.gum.point_u.mean()) * 1e3,
+        },
+    }
+    if as_json:
+        print_json(out)
+        return
+    typer.echo(
+        f"{r.trials} verifications (seed {r.seed}), {ver.n_points} points "
+        f"({out['point_set']}), tracker {out['tracker']}"
+    )
+    for key, label in (
+        ("initial_ve_um", "initial VE"),
+        ("residual_ve_um", "residual VE (eq. 17)"),
+        ("compensated_ve_um", "after compensation"),
+    ):
+        d = out[key]
+        typer.echo(
+            f"{label:>22} um: max {d['max']['estimate']:.2f} ± {d['max']['u']:.2f}, "
+            f"mean {d['mean']['estimate']:.2f} ± {d['mean']['u']:.2f}, "
+            f"min {d['min']['estimate']:.2f} ± {d['min']['u']:.2f}"
+        )
+    pu = out["point_u_um"]
+    typer.echo(f"calibration u per point: max {pu['max']:.2f} um, mean {pu['mean']:.2f} um (MC)")
+
+
+def _read_data(path: Path, axes: tuple[str, ...]) -> tuple[Any, Any]:
+    """Commanded positions (N, n_axes) and tracker readings (N, 3) from the data CSV."""
+    import csv
+
+    import numpy as np
+
+    from mtmc.errors import InputError
+
+    want = [*axes, "x_lt", "y_lt", "z_lt"]
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise InputError(f"cannot read the data: {exc.strerror or exc}", file=str(path)) from None
+    rows = [
+        (i + 1, ln) for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")
+    ]
+    if not rows:
+        raise InputError("no header line", file=str(path))
+    head_line, head = rows[0]
+    header = [h.strip() for h in next(csv.reader([head]))]
+    missing = [c for c in want if c not in header]
+    if missing:
+        raise InputError(
+            f"missing columns {', '.join(missing)}; expected {','.join(want)}",
+            file=str(path), line=head_line,
+        )  # fmt: skip
+    idx = [header.index(c) for c in want]
+    vals = []
+    for ln, text in rows[1:]:
+        cells = next(csv.reader([text]))
+        try:
+            vals.append([float(cells[j]) for j in idx])
+        except (ValueError, IndexError):
+            raise InputError(
+                f"expected {len(header)} numbers, got {text!r}", file=str(path), line=ln
+            ) from None
+    arr = np.array(vals, dtype=np.float64)
+    if arr.shape[0] == 0:
+        raise InputError("no data rows", file=str(path))
+    return arr[:, : len(axes)], arr[:, len(axes) :]
+
+
+@app.command("identify")
+def identify_cmd(
+    data: Path = typer.Argument(..., help="CSV: axis positions and tracker readings (mm)."),
+    study: Path = typer.Option(..., "--study", help="The verification study (TOML)."),
+    tracker: str | None = typer.Option(None, "--tracker", help="Nominal tracker position."),
+    as_json: bool = JSON_OPTION,
+    export: str | None = typer.Option(None, "--export", help="isg, etalon or csv."),
+    out: Path | None = typer.Option(None, "-o", "--output", help="The compensation file."),
+) -> None:
+    """Identify the error functions (and the tracker pose) from measured data."""
+    import numpy as np
+
+    from mtmc.verification.compensation import compensation_table, write_compensation
+    from mtmc.verification.study import load_verification_study
+
+    if (export is None) != (out is None):
+        fail("--export and -o go together")
+    if export is not None and export not in ("isg", "etalon", "csv"):
+        fail(f"--export: expected isg, etalon or csv, got {export!r}")
+    try:
+        st = load_verification_study(study)
+        ver = st.verification(None, tracker)
+        q, meas = _read_data(data, st.machine.axes)
+        from mtmc.verification.identify import identify
+
+        r = identify(st.model, q, meas, ver.tracker, pose=st.pose, fixed=st.fixed)
+        if export is not None and out is not None:
+            grid = {ax: np.unique(q[:, i]) for i, ax in enumerate(st.machine.axes)}
+            used = {st.machine.error_term(n).axis for n in st.model.error_names}
+            grid = {ax: g for ax, g in grid.items() if ax in used}
+            table = compensation_table(st.model, grid, theta=r.theta[0])
+            write_compensation(table, out, export)
+    except MtmcError as exc:
+        fail(exc)
+    except OSError as exc:
+        fail(f"{out}: cannot write: {exc.strerror or exc}")
+    u = r.u[0]
+    coefs = {}
+    for i, n in enumerate(r.names):
+        unit, f = _coef_unit(st.model, n)
+        coefs[n] = {"estimate": float(r.estimate[0, i]) * f, "u": float(u[i]) * f, "unit": unit}
+    ini, res = r.initial_stats()[0] * 1e3, r.residual_stats()[0] * 1e3
+    result = {
+        "points": int(q.shape[0]),
+        "status": r.messages()[0],
+        "converged": bool(r.converged[0]),
+        "iterations": int(r.iterations[0]),
+        "initial_ve_um": dict(zip(("max", "mean", "min"), map(float, ini), strict=True)),
+        "residual_ve_um": dict(zip(("max", "mean", "min"), map(float, res), strict=True)),
+        "coefficients": coefs,
+        "identifiability": r.identifiability.text(),
+        "export": None if out is None else str(out),
+    }
+    if as_json:
+        print_json(result)
+        return
+    typer.echo(f"{q.shape[0]} points: {result['status']} after {result['iterations']} iterations")
+    typer.echo(
+        f"VE um: initial max {ini[0]:.2f} mean {ini[1]:.2f} min {ini[2]:.2f}; "
+        f"residual max {res[0]:.2f} mean {res[1]:.2f} min {res[2]:.2f}"
+    )
+    for n, c in coefs.items():
+        typer.echo(f"  {n:>10} = {c['estimate']:+.4f} ± {c['u']:.4f} {c['unit']}")
+    if out is not None:
+        typer.echo(f"compensation ({export}): {out}")

@@ -313,16 +313,17 @@ class VerificationModel:
         est = np.broadcast_to(self.est0, (m, self.est0.size)).copy()
         R = np.broadcast_to(self.R_ref, (m, 3, 3)).copy()
         t = np.broadcast_to(self.t_ref, (m, 3)).copy()
+        Jt = self.Jp.reshape(3 * N, k).T  # (k, 3N): one matrix product per iteration
         for _ in range(self.iterations):  # chord iterations, all trials at once
-            p = self.p_fit + np.einsum("nik,mk->mni", self.Jp, est[:, :k] - self.est0[:k])
-            r = np.einsum("mij,mni->mnj", R, p - t[:, None, :]) - x_meas
+            p = self.p_fit + ((est[:, :k] - self.est0[:k]) @ Jt).reshape(m, N, 3)
+            r = (p - t[:, None, :]) @ R - x_meas
             d = -r.reshape(m, 3 * N) @ self.A.T
             est += d
             if self.pose:
                 R = R @ expmap(d[:, k : k + 3])
                 t = t + d[:, k + 3 : k + 6]
-        p = self.p_fit + np.einsum("nik,mk->mni", self.Jp, est[:, :k] - self.est0[:k])
-        r = np.einsum("mij,mni->mnj", R, p - t[:, None, :]) - x_meas
+        p = self.p_fit + ((est[:, :k] - self.est0[:k]) @ Jt).reshape(m, N, 3)
+        r = (p - t[:, None, :]) @ R - x_meas
         return est, r, R, t
 
     def __call__(
@@ -341,8 +342,10 @@ class VerificationModel:
         init = np.sqrt(np.sum((x_meas - self.x_nom) ** 2, axis=-1))
         res = np.sqrt(np.sum(r * r, axis=-1))
         k = self.n_theta
-        pe = self.pe_fit + np.einsum("nik,mk->mni", self.Jpe, est[:, :k] - self.est0[:k])
-        comp = np.einsum("mij,mni->mnj", R, pe - t[:, None, :]) - self.xe_true
+        Ne = self.pe_fit.shape[0]
+        Jte = self.Jpe.reshape(3 * Ne, k).T
+        pe = self.pe_fit + ((est[:, :k] - self.est0[:k]) @ Jte).reshape(m, Ne, 3)
+        comp = (pe - t[:, None, :]) @ R - self.xe_true
         ce = np.sqrt(np.sum(comp * comp, axis=-1))
         ve = np.concatenate([ve_stats(init), ve_stats(res), ve_stats(ce)], axis=1)
         return {"ve": ve, "coef": est, "comp": comp.reshape(m, -1)}

@@ -1,0 +1,480 @@
+"""Verification study files (TOML): machine, models, tracker, point sets, run settings.
+
+A plain loader returning frozen objects; every error names the file, the line and the
+field (lines from :class:`mtmc.study.spec.Source`). The format (``docs/verification.md``):
+
+.. code-block:: toml
+
+    title = "..."
+    note = "..."                       # optional, free text
+
+    [machine]
+    topology = "XFYZ"
+    reflector = [0.0, 0.0, 0.0]        # tool (reflector) offset, mm
+    travel = { X = [0.0, 400.0], Y = [0.0, 400.0], Z = [0.0, 600.0] }   # mm
+
+    [model]                            # what the identification fits
+    functions = "legendre"             # legendre | chebyshev | polynomial
+    pose = true                        # identify the tracker pose
+    errors = { EXX = 3, EC0Y = "constant" }   # degree of each function, or a constant
+    fixed = "default"                  # or a list of parameter names held at 0
+
+    [truth]                            # the simulated machine's errors
+    functions = "legendre"
+    EXX = [12.0, -4.0, 2.0]            # coefficients c1..cn, µm (µrad for angles)
+    EC0Y = 20.0                        # a constant, µrad (µm for a length)
+
+    [tracker]
+    noise = "aguado2017"               # or { radial_a_um, radial_b_um_per_m,
+                                       #      azimuth_urad, elevation_urad }
+                                       # or { adm = [A_um, B_um_per_m],
+                                       #      transverse = [A_um, B_um_per_m],
+                                       #      conversion = "typical" | "rectangular" }
+    euler = "xyz"                      # Euler sequence of euler_deg
+    [tracker.positions.pos1]
+    position = [-863.527, 194.373, 677.782]   # mm, base (workpiece) frame
+    euler_deg = [0.0339, 0.0343, 59.4652]
+    [tracker.limits]                   # optional (placement, visibility)
+    azimuth_deg = [-180.0, 180.0]
+    elevation_deg = [-60.0, 77.0]
+    height_mm = [0.0, 1800.0]
+    acceptance_deg = [0.0, 30.0]
+
+    [points.mesh]                      # commanded positions, mm
+    kind = "mesh"                      # or "cloud" (Aguado et al. 2016 eq. 18, with seed)
+    start = [0.0, 0.0, 0.0]
+    stop = [400.0, 400.0, 0.0]
+    step = [50.0, 50.0, 50.0]          # an axis with start == stop stays there
+
+    [run]
+    trials = 1000
+    seed = 2017
+    points = "mesh"
+    tracker = "pos1"
+
+A truth function's constant term is set so that the error is zero at the start of the
+axis travel (the machine's reference); the identification model's constant terms and the
+linear terms of its straightnesses are held at zero by ``fixed = "default"`` (a constant
+is a shift or turn of the tracker, a linear straightness term a squareness or a turn of
+the tracker: see :mod:`mtmc.verification.identify`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mtmc.errors import InputError, MtmcError
+from mtmc.instruments.laser_tracker import LaserTracker, TrackerLimits, TrackerNoise
+from mtmc.kinematics.functions import (
+    ChebyshevSeries,
+    ErrorFunction,
+    LegendreSeries,
+    PolynomialFunction,
+)
+from mtmc.kinematics.machine import Machine
+from mtmc.kinematics.parameters import ErrorModel
+from mtmc.study.spec import Fields, Source
+from mtmc.verification.simulate import Verification
+
+__all__ = ["PointSet", "VerificationStudy", "load_verification_study", "loads_verification_study"]
+
+_F = NDArray[np.float64]
+
+_FUNCTIONS = ("legendre", "chebyshev", "polynomial")
+_STRAIGHTNESS = ("EYX", "EZX", "EXY", "EZY", "EXZ", "EYZ")
+
+
+@dataclass(frozen=True)
+class PointSet:
+    """A named set of commanded positions.
+
+    Attributes
+    ----------
+    name : str
+    q : ndarray, shape (N, n_axes)
+        Axis positions, mm (read-only).
+    description : str
+    """
+
+    name: str
+    q: _F = field(repr=False)
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class VerificationStudy:
+    """A verification study read from a file (see the module notes)."""
+
+    file: str
+    title: str
+    note: str
+    machine: Machine
+    model: ErrorModel
+    fixed: tuple[str, ...]
+    pose: bool
+    truth: Mapping[str, Any]
+    noise: TrackerNoise
+    trackers: Mapping[str, LaserTracker]
+    limits: TrackerLimits | None
+    points: Mapping[str, PointSet]
+    trials: int
+    seed: int | None
+    default_points: str
+    default_tracker: str
+    repeatability: float = 0.0
+    reflector_u: float = 0.0
+    pose_u: tuple[float, ...] = (0.0,) * 6
+
+    def verification(self, points: str | None = None, tracker: str | None = None) -> Verification:
+        """The :class:`Verification` of one point set with one tracker position.
+
+        Raises
+        ------
+        InputError
+            For an unknown point set or tracker name.
+        """
+        pn = self.default_points if points is None else points
+        tn = self.default_tracker if tracker is None else tracker
+        if pn not in self.points:
+            raise InputError(
+                f"no point set {pn!r}; the study has {', '.join(self.points)}", field="points"
+            )
+        if tn not in self.trackers:
+            raise InputError(
+                f"no tracker position {tn!r}; the study has {', '.join(self.trackers)}",
+                field="tracker",
+            )
+        return Verification(
+            self.model,
+            self.points[pn].q,
+            self.trackers[tn],
+            self.truth,
+            pose=self.pose,
+            fixed=self.fixed,
+        )
+
+
+def _function(kind: str, values: list[float], lo: float, hi: float) -> ErrorFunction:
+    coeffs = np.array(values, dtype=np.float64)
+    if kind == "legendre":
+        return LegendreSeries(coeffs, low=lo, high=hi)
+    if kind == "chebyshev":
+        return ChebyshevSeries(coeffs, low=lo, high=hi)
+    return PolynomialFunction(coeffs)
+
+
+def _is_angle(machine: Machine, name: str) -> bool:
+    return bool(machine.error_term(name).angular)
+
+
+def _vector(f: Fields, key: str, n: int = 3) -> _F:
+    v = f.data.get(key)
+    if v is None:
+        raise f.error(f"missing {key}", key)
+    if (
+        not isinstance(v, list)
+        or len(v) != n
+        or not all(
+            isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v
+        )
+    ):
+        raise f.error(f"expected an array of {n} finite numbers, got {v!r}", key)
+    return np.array(v, dtype=np.float64)
+
+
+def _pair(f: Fields, key: str, default: tuple[float, float]) -> tuple[float, float]:
+    if key not in f.data:
+        return default
+    v = _vector(f, key, 2)
+    if not v[0] <= v[1]:
+        raise f.error(f"expected low <= high, got {v.tolist()}", key)
+    return float(v[0]), float(v[1])
+
+
+def _travel(mf: Fields, topo_axes: tuple[str, ...]) -> dict[str, tuple[float, float]]:
+    t = mf.table("travel")
+    assert t is not None
+    out = {}
+    for ax in topo_axes:
+        out[ax] = _pair(t, ax, (math.nan, math.nan))
+        if math.isnan(out[ax][0]):
+            raise t.error(f"missing travel of axis {ax}", ax)
+        if not out[ax][0] < out[ax][1]:
+            raise t.error(f"expected low < high, got {list(out[ax])}", ax)
+    t.only(topo_axes)
+    return out
+
+
+def _noise(tf: Fields) -> TrackerNoise:
+    v = tf.data.get("noise", "aguado2017")
+    if v == "aguado2017":
+        return TrackerNoise.aguado2017()
+    if not isinstance(v, dict):
+        raise tf.error(f'expected "aguado2017" or a table, got {v!r}', "noise")
+    nf = tf.table("noise")
+    assert nf is not None
+    if "conversion" in nf.data:
+        nf.only(("adm", "transverse", "conversion"))
+        adm, tr = _vector(nf, "adm", 2), _vector(nf, "transverse", 2)
+        conv = nf.text("conversion", choices=("typical", "rectangular"))
+        return TrackerNoise.from_mpe(
+            adm=(adm[0] * 1e-3, adm[1] * 1e-6),
+            transverse=(tr[0] * 1e-3, tr[1] * 1e-6),
+            conversion=conv,
+        )
+    nf.only(("radial_a_um", "radial_b_um_per_m", "azimuth_urad", "elevation_urad"))
+    return TrackerNoise(
+        nf.number("radial_a_um", low=0.0) * 1e-3,
+        nf.number("radial_b_um_per_m", low=0.0) * 1e-6,
+        nf.number("azimuth_urad", low=0.0) * 1e-6,
+        nf.number("elevation_urad", low=0.0) * 1e-6,
+        0.0,
+        "study file",
+    )
+
+
+def _points_of(pf: Fields, n_axes: int) -> _F:
+    """A mesh or a cloud (Aguado et al. 2016 eq. 18) by :mod:`mtmc.verification.workspace`."""
+    from mtmc.verification.workspace import cloud, mesh
+
+    kind = pf.text("kind", "mesh", choices=("mesh", "cloud"))
+    a, b = _vector(pf, "start", n_axes), _vector(pf, "stop", n_axes)
+    step = _vector(pf, "step", n_axes)
+    try:
+        if kind == "mesh":
+            return mesh(a, b, step=step)
+        seed = pf.integer("seed", minimum=0)
+        rng = np.random.default_rng(np.random.SeedSequence(seed))
+        return cloud(a, b, rng, step=step)
+    except MtmcError as exc:
+        key = {"end": "stop"}.get(exc.field or "", exc.field)
+        if key in pf.data:
+            raise pf.error(exc.message, key) from exc
+        raise pf.error(str(exc)) from exc
+
+
+def loads_verification_study(
+    text: str, *, file: str = "<study>", folder: Path | None = None
+) -> VerificationStudy:
+    """Read a verification study from TOML text.
+
+    Parameters
+    ----------
+    text : str
+    file : str
+        Name used in messages.
+    folder : Path, optional
+        Folder of the file.
+
+    Returns
+    -------
+    VerificationStudy
+
+    Raises
+    ------
+    InputError, ParseError
+        Naming the file, line and field of the first bad entry.
+    """
+    import tomllib
+
+    from mtmc.errors import ParseError
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        line = getattr(exc, "lineno", None)
+        raise ParseError(f"not valid TOML: {exc}", file=file, line=line) from exc
+    src = Source.from_text(text, file, folder)
+    top = Fields(src, data)
+    top.only(
+        ("title", "note", "kind", "machine", "model", "truth", "tracker", "points", "run")
+        + ("workspace", "nc")  # read by mtmc.verification.ncprogram (verify plan)
+    )
+    if "kind" in data:
+        top.text("kind", choices=("verification",))
+    title = top.text("title", "")
+    note = top.text("note", "")
+    mf = top.table("machine")
+    assert mf is not None
+    mf.only(("topology", "reflector", "travel"))
+    topo = mf.text("topology")
+    try:
+        bare = Machine.from_topology(topo)
+    except MtmcError as exc:
+        raise mf.error(str(exc), "topology") from exc
+    travel = _travel(mf, bare.axes)
+    reflector = _vector(mf, "reflector") if "reflector" in mf.data else np.zeros(3)
+    machine = Machine.from_topology(topo, tool=reflector, travel=travel, name=title)
+
+    def term_name(f: Fields, key: str) -> str:
+        try:
+            return machine.error_term(key).name
+        except MtmcError as exc:
+            raise f.error(str(exc), key) from exc
+
+    # identification model
+    md = top.table("model")
+    assert md is not None
+    md.only(("functions", "pose", "errors", "fixed"))
+    kind = md.text("functions", "legendre", choices=_FUNCTIONS)
+    pose = md.flag("pose", True)
+    ef = md.table("errors")
+    assert ef is not None
+    templates: dict[str, ErrorFunction | float] = {}
+    for key, v in ef.data.items():
+        name = term_name(ef, key)
+        if v == "constant":
+            templates[name] = 0.0
+        elif isinstance(v, int) and not isinstance(v, bool) and v >= 1:
+            term = machine.error_term(name)
+            if term.axis not in travel:
+                raise ef.error(f'{name} is not a function of an axis; write "constant"', key)
+            lo, hi = travel[term.axis]
+            templates[name] = _function(kind, [0.0] * (v + 1), lo, hi)
+        else:
+            raise ef.error(f'expected a degree >= 1 or "constant", got {v!r}', key)
+    try:
+        model = ErrorModel(machine, templates)
+    except MtmcError as exc:
+        raise ef.error(str(exc)) from exc
+    fx = md.data.get("fixed", "default")
+    if fx == "default":
+        fixed = [n for n in model.parameter_names if n.endswith("[0]")]
+        fixed += [f"{e}[1]" for e in _STRAIGHTNESS if f"{e}[1]" in model.parameter_names]
+    else:
+        fixed = list(md.texts("fixed"))
+        for n in fixed:
+            if n not in model.parameter_names:
+                raise md.error(
+                    f"{n} is not a parameter of the model ({', '.join(model.parameter_names)})",
+                    "fixed",
+                )
+    # truth
+    tr = top.table("truth")
+    assert tr is not None
+    tkind = tr.text("functions", "legendre", choices=_FUNCTIONS)
+    truth: dict[str, Any] = {}
+    for key, v in tr.data.items():
+        if key == "functions":
+            continue
+        name = term_name(tr, key)
+        scale = 1e-6 if _is_angle(machine, name) else 1e-3
+        if isinstance(v, list):
+            if not v or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v):
+                raise tr.error(f"expected an array of numbers, got {v!r}", key)
+            term = machine.error_term(name)
+            if term.axis not in travel or term.kind != "component":
+                raise tr.error(f"{name} is not a component error of an axis: give a number", key)
+            lo, hi = travel[term.axis]
+            f0 = _function(tkind, [0.0, *(float(x) * scale for x in v)], lo, hi)
+            c0 = -float(f0(np.array([lo]))[0])  # zero at the start of travel
+            truth[name] = _function(tkind, [c0, *(float(x) * scale for x in v)], lo, hi)
+        else:
+            truth[name] = tr.number(key) * scale
+    # tracker
+    tf = top.table("tracker")
+    assert tf is not None
+    tf.only(("noise", "euler", "positions", "limits"))
+    noise = _noise(tf)
+    seq = tf.text("euler", "xyz")
+    pf = tf.table("positions")
+    assert pf is not None
+    trackers: dict[str, LaserTracker] = {}
+    for name in pf.data:
+        one = pf.table(name)
+        assert one is not None
+        one.only(("position", "euler_deg"))
+        try:
+            trackers[name] = LaserTracker.from_euler(
+                _vector(one, "position"), _vector(one, "euler_deg"), seq=seq, degrees=True,
+                noise=noise, name=name,
+            )  # fmt: skip
+        except MtmcError as exc:
+            raise one.error(str(exc)) from exc
+    if not trackers:
+        raise pf.error("expected at least one tracker position")
+    limits = None
+    lf = tf.table("limits", required=False)
+    if lf is not None:
+        lf.only(("azimuth_deg", "elevation_deg", "height_mm", "acceptance_deg"))
+        d = TrackerLimits()
+        az = _pair(lf, "azimuth_deg", tuple(math.degrees(x) for x in d.azimuth))  # type: ignore[arg-type]
+        el = _pair(lf, "elevation_deg", tuple(math.degrees(x) for x in d.elevation))  # type: ignore[arg-type]
+        ac = _pair(lf, "acceptance_deg", tuple(math.degrees(x) for x in d.acceptance))  # type: ignore[arg-type]
+        limits = TrackerLimits(
+            azimuth=(math.radians(az[0]), math.radians(az[1])),
+            elevation=(math.radians(el[0]), math.radians(el[1])),
+            height=_pair(lf, "height_mm", d.height),
+            acceptance=(math.radians(ac[0]), math.radians(ac[1])),
+        )
+    # points
+    ps = top.table("points")
+    assert ps is not None
+    points: dict[str, PointSet] = {}
+    for name in ps.data:
+        one = ps.table(name)
+        assert one is not None
+        one.only(("kind", "start", "stop", "step", "seed", "description"))
+        q = np.array(_points_of(one, machine.n_axes), dtype=np.float64)
+        q.setflags(write=False)
+        points[name] = PointSet(name, q, one.text("description", ""))
+    if not points:
+        raise ps.error("expected at least one point set")
+    # run
+    rf = top.table("run", required=False) or Fields(src, {}, ("run",))
+    rf.only(("trials", "seed", "points", "tracker", "repeatability_um", "reflector_um", "pose_u"))
+    dp = rf.text("points", next(iter(points)), choices=tuple(points))
+    dt = rf.text("tracker", next(iter(trackers)), choices=tuple(trackers))
+    pose_u = tuple(_vector(rf, "pose_u", 6).tolist()) if "pose_u" in rf.data else (0.0,) * 6
+    return VerificationStudy(
+        file=file,
+        title=title,
+        note=note,
+        machine=machine,
+        model=model,
+        fixed=tuple(fixed),
+        pose=pose,
+        truth=truth,
+        noise=noise,
+        trackers=trackers,
+        limits=limits,
+        points=points,
+        trials=rf.integer("trials", 1000, minimum=2),
+        seed=rf.integer("seed", None, minimum=0) if "seed" in rf.data else None,
+        default_points=dp,
+        default_tracker=dt,
+        repeatability=rf.number("repeatability_um", 0.0, low=0.0) * 1e-3,
+        reflector_u=rf.number("reflector_um", 0.0, low=0.0) * 1e-3,
+        pose_u=pose_u,
+    )
+
+
+def load_verification_study(path: str | Path) -> VerificationStudy:
+    """Read a verification study file.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    VerificationStudy
+
+    Raises
+    ------
+    InputError
+        If the file cannot be read, or as :func:`loads_verification_study`.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read the study file: {exc.strerror}", file=str(path)) from exc
+    return loads_verification_study(text, file=str(path), folder=p.parent)

@@ -1,0 +1,101 @@
+"""``mtmc verify simulate`` and ``identify``; the shipped verification studies."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtmc.cli.main import main
+from mtmc.errors import InputError
+from mtmc.verification.compensation import read_plain_csv
+from mtmc.verification.identify import identify
+from mtmc.verification.study import load_verification_study, loads_verification_study
+
+ROOT = Path(__file__).resolve().parents[2]
+STUDIES = ROOT / "examples" / "studies"
+
+
+def test_shipped_studies_load_with_the_papers_numbers() -> None:
+    s16 = load_verification_study(STUDIES / "aguado2016.toml")
+    assert {k: v.q.shape[0] for k, v in s16.points.items()} == {
+        "mesh96": 96,
+        "cloud96": 96,
+        "mesh5408": 5408,
+    }
+    assert list(s16.trackers) == ["pos1", "pos2", "pos3", "pos4"]
+    assert np.allclose(s16.trackers["pos4"].position, [1100.0, -1000.0, 600.0])
+    cloud, mesh = s16.points["cloud96"].q, s16.points["mesh96"].q
+    assert not np.allclose(cloud, mesh) and np.abs(cloud - mesh).max() <= 250.0
+    s17 = load_verification_study(STUDIES / "aguado2017.toml")
+    lt = s17.trackers["aguado2017"]
+    assert np.allclose(np.degrees(lt.euler("xyz")), [0.0339, 0.0343, 59.4652])
+    assert s17.noise.azimuth == 24e-6 and s17.noise.u_range(1000.0) == pytest.approx(0.0048)
+    assert s17.trials == 1000 and s17.points["mesh"].q.shape == (81, 3)
+
+
+def test_study_errors_name_file_line_and_field() -> None:
+    text = (STUDIES / "aguado2017.toml").read_text()
+    bad = text.replace("step = [50.0, 50.0, 50.0]", "step = [50.0, -50.0, 50.0]")
+    with pytest.raises(InputError) as exc:
+        loads_verification_study(bad, file="s.toml")
+    line = next(i for i, ln in enumerate(bad.splitlines(), 1) if ln.startswith("step"))
+    assert exc.value.file == "s.toml" and exc.value.line == line
+    assert exc.value.field is not None and exc.value.field.startswith("points.mesh")
+    bad = text.replace("EXX = [54.0", "EXQ = [54.0")
+    with pytest.raises(InputError, match="EXQ"):
+        loads_verification_study(bad, file="s.toml")
+    bad = text.replace('noise = "aguado2017"', 'noise = "leica"')
+    with pytest.raises(InputError, match="noise"):
+        loads_verification_study(bad, file="s.toml")
+
+
+def test_simulate_json_contract(capsys) -> None:  # type: ignore[no-untyped-def]
+    args = ["verify", "simulate", str(STUDIES / "aguado2017.toml"), "--trials", "40"]
+    assert main([*args, "--seed", "3", "--json", "--no-progress"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["trials"] == 40 and d["seed"] == 3 and d["points"] == 81
+    for key in ("initial_ve_um", "residual_ve_um"):
+        assert set(d[key]) == {"max", "mean", "min"}
+        for v in d[key].values():
+            assert set(v) == {"estimate", "u"} and v["u"] >= 0
+    assert d["initial_ve_um"]["mean"]["estimate"] > d["residual_ve_um"]["mean"]["estimate"]
+    assert set(d["coefficients"]) == set(d["gum"])
+    ec0y = d["coefficients"]["EC0Y"]
+    assert ec0y["unit"] == "urad" and abs(ec0y["estimate"] - 40.0) < 5 * ec0y["u"]
+    assert d["point_u_um"]["max"] >= d["point_u_um"]["mean"] > 0
+    assert main(["verify", "simulate", str(STUDIES / "aguado2017.toml"), "--tracker", "x"]) == 2
+    assert "no tracker position 'x'" in capsys.readouterr().err
+
+
+def test_identify_from_csv_and_export(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    study = STUDIES / "aguado2017.toml"
+    st = load_verification_study(study)
+    ver = st.verification()
+    x = ver.readings()
+    rows = ["# commanded X Y Z (mm), tracker readings (mm)", "X,Y,Z,x_lt,y_lt,z_lt"]
+    rows += [",".join(f"{v:.9f}" for v in (*q, *p)) for q, p in zip(ver.q, x, strict=True)]
+    data = tmp_path / "data.csv"
+    data.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "comp.csv"
+    cmd = ["verify", "identify", str(data), "--study", str(study), "--json"]
+    assert main([*cmd, "--export", "csv", "-o", str(out)]) == 0
+    d = json.loads(capsys.readouterr().out)
+    ref = identify(st.model, ver.q, np.round(x, 9), ver.tracker, fixed=st.fixed)
+    assert d["converged"] and d["residual_ve_um"]["max"] < 1e-3
+    for i, n in enumerate(ref.names[:-6]):
+        f = 1e6 if st.machine.error_term(n.split("[")[0]).angular else 1e3
+        assert d["coefficients"][n]["estimate"] == pytest.approx(ref.estimate[0, i] * f, rel=1e-6)
+    table = read_plain_csv(out.read_text())
+    xs = table.curve("EXX").positions
+    truth = st.truth["EXX"](xs)
+    fitted = table.curve("EXX").values
+    # the identified positioning error equals the machine's up to a constant and a slope
+    # (absorbed by the tracker pose and the squareness), here both zero at X = 0
+    assert np.allclose(fitted - fitted[0], truth - truth[0], atol=2e-4)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("X,Y,x_lt,y_lt,z_lt\n0,0,1,2,3\n")
+    assert main(["verify", "identify", str(bad), "--study", str(study)]) == 2
+    assert "missing columns Z" in capsys.readouterr().err
