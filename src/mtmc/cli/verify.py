@@ -286,3 +286,64 @@ def identify_cmd(
         typer.echo(f"  {n:>10} = {c['estimate']:+.4f} ± {c['u']:.4f} {c['unit']}")
     if out is not None:
         typer.echo(f"compensation ({export}): {out}")
+
+
+@app.command("place")
+def place_cmd(
+    study: Path = STUDY,
+    points: str | None = typer.Option(None, "--points", help="A point set of the study."),
+    trials: int = typer.Option(200, "--trials", "-n", min=0, help="MC trials confirming the best."),
+    seed: int | None = typer.Option(None, "--seed", "-s", min=0, help="Random seed."),
+    grid: int = typer.Option(11, "--grid", min=2, help="Candidates per horizontal axis."),
+    refine: int = typer.Option(300, "--refine", min=0, help="Evaluations of the refinement."),
+    as_json: bool = JSON_OPTION,
+) -> None:
+    """Search the tracker position with the smallest mean calibration uncertainty."""
+    import math
+
+    from mtmc.verification.placement import place
+    from mtmc.verification.study import load_verification_study
+
+    try:
+        st = load_verification_study(study)
+        if st.limits is None:
+            fail(f"{study}: placement needs [tracker.limits] with height_mm")
+        ver = st.verification(points, None)
+        r = place(
+            ver,
+            st.limits,
+            references=st.trackers,
+            n_xy=grid,
+            refine=refine,
+            trials=trials,
+            seed=st.seed if seed is None else seed,
+        )
+    except MtmcError as exc:
+        fail(exc)
+    p = r.best.position
+    out: dict[str, Any] = {
+        "best": {
+            "x": float(p[0]),
+            "y": float(p[1]),
+            "z": float(p[2]),
+            "euler_deg": [math.degrees(a) for a in r.best.euler("xyz")],
+            "u_um": r.u_best * 1e3,
+            "u_mc_um": None if r.u_best_mc is None else r.u_best_mc * 1e3,
+        },
+        "reference": {n: {"u_um": u * 1e3} for n, u in r.reference.items()},
+        "candidates": r.candidates,
+        "rejected": r.rejected,
+    }
+    if as_json:
+        print_json(out)
+        return
+    b = out["best"]
+    typer.echo(
+        f"best of {r.candidates} candidates ({r.rejected} out of the limits): "
+        f"({b['x']:.0f}, {b['y']:.0f}, {b['z']:.0f}) mm, Euler xyz "
+        f"({', '.join(f'{a:.1f}' for a in b['euler_deg'])}) deg: mean point u "
+        f"{b['u_um']:.2f} um (GUM)"
+        + ("" if b["u_mc_um"] is None else f", {b['u_mc_um']:.2f} um (MC)")
+    )
+    for n, v in out["reference"].items():
+        typer.echo(f"  {n}: {v['u_um']:.2f} um")

@@ -1,0 +1,161 @@
+"""Laser-tracker verification: identification and Monte Carlo of whole verifications.
+
+The Aguado et al. 2016 case (``examples/studies/aguado2016.toml``, XFYZ, tracker at pos4):
+
+1. one identification of the 5408-point mesh with the tracker pose (noisy readings);
+2. the Monte Carlo of 1000 verifications of the 96-point mesh, and of the 5408-point mesh
+   (time and peak resident memory of this process);
+3. the plain way beside ours on the 96-point case: a Python loop of
+   ``scipy.optimize.least_squares`` per trial with a finite-difference Jacobian, on the
+   first ``--plain`` trials (scaled to 1000), on the same readings; the coefficients of
+   both are compared.
+
+Run: ``python benchmarks/bench_verification.py [--trials 1000] [--plain 20] [--skip-5408]
+[--only-5408]``.
+BLAS runs on one thread unless ``OPENBLAS_NUM_THREADS`` is set (threads of a loaded 2-core
+machine slow the small factorisations down by 30x).
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import platform  # noqa: E402
+import resource  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy.optimize import least_squares as scipy_lsq  # noqa: E402
+
+from mtmc.verification.identify import expmap, identify  # noqa: E402
+from mtmc.verification.simulate import (  # noqa: E402
+    VerificationModel,
+    reference_identification,
+    simulate,
+)
+from mtmc.verification.study import load_verification_study  # noqa: E402
+
+STUDY = Path(__file__).resolve().parents[1] / "examples" / "studies" / "aguado2016.toml"
+
+
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def bench_identification(st, repeat: int) -> None:  # type: ignore[no-untyped-def]
+    ver = st.verification("mesh5408", "pos4")
+    x = ver.readings()
+    rng = np.random.default_rng(np.random.SeedSequence(1))
+    xm = ver.tracker.noise.perturb(x, rng.normal(size=x.shape))
+    best = np.inf
+    for _ in range(repeat):
+        t = time.perf_counter()
+        r = identify(ver.model, ver.q, xm, ver.tracker, fixed=ver.fixed)
+        best = min(best, time.perf_counter() - t)
+    print(
+        f"identification, 5408 points, {len(r.names)} parameters (pose included): "
+        f"{best:.3f} s best of {repeat} ({r.iterations[0]} iterations, {r.messages()[0]}); "
+        f"target <= 0.5 s",
+        flush=True,
+    )
+
+
+def bench_mc(st, points: str, trials: int, target: float) -> None:  # type: ignore[no-untyped-def]
+    ver = st.verification(points, "pos4")
+    t = time.perf_counter()
+    r = simulate(ver, trials, 2016)
+    dt = time.perf_counter() - t
+    print(
+        f"Monte Carlo, {trials} verifications of {ver.n_points} points: {dt:.2f} s "
+        f"(target <= {target:g} s), peak RSS of the process {_peak_mb():.0f} MB; "
+        f"initial VE mean {r.ve_estimate[1] * 1e3:.1f} ± {r.ve_u[1] * 1e3:.1f} um, "
+        f"residual mean {r.ve_estimate[4] * 1e3:.1f} ± {r.ve_u[4] * 1e3:.1f} um",
+        flush=True,
+    )
+
+
+def bench_plain(st, trials: int, n_plain: int) -> None:  # type: ignore[no-untyped-def]
+    ver = st.verification("mesh96", "pos4")
+    ref = reference_identification(ver)
+    vm = VerificationModel.build(ver, ref)
+    N = ver.n_points
+    rng = np.random.default_rng(np.random.SeedSequence(7))
+    z = rng.normal(size=(trials, N, 3))
+    x = vm.noise.perturb(np.broadcast_to(vm.x_true, z.shape), z)
+    t = time.perf_counter()
+    ours, _, _, _ = vm.solve(x)
+    t_ours = time.perf_counter() - t
+    model, free = ver.model, [ver.model.parameter_names.index(n) for n in ref.names[:-6]]
+    k = len(free)
+    R0, t0 = ver.tracker.rotation, ver.tracker.position
+    scale = np.where(np.abs(ref.estimate[0]) > 0, np.abs(ref.estimate[0]), 1.0)
+
+    def residual(v: np.ndarray, meas: np.ndarray) -> np.ndarray:
+        w = v * scale
+        th = np.zeros(model.n_parameters)
+        th[free] = w[:k]
+        R = R0 @ expmap(w[k : k + 3])
+        p = model.tool_position(ver.q, th)
+        return ((p - (t0 + w[k + 3 :])) @ R - meas).ravel()
+
+    t = time.perf_counter()
+    plain = []
+    for i in range(n_plain):  # the plain way: one trial at a time
+        sol = scipy_lsq(residual, ref.estimate[0] / scale, args=(x[i],), xtol=1e-15, ftol=1e-15)
+        plain.append(sol.x * scale)
+    t_plain = (time.perf_counter() - t) * trials / n_plain
+    plain_a = np.array(plain)
+    exact = identify(ver.model, ver.q, x[:n_plain], ver.tracker, fixed=ver.fixed)
+    u = np.sqrt(np.diag(exact.covariance[0]))
+    d_chord = np.abs(ours[:n_plain] - plain_a) / u
+    d_exact = np.abs(exact.estimate - plain_a) / u
+    big = np.abs(plain_a) > 2 * u  # relative differences of the well-determined ones
+    rel = np.abs(exact.estimate - plain_a)[big] / np.abs(plain_a[big])
+    rel_c = np.abs(ours[:n_plain] - plain_a)[big] / np.abs(plain_a[big])
+    rel = rel if rel.size else np.zeros(1)
+    rel_c = rel_c if rel_c.size else np.zeros(1)
+    t = time.perf_counter()
+    simulate(ver, trials, 7)
+    t_mc = time.perf_counter() - t
+    print(
+        f"plain way (scipy least_squares, finite differences, a loop over trials), 96 points: "
+        f"{t_plain:.1f} s for {trials} trials (from {n_plain}); ours: the whole Monte Carlo "
+        f"{t_mc:.2f} s ({t_plain / t_mc:.0f}x), the identification of the {trials} trials "
+        f"alone {t_ours:.3f} s",
+        flush=True,
+    )
+    print(
+        f"  coefficients, ours (shared factorisation) vs plain: max |diff| = "
+        f"{d_chord.max():.2e} u, max relative {rel_c.max():.2e} (coefficients > 2 u); "
+        f"batched exact LM vs plain: {d_exact.max():.2e} u, relative {rel.max():.2e}",
+        flush=True,
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--trials", type=int, default=1000)
+    ap.add_argument("--plain", type=int, default=20)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--skip-5408", action="store_true")
+    ap.add_argument("--only-5408", action="store_true")
+    a = ap.parse_args()
+    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"BLAS threads {os.environ['OPENBLAS_NUM_THREADS']}", flush=True)  # fmt: skip
+    st = load_verification_study(STUDY)
+    if not a.only_5408:
+        bench_identification(st, a.repeat)
+        bench_mc(st, "mesh96", a.trials, 2.0)
+        bench_plain(st, a.trials, a.plain)
+    if not a.skip_5408:
+        bench_mc(st, "mesh5408", a.trials, 20.0)
+
+
+if __name__ == "__main__":
+    main()

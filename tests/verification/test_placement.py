@@ -1,0 +1,45 @@
+"""Tracker placement beats the manual positions 1-3 of Aguado et al. 2016 (GUM and MC)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from mtmc.cli.main import main
+from mtmc.verification.placement import gum_point_u, place
+from mtmc.verification.simulate import simulate
+from mtmc.verification.study import load_verification_study
+
+STUDY = Path(__file__).resolve().parents[2] / "examples" / "studies" / "aguado2016.toml"
+
+
+def test_placement_beats_positions_1_to_3() -> None:
+    st = load_verification_study(STUDY)
+    ver = st.verification("mesh96", "pos4")
+    assert st.limits is not None
+    r = place(ver, st.limits, references=st.trackers)
+    for name in ("pos1", "pos2", "pos3"):
+        assert r.u_best < r.reference[name], (name, r.u_best, r.reference)
+    lo, hi = st.limits.height
+    assert lo <= r.best.position[2] <= hi
+    # the GUM score against the Monte Carlo of whole verifications at the best position
+    best = st.verification("mesh96", "pos4")
+    mc = simulate(
+        type(best)(best.model, best.q, r.best, best.true_errors, fixed=best.fixed), 400, 3
+    )
+    assert np.isclose(np.mean(mc.point_u), r.u_best, rtol=0.1)
+    assert np.isclose(gum_point_u(ver, st.trackers["pos1"]), r.reference["pos1"])
+
+
+def test_place_cli_json(capsys) -> None:  # type: ignore[no-untyped-def]
+    text = STUDY.read_text()
+    assert "[tracker.limits]" in text
+    args = ["verify", "place", str(STUDY), "--trials", "0", "--grid", "3", "--refine", "5"]
+    assert main([*args, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert set(d["best"]) >= {"x", "y", "z", "euler_deg", "u_um"}
+    assert set(d["reference"]) == {"pos1", "pos2", "pos3", "pos4"}
+    assert d["candidates"] > 0
+    assert d["reference"]["pos1"]["u_um"] > d["reference"]["pos3"]["u_um"] > 0
