@@ -24,22 +24,22 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import platform  # noqa: E402
-import resource  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
+import argparse
+import platform
+import resource
+import time
+from pathlib import Path
 
-import numpy as np  # noqa: E402
-from scipy.optimize import least_squares as scipy_lsq  # noqa: E402
+import numpy as np
+from scipy.optimize import least_squares as scipy_lsq
 
-from mtmc.verification.identify import expmap, identify  # noqa: E402
-from mtmc.verification.simulate import (  # noqa: E402
+from mtmc.verification.identify import expmap, identify
+from mtmc.verification.simulate import (
     VerificationModel,
     reference_identification,
     simulate,
 )
-from mtmc.verification.study import load_verification_study  # noqa: E402
+from mtmc.verification.study import load_verification_study
 
 STUDY = Path(__file__).resolve().parents[1] / "examples" / "studies" / "aguado2016.toml"
 

@@ -82,10 +82,12 @@ def test_noise_presets_and_mpe_conversion() -> None:
     r = TrackerNoise.from_mpe(
         adm=(0.010, 0.3e-6), transverse=(0.015, 6e-6), conversion="rectangular"
     )
-    assert t.radial_a == pytest.approx(0.005) and r.radial_a == pytest.approx(0.010 / math.sqrt(3))
+    assert t.radial_a == pytest.approx(0.005)
+    assert r.radial_a == pytest.approx(0.010 / math.sqrt(3))
     # transverse u at 5 m: (15 µm + 6 µm/m · 5 m)/2 = 22.5 µm
     assert t.u_spherical(5000.0)[1] * 5000.0 == pytest.approx(0.0225)
-    assert "MPE/2" in t.source and "MPE/√3" in r.source
+    assert "MPE/2" in t.source
+    assert "MPE/√3" in r.source
     with pytest.raises(InputError, match="conversion"):
         TrackerNoise.from_mpe(adm=(0.01, 0.0), transverse=(0.01, 0.0), conversion="gauss")  # type: ignore[arg-type]
 
@@ -110,9 +112,11 @@ def test_visibility_names_failing_points_and_limits() -> None:
     assert which == {(-1, "height"), (2, "acceptance"), (3, "acceptance"), (3, "elevation")} or (
         which >= {(-1, "height"), (2, "acceptance"), (3, "acceptance")}
     )
-    assert "point 2: acceptance" in rep.text() and "tracker height 500.0 mm" in rep.text()
+    assert "point 2: acceptance" in rep.text()
+    assert "tracker height 500.0 mm" in rep.text()
     ok = visibility(lt, pts[:2], TrackerLimits())
-    assert ok.ok and ok.text() == "all points visible"
+    assert ok.ok
+    assert ok.text() == "all points visible"
 
 
 def _geometry() -> tuple[np.ndarray, np.ndarray]:
@@ -127,14 +131,16 @@ def test_multilateration_recovers_exact_points_noise_free() -> None:
     C, P = _geometry()
     d = np.linalg.norm(P[None] - C[:, None], axis=-1)
     r = trilaterate(C, d)
-    assert np.abs(r.points[0] - P).max() < 1e-9 and r.converged.all()
+    assert np.abs(r.points[0] - P).max() < 1e-9
+    assert r.converged.all()
     r3 = trilaterate(C[:3], d[:3], points0=P + 5.0)
     assert np.abs(r3.points[0] - P).max() < 1e-9
     start = C + np.random.default_rng(np.random.SeedSequence(4)).normal(0, 3.0, C.shape)
     sc = self_calibrate(np.stack([d, d, d]), start)
     Cd, Pd = datum_frame(C, P)
     assert sc.converged.all()
-    assert np.abs(sc.stations - Cd).max() < 1e-8 and np.abs(sc.points - Pd).max() < 1e-8
+    assert np.abs(sc.stations - Cd).max() < 1e-8
+    assert np.abs(sc.points - Pd).max() < 1e-8
 
 
 def test_self_calibration_needs_four_stations_and_enough_points() -> None:

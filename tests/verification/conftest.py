@@ -57,7 +57,7 @@ def truth_vector(model: ErrorModel, fixed: tuple[str, ...], rng_seed: int = 7) -
         if n in fixed:
             continue
         k = int(n.split("[")[1][0]) if "[" in n else 0
-        ang = n[1] in "ABC" and "0" not in n[2:3] or n in ("EC0Y", "EB0Z", "EA0Z")
+        ang = (n[1] in "ABC" and "0" not in n[2:3]) or n in ("EC0Y", "EB0Z", "EA0Z")
         scale = (20e-6 if ang else 0.02) / (700.0**k if "[" in n else 1.0)
         th[i] = scale * rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 1.0)
     return th

@@ -28,12 +28,15 @@ def test_shipped_studies_load_with_the_papers_numbers() -> None:
     assert list(s16.trackers) == ["pos1", "pos2", "pos3", "pos4"]
     assert np.allclose(s16.trackers["pos4"].position, [1100.0, -1000.0, 600.0])
     cloud, mesh = s16.points["cloud96"].q, s16.points["mesh96"].q
-    assert not np.allclose(cloud, mesh) and np.abs(cloud - mesh).max() <= 250.0
+    assert not np.allclose(cloud, mesh)
+    assert np.abs(cloud - mesh).max() <= 250.0
     s17 = load_verification_study(STUDIES / "aguado2017.toml")
     lt = s17.trackers["aguado2017"]
     assert np.allclose(np.degrees(lt.euler("xyz")), [0.0339, 0.0343, 59.4652])
-    assert s17.noise.azimuth == 24e-6 and s17.noise.u_range(1000.0) == pytest.approx(0.0048)
-    assert s17.trials == 1000 and s17.points["mesh"].q.shape == (81, 3)
+    assert s17.noise.azimuth == 24e-6
+    assert s17.noise.u_range(1000.0) == pytest.approx(0.0048)
+    assert s17.trials == 1000
+    assert s17.points["mesh"].q.shape == (81, 3)
 
 
 def test_study_errors_name_file_line_and_field() -> None:
@@ -42,8 +45,10 @@ def test_study_errors_name_file_line_and_field() -> None:
     with pytest.raises(InputError) as exc:
         loads_verification_study(bad, file="s.toml")
     line = next(i for i, ln in enumerate(bad.splitlines(), 1) if ln.startswith("step"))
-    assert exc.value.file == "s.toml" and exc.value.line == line
-    assert exc.value.field is not None and exc.value.field.startswith("points.mesh")
+    assert exc.value.file == "s.toml"
+    assert exc.value.line == line
+    assert exc.value.field is not None
+    assert exc.value.field.startswith("points.mesh")
     bad = text.replace("EXX = [54.0", "EXQ = [54.0")
     with pytest.raises(InputError, match="EXQ"):
         loads_verification_study(bad, file="s.toml")
@@ -56,15 +61,19 @@ def test_simulate_json_contract(capsys) -> None:  # type: ignore[no-untyped-def]
     args = ["verify", "simulate", str(STUDIES / "aguado2017.toml"), "--trials", "40"]
     assert main([*args, "--seed", "3", "--json", "--no-progress"]) == 0
     d = json.loads(capsys.readouterr().out)
-    assert d["trials"] == 40 and d["seed"] == 3 and d["points"] == 81
+    assert d["trials"] == 40
+    assert d["seed"] == 3
+    assert d["points"] == 81
     for key in ("initial_ve_um", "residual_ve_um"):
         assert set(d[key]) == {"max", "mean", "min"}
         for v in d[key].values():
-            assert set(v) == {"estimate", "u"} and v["u"] >= 0
+            assert set(v) == {"estimate", "u"}
+            assert v["u"] >= 0
     assert d["initial_ve_um"]["mean"]["estimate"] > d["residual_ve_um"]["mean"]["estimate"]
     assert set(d["coefficients"]) == set(d["gum"])
     ec0y = d["coefficients"]["EC0Y"]
-    assert ec0y["unit"] == "urad" and abs(ec0y["estimate"] - 40.0) < 5 * ec0y["u"]
+    assert ec0y["unit"] == "urad"
+    assert abs(ec0y["estimate"] - 40.0) < 5 * ec0y["u"]
     assert d["point_u_um"]["max"] >= d["point_u_um"]["mean"] > 0
     assert main(["verify", "simulate", str(STUDIES / "aguado2017.toml"), "--tracker", "x"]) == 2
     assert "no tracker position 'x'" in capsys.readouterr().err
@@ -84,7 +93,8 @@ def test_identify_from_csv_and_export(tmp_path: Path, capsys) -> None:  # type: 
     assert main([*cmd, "--export", "csv", "-o", str(out)]) == 0
     d = json.loads(capsys.readouterr().out)
     ref = identify(st.model, ver.q, np.round(x, 9), ver.tracker, fixed=st.fixed)
-    assert d["converged"] and d["residual_ve_um"]["max"] < 1e-3
+    assert d["converged"]
+    assert d["residual_ve_um"]["max"] < 1e-3
     for i, n in enumerate(ref.names[:-6]):
         f = 1e6 if st.machine.error_term(n.split("[")[0]).angular else 1e3
         assert d["coefficients"][n]["estimate"] == pytest.approx(ref.estimate[0, i] * f, rel=1e-6)

@@ -20,7 +20,7 @@ def test_noise_free_returns_injected_coefficients_and_pose(setup) -> None:  # ty
     s = setup
     true_lt = LaserTracker(
         s["tracker"].rotation @ expmap([2e-4, -1e-4, 3e-4]),
-        s["tracker"].position + [0.5, -0.3, 0.2],
+        s["tracker"].position + np.array([0.5, -0.3, 0.2]),
     )
     meas = _readings(s, s["theta"], true_lt)
     r = identify(s["model"], s["q"], meas, s["tracker"], fixed=s["fixed"])
@@ -37,7 +37,7 @@ def test_noise_free_returns_injected_coefficients_and_pose(setup) -> None:  # ty
 def test_model_poorer_than_the_machine_leaves_a_residual(setup) -> None:  # type: ignore[no-untyped-def]
     s = setup
     truth = dict(s["model"].errors(s["theta"]))
-    truth["EXX"] = PolynomialFunction(list(truth["EXX"].coefficients) + [1e-12])  # quartic term
+    truth["EXX"] = PolynomialFunction([*truth["EXX"].coefficients, 1e-12])  # quartic term
     meas = s["tracker"].to_tracker(s["machine"].tool_position(s["q"], truth))
     r = identify(s["model"], s["q"], meas, s["tracker"], fixed=s["fixed"])
     assert r.converged.all()
@@ -52,7 +52,8 @@ def test_rank_deficient_case_is_reported_by_name(setup) -> None:  # type: ignore
     with pytest.raises(IdentifiabilityError) as exc:
         identify(s["model"], s["q"], meas, s["tracker"], fixed=fixed)
     assert len(exc.value.combinations) == 1
-    assert "EXX[0]" in exc.value.combinations[0] and "LT.x" in exc.value.combinations[0]
+    assert "EXX[0]" in exc.value.combinations[0]
+    assert "LT.x" in exc.value.combinations[0]
     # the linear term of a straightness vs the squareness (no tracker pose)
     fixed = tuple(n for n in s["fixed"] if n != "EXY[1]")
     r = identify(
@@ -72,7 +73,8 @@ def test_rank_deficient_case_is_reported_by_name(setup) -> None:  # type: ignore
 def test_default_model_is_identifiable(setup) -> None:  # type: ignore[no-untyped-def]
     s = setup
     r = identify(s["model"], s["q"], _readings(s, s["theta"]), s["tracker"], fixed=s["fixed"])
-    assert r.identifiability.ok and r.identifiability.rank == len(r.names)
+    assert r.identifiability.ok
+    assert r.identifiability.rank == len(r.names)
 
 
 def test_batched_equals_one_at_a_time(setup) -> None:  # type: ignore[no-untyped-def]

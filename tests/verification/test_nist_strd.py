@@ -83,7 +83,7 @@ def test_certified_values_from_both_starts(name: str) -> None:
 
 def test_certified_standard_deviations() -> None:
     """The covariance s²(JᵀJ)⁻¹ gives NIST's certified standard deviations (Misra1a)."""
-    x, y, starts, cert, _ = read_strd("Misra1a")
+    x, y, starts, _, _ = read_strd("Misra1a")
     f = _model("Misra1a", x)
     res = least_squares(lambda b, _: f(b)[0] - y, lambda b, _: f(b)[1], starts[:1])
     u = np.sqrt(np.diag(res.covariance()[0]))

@@ -54,7 +54,8 @@ def test_monte_carlo_against_gum(setup) -> None:  # type: ignore[no-untyped-def]
     s = setup
     ver = _ver(s)
     r = simulate(ver, 3000, 2026, repeatability=0.002)
-    assert r.coef_samples.shape == (3000, len(r.names)) and not r.coef_u.flags.writeable
+    assert r.coef_samples.shape == (3000, len(r.names))
+    assert not r.coef_u.flags.writeable
     # standard uncertainty of each coefficient: MC vs GUM within the MC's sampling error
     assert np.allclose(r.coef_u, r.gum.u, rtol=0.08)
     assert np.allclose(r.point_u, r.gum.point_u, rtol=0.08)

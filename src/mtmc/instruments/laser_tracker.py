@@ -12,7 +12,7 @@ stands in the kinematic chain, Aguado et al. 2016 §2): a point with tracker coo
 (Aguado et al. 2017 eq. 1 and Aguado et al. 2016 eqs. 14–16 write ``R_LT⁻¹ (… − T_LT)``;
 ``R`` is active, as in :mod:`mtmc.geometry.transforms`). ``R`` comes from Euler angles
 (default sequence ``"xyz"``: rotations about the fixed x, y, z axes in that order,
-``R = Rz(γ) Ry(β) Rx(α)``, our reading of the "Euler angles (XYZ)" of Aguado et al. 2017)
+``R = Rz(a3) Ry(a2) Rx(a1)``, our reading of the "Euler angles (XYZ)" of Aguado et al. 2017)
 or from an axis and an angle (Rodrigues, Aguado et al. 2017 eq. 3).
 
 Spherical coordinates of a tracker-frame point ``x = (x1, x2, x3)``: the range

@@ -93,7 +93,8 @@ def expmap(phi: npt.ArrayLike) -> _F:
     b = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(ths)) / (ths * ths))
     K = _skew(p)
     eye = np.broadcast_to(np.eye(3), K.shape)
-    return eye + a[..., None, None] * K + b[..., None, None] * (K @ K)
+    out: _F = eye + a[..., None, None] * K + b[..., None, None] * (K @ K)
+    return out
 
 
 def logmap(R: npt.ArrayLike) -> _F:
@@ -365,7 +366,8 @@ class _Problem:
             Jw = _skew(xr)
             Jtr = -np.broadcast_to(np.swapaxes(R, 1, 2)[:, None], (m, N, 3, 3))
             Jt = np.concatenate([Jt, Jw, Jtr], axis=-1)
-        return Jt.reshape(m, 3 * N, -1)
+        out: _F = Jt.reshape(m, 3 * N, -1)
+        return out
 
     def retract(self, x: _F, d: _F) -> _F:
         out = x + d
@@ -495,7 +497,7 @@ def identify(
     def fun(x: _F, rows: NDArray[np.int64]) -> _F:
         return prob.readings(x).reshape(x.shape[0], -1) - flat[rows]
 
-    def jac(x: _F, rows: NDArray[np.int64]) -> _F:
+    def jac(x: _F, rows: NDArray[np.int64]) -> _F:  # noqa: ARG001 - the solver's signature
         return prob.jac(x)
 
     res = least_squares(

@@ -260,7 +260,7 @@ def _points_of(pf: Fields, n_axes: int) -> _F:
         raise pf.error(str(exc)) from exc
 
 
-def loads_verification_study(
+def loads_verification_study(  # noqa: C901 - one reader per table, in file order
     text: str, *, file: str = "<study>", folder: Path | None = None
 ) -> VerificationStudy:
     """Read a verification study from TOML text.
@@ -294,8 +294,19 @@ def loads_verification_study(
     src = Source.from_text(text, file, folder)
     top = Fields(src, data)
     top.only(
-        ("title", "note", "kind", "machine", "model", "truth", "tracker", "points", "run")
-        + ("workspace", "nc")  # read by mtmc.verification.ncprogram (verify plan)
+        (
+            "title",
+            "note",
+            "kind",
+            "machine",
+            "model",
+            "truth",
+            "tracker",
+            "points",
+            "run",
+            "workspace",
+            "nc",  # these two read by mtmc.verification.ncprogram (verify plan)
+        )
     )
     if "kind" in data:
         top.text("kind", choices=("verification",))
