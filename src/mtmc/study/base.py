@@ -502,7 +502,7 @@ class StudyResult:
     seed: int
     trials: int
     p: float
-    quantities: tuple[Quantity, ...]
+    quantities: tuple[Quantity, ...] = ()
     regions: tuple[Region, ...] = ()
     tables: tuple[Table, ...] = ()
     fields: tuple[PointField, ...] = ()
