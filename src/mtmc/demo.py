@@ -13,7 +13,9 @@ in well under a minute, the five-axis story as study files (the package's copies
    the σ_probe × σ_machine grid and the fitted surrogate (Stryczek Fig. 12–15);
 5. ``five_axis``: a five-axis table-table machine with uncertain ISO 230 geometric errors
    through its forward kinematics to the tool position at four poses (kind
-   ``kinematics``).
+   ``kinematics``);
+6. ``wang2022``: the fiducial artefact of Wang, Cheung and Kong (2022), its setup errors
+   and volumetric errors at nine rotary poses (kind ``artefact``).
 
 Each study writes its result folder (``result.json``, CSV tables, ``provenance.json``,
 ``report.html``) under the output folder, and ``index.html`` links the reports. There is
@@ -40,6 +42,7 @@ STUDIES: tuple[str, ...] = (
     "axis_a.toml",
     "bcs_origin.toml",
     "five_axis.toml",
+    "wang2022.toml",
 )
 
 

@@ -584,8 +584,19 @@ def loads_artefact_study(  # noqa: C901
     src = Source.from_text(text, file=file, folder=folder)
     top = Fields(src, data)
     top.only(
-        ("title", "artefact", "machine", "setup_errors", "probing", "plan", "uncertainty", "run")
+        (
+            "kind",
+            "title",
+            "artefact",
+            "machine",
+            "setup_errors",
+            "probing",
+            "plan",
+            "uncertainty",
+            "run",
+        )
     )
+    top.text("kind", "artefact", choices=("artefact",))  # as ``mtmc run`` reads it
     title = top.text("title", "")
     art_f = top.table("artefact")
     assert art_f is not None
