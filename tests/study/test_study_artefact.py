@@ -23,7 +23,8 @@ def test_artefact_study_reports_what_simulate_computes():
     j = ref.to_json()
     setup = {row[0]: row for row in r.tables[1].rows}
     for name, e in j["setup_errors"].items():
-        assert setup[name][3] == e["estimate"] and setup[name][4] == e["u"]
+        assert setup[name][3] == e["estimate"]
+        assert setup[name][4] == e["u"]
     first = r.tables[0].rows[0]
     assert first[-4:] == tuple(
         j["poses"][0]["r_avg_model_um"][k] for k in ("noise_free", "estimate", "u", "gum_u")
