@@ -96,10 +96,10 @@ class ArtefactKindStudy(Study):
             name="volumetric",
             title="Volumetric errors at the balls, pose by pose (Fig. 7)",
             points=pos.reshape(-1, 3),
-            values=vec.reshape(-1, 3),
+            values=np.asarray(vec, dtype=np.float64).reshape(-1, 3),
             unit="mm",
             labels=labels,
-            axes=tuple(self.study.setup.linear)[:3],  # type: ignore[arg-type]
+            axes=tuple(self.study.setup.linear)[:3],
             magnification=10_000.0,
         )
         extra = {"artefact": {"volumetric_mean_um": j["volumetric_mean_um"], "units": "um"}}
