@@ -37,7 +37,7 @@ CASES = [
         'kind = "spline"',
         1,
         "kind",
-        "expected one of graph, kinematics, propagate",
+        "expected one of artefact, graph, kinematics, propagate",
     ),
     ('kind = "propagate"', "kind = 3", 1, "kind", "expected a string"),
     ('kind = "propagate"\n', "", 1, "kind", "missing kind"),
