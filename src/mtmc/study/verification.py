@@ -1,0 +1,126 @@
+"""Study kind ``verification``: a laser-tracker volumetric verification (Aguado et al.).
+
+The file is a verification study (``docs/verification.md``), read by
+:func:`mtmc.verification.study.loads_verification_study` and run by
+:func:`mtmc.verification.simulate.simulate`: the tracker noise is drawn by Monte Carlo, each
+trial identifies the machine's error functions from its readings, and the result gives
+the volumetric error before and after compensation (Aguado et al. 2017 §3) and the
+calibration uncertainty at every point (Aguado et al. 2017 Fig. 5–6, 2016 Fig. 9). The
+volumetric-error statistics become quantities (Monte Carlo, no GUM: they are maxima and
+means over the points), the identified coefficients a table with their GUM ``u``, and the
+calibration uncertainty a map over the workspace.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
+from mtmc.study.spec import Fields, RunSettings, register_kind
+from mtmc.uncertainty.results import MonteCarloResult
+
+__all__ = ["VerificationKindStudy"]
+
+
+@dataclass(frozen=True)
+class VerificationKindStudy(Study):
+    """A verification study, read and validated by :mod:`mtmc.verification` (kind ``verification``).
+
+    Attributes
+    ----------
+    study : VerificationStudy
+        The validated study of :func:`mtmc.verification.study.loads_verification_study`.
+    """
+
+    kind = "verification"
+    study: Any
+
+    def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
+        """Simulate the verification and tabulate it (module docstring)."""
+        from mtmc.verification.simulate import VE_NAMES, simulate
+
+        s = self.study
+        ver = s.verification()
+        mc = simulate(
+            ver,
+            settings.trials,
+            settings.seed,
+            repeatability=s.repeatability,
+            pose_u=s.pose_u,
+            reflector_u=s.reflector_u,
+            progress=progress,
+        )
+        quantities = tuple(
+            quantity(
+                f"volumetric_error.{name}",
+                "mm",
+                MonteCarloResult(
+                    samples=np.asarray(mc.ve_samples)[:, i], trials=mc.trials, seed=mc.seed
+                ),
+                None,
+                settings,
+            )
+            for i, name in enumerate(VE_NAMES)
+        )
+        ref = np.asarray(mc.reference.estimate, dtype=np.float64)[0]
+        coef_rows = tuple(
+            (
+                name,
+                float(ref[i]) if i < ref.size else "",
+                float(mc.coef_estimate[i]),
+                float(mc.coef_u[i]),
+                float(mc.gum.u[i]),
+            )
+            for i, name in enumerate(mc.names)
+        )
+        tables = (
+            Table(
+                "coefficients",
+                "Identified parameters: noise-free, Monte Carlo mean and u, GUM u",
+                ("parameter", "noise-free", "MC mean", "MC u", "GUM u"),
+                coef_rows,
+            ),
+        )
+        q = ver.q if ver.eval_q is None else ver.eval_q
+        points = s.machine.tool_position(q)
+        field = PointField(
+            name="calibration_u",
+            title="Calibration uncertainty at each point, √(u²x + u²y + u²z) (Aguado et al. 2017 "
+            "Fig. 5–6)",
+            points=np.asarray(points, dtype=np.float64),
+            values=np.asarray(mc.point_u, dtype=np.float64),
+            unit="mm",
+        )
+        bias = PointField(
+            name="compensation_bias",
+            title="Mean error left after compensation at each point",
+            points=np.asarray(points, dtype=np.float64),
+            values=np.asarray(mc.comp_bias, dtype=np.float64),
+            unit="mm",
+            magnification=1000.0,
+        )
+        return self._result(
+            settings,
+            quantities=quantities,
+            tables=tables,
+            fields=(field, bias),
+            extra={"verification": {"note": s.note, "machine": str(s.machine.topology)}},
+        )
+
+
+@register_kind("verification", "a laser-tracker volumetric verification (Aguado et al.)")
+def load_verification_kind(top: Fields) -> VerificationKindStudy:
+    """Validate a ``verification`` study file with :mod:`mtmc.verification.study`."""
+    from mtmc.verification.study import loads_verification_study
+
+    src = top.source
+    study = loads_verification_study(src.text, file=src.file, folder=src.folder)
+    return VerificationKindStudy(
+        title=study.title or "Laser-tracker verification",
+        source=src,
+        settings=RunSettings(trials=study.trials, seed=study.seed),
+        study=study,
+    )

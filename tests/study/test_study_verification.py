@@ -1,0 +1,40 @@
+"""The verification kind runs the verification of mtmc.verification and reports it unchanged."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtmc.study import load_study
+
+ROOT = Path(__file__).resolve().parents[2]
+STUDY = ROOT / "examples" / "studies" / "aguado2017.toml"
+
+
+def test_verification_study_reports_what_simulate_computes():
+    from mtmc.verification.simulate import VE_NAMES, simulate
+    from mtmc.verification.study import load_verification_study
+
+    r = load_study(STUDY).run(trials=60, seed=3)
+    s = load_verification_study(STUDY)
+    mc = simulate(
+        s.verification(),
+        60,
+        3,
+        repeatability=s.repeatability,
+        pose_u=s.pose_u,
+        reflector_u=s.reflector_u,
+    )
+    for i, name in enumerate(VE_NAMES):
+        q = r.quantity(f"volumetric_error.{name}")
+        assert q.mc["estimate"] == pytest.approx(mc.ve_estimate[i], rel=1e-12)
+        assert q.mc["u"] == pytest.approx(mc.ve_u[i], rel=1e-12)
+    rows = r.tables[0].rows
+    assert [row[0] for row in rows] == list(mc.names)
+    np.testing.assert_allclose([row[3] for row in rows], mc.coef_u, rtol=1e-12)
+    np.testing.assert_allclose([row[4] for row in rows], mc.gum.u, rtol=1e-12)
+    field = r.fields[0]
+    np.testing.assert_allclose(field.values, mc.point_u, rtol=1e-12)
+    assert field.points.shape == (len(mc.point_u), 3)
