@@ -14,7 +14,10 @@ in well under a minute, the five-axis story as study files (the package's copies
 5. ``five_axis``: a five-axis table-table machine with uncertain ISO 230 geometric errors
    through its forward kinematics to the tool position at four poses (kind
    ``kinematics``);
-6. ``wang2022``: the fiducial artefact of Wang, Cheung and Kong (2022), its setup errors
+6. ``aguado2017``: the laser-tracker volumetric verification of an XFYZ machine of Aguado
+   et al. 2017, its identified error functions and calibration uncertainty (kind
+   ``verification``);
+7. ``wang2022``: the fiducial artefact of Wang, Cheung and Kong (2022), its setup errors
    and volumetric errors at nine rotary poses (kind ``artefact``).
 
 Each study writes its result folder (``result.json``, CSV tables, ``provenance.json``,
@@ -42,6 +45,7 @@ STUDIES: tuple[str, ...] = (
     "axis_a.toml",
     "bcs_origin.toml",
     "five_axis.toml",
+    "aguado2017.toml",
     "wang2022.toml",
 )
 

@@ -9,10 +9,10 @@ file, the line and the field. ``load_study(path).run()`` returns a frozen
 """
 
 from mtmc.study import artefact as _artefact  # noqa: F401  (registers artefact)
-from mtmc.study import verification as _verification  # noqa: F401  (registers verification)
 from mtmc.study import graph as _graph  # noqa: F401  (registers graph and sweep)
 from mtmc.study import kinematics as _kinematics  # noqa: F401  (registers kinematics)
 from mtmc.study import propagate as _propagate  # noqa: F401  (registers propagate)
+from mtmc.study import verification as _verification  # noqa: F401  (registers verification)
 from mtmc.study.base import Quantity, Region, Study, StudyResult, Table
 from mtmc.study.spec import (
     Fields,
