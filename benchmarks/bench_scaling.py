@@ -8,9 +8,9 @@ Two runs of the scaling page (docs/scaling.md):
   trials are the tasks.
 
 Every parallel run is checked to give the same numbers as the in-process one. The Dask
-cluster is started once, before the timings (its start-up is printed apart), as a user
-with many runs would. The per-block scheduling overhead is measured with a model that
-does nothing: (time of N empty blocks on Dask) / N.
+cluster (`mtmc.parallel.local_cluster`) is started once, before the timings (its start-up
+is printed apart), as a user with many runs would. The per-block scheduling overhead is
+measured with a model that does nothing: (time of N empty blocks on Dask) / N.
 
 Usage: python benchmarks/bench_scaling.py [scale]   (scale 1 = the sizes above)
 """
@@ -25,6 +25,7 @@ import numpy as np
 
 from mtmc.graph import load_graph
 from mtmc.graph.sweep import sweep
+from mtmc.parallel import local_cluster
 from mtmc.uncertainty.montecarlo import monte_carlo
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,18 +48,7 @@ def main() -> None:
     import distributed
 
     scale = float(sys.argv[1]) if len(sys.argv) > 1 else 1.0
-    t_start, (cluster, client) = timed(
-        lambda: (
-            c := distributed.LocalCluster(
-                n_workers=2,
-                threads_per_worker=1,
-                processes=True,
-                host="127.0.0.1",
-                dashboard_address=":0",
-            ),
-            distributed.Client(c),
-        )
-    )
+    t_start, (cluster, client) = timed(lambda: (c := local_cluster(2), distributed.Client(c)))
     print(f"Dask LocalCluster, 2 worker processes: start-up {t_start:.2f} s")
     graph = load_graph(ROOT / "examples" / "graphs" / "bcs_origin.toml")
     vary = {

@@ -15,6 +15,7 @@ import pytest
 from mtmc.errors import InputError
 from mtmc.graph import load_graph, run_graph
 from mtmc.graph.sweep import sweep
+from mtmc.parallel import WORKER_MALLOC_ENV, local_cluster
 from mtmc.uncertainty.montecarlo import monte_carlo
 
 distributed = pytest.importorskip("distributed")
@@ -29,17 +30,33 @@ def model(x, y):
 
 @pytest.fixture(scope="module")
 def client():
-    cluster = distributed.LocalCluster(
-        n_workers=2,
-        threads_per_worker=1,
-        processes=True,
-        host="127.0.0.1",
-        scheduler_port=0,
-        dashboard_address=":0",
-    )
+    cluster = local_cluster(2, scheduler_port=0)
     with distributed.Client(cluster) as c:
         yield c
     cluster.close()
+
+
+#: the allocator variables of this process before any cluster started (they win)
+_BEFORE = {k: os.environ.get(k) for k in WORKER_MALLOC_ENV}
+
+
+def _malloc_env():
+    return {k: os.environ.get(k) for k in WORKER_MALLOC_ENV}
+
+
+def test_local_cluster_workers_reuse_heap_memory(client):
+    # Dask's default MALLOC_TRIM_THRESHOLD_=65536 maps every large array afresh
+    seen = client.run(_malloc_env)
+    assert len(seen) == 2
+    for env in seen.values():
+        for name, value in WORKER_MALLOC_ENV.items():
+            assert env[name] == (_BEFORE[name] or value)
+    assert int(WORKER_MALLOC_ENV["MALLOC_MMAP_THRESHOLD_"]) >= 8 * 2**20  # a 2^20-trial column
+
+
+def test_local_cluster_rejects_a_bad_worker_count():
+    with pytest.raises(InputError, match="integer >= 1"):
+        local_cluster(0)
 
 
 @pytest.mark.parametrize("keep", [True, False])

@@ -17,7 +17,8 @@ and the results are put back in trial order. This module is the one place that d
   cluster, by the address of its scheduler (``"tcp://host:8786"``) or a
   :class:`distributed.Client`. Each block of trials is one Dask task, submitted with
   ``pure=False`` a few blocks ahead per worker; a block lost with its worker is
-  computed again by the scheduler, and gives the same numbers;
+  computed again by the scheduler, and gives the same numbers. :func:`local_cluster`
+  starts such a cluster to keep across many runs;
 * any :class:`concurrent.futures.Executor` given by the caller.
 
 Whichever is used, the numbers are the same: the random numbers of a block depend only
@@ -38,7 +39,7 @@ from typing import Any, Literal, TypeVar
 
 from mtmc.errors import InputError
 
-__all__ = ["ExecutorKind", "map_blocks"]
+__all__ = ["WORKER_MALLOC_ENV", "ExecutorKind", "local_cluster", "map_blocks"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -48,8 +49,19 @@ ExecutorKind = Literal["thread", "process", "dask"]
 DASK_AHEAD: int = 4
 
 
-def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:
-    """A ``distributed.Client`` for ``scheduler`` (or a new local cluster) and what to close."""
+#: glibc ``malloc`` settings for Dask worker processes. Dask's nanny sets
+#: ``MALLOC_TRIM_THRESHOLD_=65536`` in its workers, which also switches off glibc's
+#: adaptive mmap threshold: every array over 128 kB is then mapped afresh and its pages
+#: faulted in and zeroed on each block, and a block of 2^20 trials took 1.9 times as long
+#: in a worker as in this process (0.126 s against 0.067 s). With these two settings
+#: arrays up to 32 MiB are reused from the heap and at most 256 MiB of free heap is kept.
+WORKER_MALLOC_ENV: dict[str, str] = {
+    "MALLOC_MMAP_THRESHOLD_": str(32 * 2**20),
+    "MALLOC_TRIM_THRESHOLD_": str(256 * 2**20),
+}
+
+
+def _import_distributed() -> Any:
     try:
         import distributed
     except ImportError:
@@ -57,14 +69,59 @@ def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:
             "executor='dask' needs Dask's distributed scheduler: pip install 'mtmc[distributed]'",
             field="executor",
         ) from None
+    return distributed
+
+
+def local_cluster(workers: int = 2, **kwargs: Any) -> Any:
+    """Start a Dask ``LocalCluster`` of worker processes set up for Monte Carlo blocks.
+
+    One single-threaded worker process per core, on the loopback interface, dashboard
+    on a free port, the workers' allocator set by :data:`WORKER_MALLOC_ENV` (variables
+    already in the environment win). Keep it, and pass it (or a
+    ``distributed.Client`` of it) as ``scheduler`` to many runs: its start-up (about
+    0.5 s) is then paid once. ``executor="dask"`` without a scheduler starts one of these
+    for the call.
+
+    Parameters
+    ----------
+    workers : int, default 2
+        Number of worker processes.
+    **kwargs
+        Further keywords of ``distributed.LocalCluster`` (they override the above).
+
+    Returns
+    -------
+    distributed.LocalCluster
+        The running cluster; close it (or use it in a ``with`` block) when done.
+
+    Raises
+    ------
+    InputError
+        If Dask's distributed scheduler is not installed, or ``workers < 1``.
+    """
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InputError(f"expected an integer >= 1, got {workers!r}", field="workers")
+    distributed = _import_distributed()
+    import dask
+
+    options: dict[str, Any] = {
+        "n_workers": workers,
+        "threads_per_worker": 1,
+        "processes": True,
+        "host": "127.0.0.1",
+        "dashboard_address": ":0",
+    }
+    options.update(kwargs)
+    env = {f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in WORKER_MALLOC_ENV.items()}
+    with dask.config.set(env):
+        return distributed.LocalCluster(**options)
+
+
+def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:
+    """A ``distributed.Client`` for ``scheduler`` (or a new local cluster) and what to close."""
+    distributed = _import_distributed()
     if scheduler is None:
-        cluster = distributed.LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=":0",
-        )
+        cluster = local_cluster(workers)
         client = distributed.Client(cluster)
         return client, (client, cluster)
     if isinstance(scheduler, distributed.Client):
