@@ -188,3 +188,17 @@ def test_cli_runs_on_the_cluster_with_the_same_numbers(client, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert "tcp://127.0.0.1:9" in err[0]
+
+
+def test_mtmc_run_through_a_scheduler_address(client, tmp_path):
+    from mtmc.cli.main import main
+
+    study = Path(__file__).resolve().parents[1] / "examples" / "studies" / "bcs_origin.toml"
+    base = ["run", str(study), "--trials", "3000", "--seed", "4", "-q"]
+    assert main([*base, "-o", str(tmp_path / "here")]) == 0
+    address = client.scheduler.address
+    assert main([*base, "-o", str(tmp_path / "dask"), "--scheduler", address]) == 0
+    here, there = (
+        (tmp_path / d / "result.json").read_text(encoding="utf-8") for d in ("here", "dask")
+    )
+    assert here == there

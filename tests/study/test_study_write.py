@@ -122,3 +122,26 @@ def test_a_killed_run_leaves_no_result(tmp_path, sig):
     assert proc.returncode != 0
     assert not out.exists()
     assert not list(tmp_path.glob("**/result.json"))
+
+
+@pytest.mark.parametrize(
+    ("name", "trials"),
+    [("mass_calibration", 3000), ("bcs_origin", 2000), ("five_axis", 3000), ("aguado2017", 40)],
+)
+def test_two_workers_give_the_same_result_as_one(name, trials):
+    study = load_study(STUDIES / f"{name}.toml")
+    one = study.run(trials=trials, seed=5)
+    two = study.run(trials=trials, seed=5, workers=2, executor="thread")
+    assert one.to_dict() == two.to_dict()
+
+
+def test_cli_run_takes_the_parallel_options(tmp_path, capsys):
+    study = STUDIES / "mass_calibration.toml"
+    base = ["run", str(study), "--trials", "3000", "--seed", "2", "-q"]
+    assert main([*base, "-o", str(tmp_path / "one")]) == 0
+    assert main([*base, "-o", str(tmp_path / "two"), "--workers", "2"]) == 0
+    one, two = (json.loads((tmp_path / d / "result.json").read_text()) for d in ("one", "two"))
+    assert one == two
+    assert main([*base, "-o", str(tmp_path / "bad"), "--executor", "mpi"]) == 2
+    assert "expected thread, process or dask" in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()

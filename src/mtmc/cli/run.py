@@ -16,7 +16,14 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import fail, progress_bar
+from mtmc.cli.common import (
+    EXECUTOR_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    fail,
+    parallel_options,
+    progress_bar,
+)
 from mtmc.errors import MtmcError
 
 __all__ = ["default_outdir", "report_cmd", "run_cmd", "run_study_file", "summary_table"]
@@ -54,15 +61,20 @@ def run_study_file(
     samples: bool | None = None,
     progress: bool | None = None,
     argv: list[str] | None = None,
+    parallel: dict[str, Any] | None = None,
 ) -> Any:
-    """Load, run and write one study (the library calls of ``mtmc run``); return the result."""
+    """Load, run and write one study (the library calls of ``mtmc run``); return the result.
+
+    ``parallel`` holds the ``workers``, ``executor`` and ``scheduler`` of
+    :meth:`mtmc.study.Study.run`.
+    """
     from mtmc.study import load_study, write_result
     from mtmc.study.write import now
 
     s = load_study(study)
     started = now()
     with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
-        result = s.run(trials=trials, seed=seed, samples=samples, progress=bar)
+        result = s.run(trials=trials, seed=seed, samples=samples, progress=bar, **(parallel or {}))
     write_result(result, outdir, study_text=s.source.text, started=started, argv=argv)
     return result
 
@@ -77,6 +89,9 @@ def run_cmd(
     seed: int | None = typer.Option(None, "--seed", help="Override [run] seed."),
     samples: bool = typer.Option(False, "--samples", help="Also write the samples as .npy."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no table."),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
 ) -> None:
     """Run STUDY and write its result folder and HTML report."""
     out = outdir if outdir is not None else default_outdir(study)
@@ -89,6 +104,7 @@ def run_cmd(
             samples=True if samples else None,
             progress=False if quiet else None,
             argv=(ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]]),
+            parallel=parallel_options(workers, executor, scheduler),
         )
     except (MtmcError, OSError) as exc:
         fail(exc)

@@ -637,6 +637,9 @@ class Study:
         seed: int | None = None,
         samples: bool | None = None,
         progress: ProgressFn | None = None,
+        workers: int = 1,
+        executor: str = "thread",
+        scheduler: Any = None,
     ) -> StudyResult:
         """Run the study.
 
@@ -650,6 +653,11 @@ class Study:
             Overrides ``[run] samples`` (keep the model values in the result).
         progress : callable, optional
             ``progress(done, total)`` after each block of trials.
+        workers, executor, scheduler
+            Where the blocks of trials run (:func:`mtmc.uncertainty.monte_carlo`):
+            ``workers`` threads, processes or Dask workers, or the Dask cluster of
+            ``scheduler`` (an address or a ``distributed.Client``). The numbers do not
+            depend on them.
 
         Returns
         -------
@@ -669,6 +677,9 @@ class Study:
             interval=s.interval,
             ndig=s.ndig,
             samples=s.samples if samples is None else bool(samples),
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
         )
         return self.execute(settings, progress)
 

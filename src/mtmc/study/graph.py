@@ -186,7 +186,12 @@ class GraphStudy(Study):
             model, inputs = graph_model(plan, out)
             step = _offset(progress, i * settings.trials, total)
             mc = monte_carlo(
-                model, inputs, trials=settings.trials, seed=settings.seed, progress=step
+                model,
+                inputs,
+                trials=settings.trials,
+                seed=settings.seed,
+                progress=step,
+                **settings.parallel,
             )
             vals = np.asarray(mc.samples).reshape(mc.m, -1)
             if settings.samples:
@@ -205,7 +210,7 @@ class GraphStudy(Study):
         tables: list[Table] = []
         if self.sweep is not None:
             step = _offset(progress, settings.trials * len(self.outputs), total)
-            sweep_d, table = self._sweep(settings.seed, step)
+            sweep_d, table = self._sweep(settings, step)
             extra["sweep"] = sweep_d
             tables.append(table)
         in_list = tuple(
@@ -255,11 +260,19 @@ class GraphStudy(Study):
             )
         return [r for r in found if r is not None]
 
-    def _sweep(self, seed: int | None, progress: ProgressFn | None) -> tuple[dict[str, Any], Table]:
+    def _sweep(
+        self, settings: RunSettings, progress: ProgressFn | None
+    ) -> tuple[dict[str, Any], Table]:
         spec = self.sweep
         assert spec is not None
         sw = sweep(
-            self.graph, spec.vary, spec.output, trials=spec.trials, seed=seed, progress=progress
+            self.graph,
+            spec.vary,
+            spec.output,
+            trials=spec.trials,
+            seed=settings.seed,
+            progress=progress,
+            **settings.parallel,
         )
         fit = sw.fit(intercept=spec.intercept)
         fit0 = sw.fit(intercept=False)

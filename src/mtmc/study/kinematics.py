@@ -105,7 +105,12 @@ class KinematicsStudy(Study):
         """Monte Carlo and GUM of the tool positions (module docstring)."""
         model = tool_positions_model(self.machine, self.poses)
         mc = monte_carlo(
-            model, self.errors, trials=settings.trials, seed=settings.seed, progress=progress
+            model,
+            self.errors,
+            trials=settings.trials,
+            seed=settings.seed,
+            progress=progress,
+            **settings.parallel,
         )
         vals = np.asarray(mc.samples)
         quantities = []

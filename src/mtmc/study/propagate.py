@@ -96,7 +96,12 @@ class PropagateStudy(Study):
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Monte Carlo and GUM of the model (see the module docstring)."""
         mc = monte_carlo(
-            self.model, self.inputs, trials=settings.trials, seed=settings.seed, progress=progress
+            self.model,
+            self.inputs,
+            trials=settings.trials,
+            seed=settings.seed,
+            progress=progress,
+            **settings.parallel,
         )
         g = gum(self.model, self.inputs, p=settings.p)
         q = quantity(self.output, self.unit, mc, g, settings)

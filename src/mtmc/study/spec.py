@@ -255,6 +255,10 @@ class RunSettings:
         Significant digits of ``u(y)`` regarded as meaningful (JCGM 101 §7.9.2).
     samples : bool
         Keep the model values and write them as ``.npy``.
+    workers, executor, scheduler
+        Where the blocks of trials (or the grid points of a sweep) are evaluated (see
+        :func:`mtmc.parallel.map_blocks`); not read from the file, since they do not
+        change a number: given to :meth:`Study.run` or on the command line.
     """
 
     trials: int = 200_000
@@ -263,6 +267,14 @@ class RunSettings:
     interval: str = "symmetric"
     ndig: int = 2
     samples: bool = False
+    workers: int = 1
+    executor: str = "thread"
+    scheduler: Any = None
+
+    @property
+    def parallel(self) -> dict[str, Any]:
+        """The ``workers``, ``executor`` and ``scheduler`` keywords of the engine."""
+        return {"workers": self.workers, "executor": self.executor, "scheduler": self.scheduler}
 
     @classmethod
     def read(cls, top: Fields, default_trials: int = 200_000) -> RunSettings:

@@ -52,6 +52,7 @@ class VerificationKindStudy(Study):
             pose_u=s.pose_u,
             reflector_u=s.reflector_u,
             progress=progress,
+            **settings.parallel,
         )
         quantities = tuple(
             quantity(
