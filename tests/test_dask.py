@@ -202,3 +202,12 @@ def test_mtmc_run_through_a_scheduler_address(client, tmp_path):
         (tmp_path / d / "result.json").read_text(encoding="utf-8") for d in ("here", "dask")
     )
     assert here == there
+
+
+def test_a_verification_study_on_the_cluster_is_bit_identical(client):
+    from mtmc.study import load_study
+
+    study = load_study(Path(__file__).resolve().parents[1] / "examples/studies/aguado2017.toml")
+    here = study.run(trials=60, seed=8)
+    there = study.run(trials=60, seed=8, executor="dask", scheduler=client)
+    assert here.to_dict() == there.to_dict()
