@@ -211,3 +211,14 @@ def test_a_verification_study_on_the_cluster_is_bit_identical(client):
     here = study.run(trials=60, seed=8)
     there = study.run(trials=60, seed=8, executor="dask", scheduler=client)
     assert here.to_dict() == there.to_dict()
+
+
+def test_the_dask_example_script_runs():
+    import subprocess
+
+    script = Path(__file__).resolve().parents[1] / "examples" / "python" / "sweep_on_dask.py"
+    done = subprocess.run(
+        [sys.executable, str(script), "300", "2"], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    assert "same numbers" in done.stdout
