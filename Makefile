@@ -20,8 +20,8 @@ demo: $(STAMP)
 test: lint typecheck unit
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks examples
-	$(BIN)/ruff format --check src tests benchmarks examples
+	$(BIN)/ruff check src tests benchmarks examples docs/tutorials
+	$(BIN)/ruff format --check src tests benchmarks examples docs/tutorials
 
 typecheck: $(STAMP)
 	$(BIN)/mypy

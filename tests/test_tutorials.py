@@ -1,0 +1,160 @@
+"""The tutorials of docs/tutorials/ cannot rot.
+
+For each tutorial: its generated tables equal what ``make_figures.py`` renders from the
+committed numbers; a rerun of its case at the documented seed (at the documented trials
+where that is quick, at fewer otherwise) gives the committed numbers (the same to 1e-9 at
+the same trials, within five Monte Carlo standard errors at fewer); its figures are
+written and small; its Python snippets and its ``mtmc`` commands run (at a few trials).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import re
+import shlex
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from mtmc.cli.main import main as cli
+
+ROOT = Path(__file__).resolve().parents[1]
+TUTORIALS = ROOT / "docs" / "tutorials"
+
+
+def _load() -> Any:
+    spec = importlib.util.spec_from_file_location("make_figures", TUTORIALS / "make_figures.py")
+    assert spec is not None
+    assert spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["make_figures"] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+mf = _load()
+
+#: The scale of the trials of each case in the rerun (1.0: the documented trials).
+SCALES = {"stryczek": 1.0}
+NAMES = sorted(SCALES)
+
+#: The figure files of the tutorials may not exceed this size (bytes).
+MAX_FIGURE = 300 * 1024
+
+
+def test_every_tutorial_is_tested() -> None:
+    assert sorted(mf.CASES) == NAMES
+    for name in NAMES:
+        assert (TUTORIALS / f"{name}.md").is_file()
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_generated_blocks_are_current(name: str) -> None:
+    text = (TUTORIALS / f"{name}.md").read_text(encoding="utf-8")
+    keys = re.findall(r"<!-- generated: (\S+) -->", text)
+    assert keys, "no generated block"
+    assert text.count("<!-- end generated -->") == len(keys)
+    assert mf.fill(text, mf.blocks(name, mf.read_numbers(name))) == text
+
+
+def test_fill_replaces_only_the_blocks() -> None:
+    text = "a\n<!-- generated: k -->\nold\n<!-- end generated -->\nb\n"
+    new = "a\n<!-- generated: k -->\nnew\n<!-- end generated -->\nb\n"
+    assert mf.fill(text, {"k": "new\n"}) == new
+    with pytest.raises(KeyError):
+        mf.fill(text, {})
+
+
+def test_tolerance() -> None:
+    doc = {"value": 1.0, "sd": 2.0, "n": 400}
+    assert mf.tolerance(doc, {"value": 1.0, "n": 100}) == pytest.approx(
+        5 * 2.0 * math.sqrt(1 / 400 + 1 / 100) + 1e-9
+    )
+    assert mf.tolerance({"value": 3.0}, {"value": 3.0}) == pytest.approx(3e-9)
+
+
+@pytest.fixture(scope="module")
+def reruns(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    out = {}
+    for name in NAMES:
+        run, figures, _ = mf.CASES[name]
+        numbers, data = run(SCALES[name])
+        folder = tmp_path_factory.mktemp(name)
+        out[name] = (numbers, figures(data, folder))
+    return out
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_numbers_reproduce(name: str, reruns: dict[str, Any]) -> None:
+    doc = mf.read_numbers(name)
+    numbers, _ = reruns[name]
+    assert sorted(numbers["values"]) == sorted(doc["values"])
+    bad = []
+    for key, d in doc["values"].items():
+        r = numbers["values"][key]
+        same_trials = "sd" not in d or d["n"] == r["n"]
+        tol = 1e-9 * max(1.0, abs(d["value"])) if same_trials else mf.tolerance(d, r)
+        if not abs(r["value"] - d["value"]) <= tol:
+            bad.append(f"{key}: documented {d['value']}, rerun {r['value']}, tolerance {tol}")
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_figures_written_and_small(name: str, reruns: dict[str, Any]) -> None:
+    _, paths = reruns[name]
+    assert paths
+    text = (TUTORIALS / f"{name}.md").read_text(encoding="utf-8")
+    for p in paths:
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        committed = TUTORIALS / "figures" / p.name
+        assert committed.is_file(), committed
+        assert committed.stat().st_size < MAX_FIGURE, committed
+        assert f"(figures/{p.name})" in text, f"{p.name} not shown in {name}.md"
+    for shown in re.findall(r"\]\((figures/[^)]+)\)", text):
+        assert (TUTORIALS / shown).is_file(), shown
+
+
+def _blocks(name: str, lang: str) -> list[str]:
+    text = (TUTORIALS / f"{name}.md").read_text(encoding="utf-8")
+    return re.findall(rf"```{lang}\n(.*?)```", text, flags=re.S)
+
+
+def _few(code: str) -> str:
+    """The code at a few trials: every ``trials=N`` (Python) or ``--trials N`` lowered."""
+    code = re.sub(r"trials=[\d_]+", "trials=500", code)
+    return re.sub(r"--trials [\d_]+", "--trials 500", code)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_python_snippets_run(
+    name: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    snippets = _blocks(name, "python")
+    assert snippets
+    monkeypatch.chdir(ROOT)
+    for code in snippets:
+        exec(compile(_few(code), f"{name}.md", "exec"), {"__name__": "tutorial"})
+    assert capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_commands_run(name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(ROOT)
+    ran = 0
+    for block in _blocks(name, "sh"):
+        for line in block.replace("\\\n", " ").splitlines():
+            line = line.split(" # ")[0].strip()
+            if not line.startswith("mtmc "):
+                continue
+            argv = shlex.split(_few(line))[1:]
+            if argv[0] == "run":  # into the test's folder, at a few trials
+                argv = [a for a in argv if a != "-o"]
+                argv = [argv[0], argv[1], "-o", str(tmp_path / f"r{ran}"), "--quiet"]
+                argv += ["--trials", "500"]
+            argv = [str(tmp_path / a) if a.endswith(".svg") else a for a in argv]
+            assert cli(argv) == 0, line
+            ran += 1
+    assert ran
