@@ -76,7 +76,10 @@ def fmt(x: float, nd: int = 1) -> str:
 
 def table(header: list[str], rows: list[list[str]]) -> str:
     """A Markdown table."""
-    out = ["| " + " | ".join(header) + " |", "|" + "|".join(" --- " for _ in header) + "|"]
+    out = [
+        "| " + " | ".join(header) + " |",
+        "|" + "|".join(" --- " for _ in header) + "|",
+    ]
     out += ["| " + " | ".join(r) + " |" for r in rows]
     return "\n".join(out)
 
@@ -138,7 +141,11 @@ def stryczek(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     probe = study.graph.probe
     u_w = math.sqrt(probe.u_axis**2 + probe.u_probe**2 + probe.u_perp**2)  # along the probing
     u_r1 = float(study.graph.place("neg_r1").u)
-    closed = {"x": u_w / math.sqrt(2.0), "y": u_w / math.sqrt(2.0), "z": math.hypot(u_w, u_r1)}
+    closed = {
+        "x": u_w / math.sqrt(2.0),
+        "y": u_w / math.sqrt(2.0),
+        "z": math.hypot(u_w, u_r1),
+    }
     for c in "xyz":
         q = res.quantity(f"p.{c}")
         u = float(q.mc["u"])
@@ -166,7 +173,10 @@ def stryczek(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     u_grid = np.asarray(sw["u"], dtype=np.float64)
     for i, (sp, sm) in enumerate(np.asarray(sw["grid"])):
         values[f"sweep.u_um[{1e3 * sp:g},{1e3 * sm:g}]"] = exact(1e3 * u_grid[i])
-    fits = (("intercept", sw["surrogate"]), ("no_intercept", sw["surrogate_no_intercept"]))
+    fits = (
+        ("intercept", sw["surrogate"]),
+        ("no_intercept", sw["surrogate_no_intercept"]),
+    )
     for key, fit in fits:
         cp, cm = (float(c) for c in fit["coefficients"])
         values[f"surrogate.{key}.sens_p"] = exact(math.sqrt(cp))
@@ -204,7 +214,12 @@ def stryczek_figures(data: dict[str, Any], out: Path) -> list[Path]:
     ax.hist(x, bins=40, density=True, color="C0", alpha=0.6, label=f"{x.size} trials")
     t = np.linspace(-4, 5, 200)
     s = math.sqrt(1.25)
-    ax.plot(t, np.exp(-0.5 * ((t - 0.5) / s) ** 2) / (s * math.sqrt(2 * math.pi)), "k-", lw=1)
+    ax.plot(
+        t,
+        np.exp(-0.5 * ((t - 0.5) / s) ** 2) / (s * math.sqrt(2 * math.pi)),
+        "k-",
+        lw=1,
+    )
     ax.set_xlabel("Y = X1 + X2")
     ax.set_title("X1 ~ N(0, 1), X2 ~ N(0.5, 0.5) (Stryczek Fig. 4)", fontsize=8)
     ax.legend(fontsize=7)
@@ -244,7 +259,10 @@ def stryczek_figures(data: dict[str, Any], out: Path) -> list[Path]:
     ax1: Any = fig.add_subplot(1, 2, 1, projection="3d")
     n = round(math.sqrt(len(u)))
     ax1.plot_surface(
-        grid[:, 0].reshape(n, n), grid[:, 1].reshape(n, n), u.reshape(n, n), cmap="viridis"
+        grid[:, 0].reshape(n, n),
+        grid[:, 1].reshape(n, n),
+        u.reshape(n, n),
+        cmap="viridis",
     )
     ax1.set_title(f"Fig. 14: Monte Carlo, {sw['trials']} trials per point", fontsize=8)
     ax2: Any = fig.add_subplot(1, 2, 2, projection="3d")
@@ -267,9 +285,19 @@ def stryczek_tables(nb: Numbers) -> dict[str, str]:
     a, b, c = STRYCZEK_EQ31
     out = {}
     out["fig4"] = table(
-        ["", "Stryczek Fig. 4 (3000 samples)", f"mtmc ({s['fig4']['trials']} trials)", "exact"],
         [
-            ["mean of Y", f"{STRYCZEK_FIG4[0]:.3f}", fmt(v(nb, "fig4.mean"), 3), "0.500"],
+            "",
+            "Stryczek Fig. 4 (3000 samples)",
+            f"mtmc ({s['fig4']['trials']} trials)",
+            "exact",
+        ],
+        [
+            [
+                "mean of Y",
+                f"{STRYCZEK_FIG4[0]:.3f}",
+                fmt(v(nb, "fig4.mean"), 3),
+                "0.500",
+            ],
             [
                 "standard deviation of Y",
                 f"{STRYCZEK_FIG4[1]:.3f}",
@@ -295,7 +323,10 @@ def stryczek_tables(nb: Numbers) -> dict[str, str]:
         + table(["", "Monte Carlo", "GUM", "closed form"], rows)
     )
     rows = []
-    for key, label in (("intercept", "with c0"), ("no_intercept", "without c0 (eq. 31's form)")):
+    for key, label in (
+        ("intercept", "with c0"),
+        ("no_intercept", "without c0 (eq. 31's form)"),
+    ):
         rows.append(
             [
                 f"mtmc, {label}",
@@ -343,6 +374,435 @@ def stryczek_tables(nb: Numbers) -> dict[str, str]:
     return out
 
 
+# ---------------------------------------------------------------------------- Aguado et al.
+
+
+def per_point(ver: Any, trials: int, seed: int) -> Any:
+    """Whole verifications with the per-point error vectors kept (engine-seeded, as simulate).
+
+    The model is :class:`mtmc.verification.simulate.VerificationModel` with two more
+    outputs: ``initial`` (reading minus nominal reading, tracker frame) and ``residual``
+    (eq. 17's model minus reading), both ``(m, 3N)``. The inputs and the seed are those of
+    :func:`mtmc.verification.simulate.simulate`, so its trials are the same verifications.
+    """
+    import mtmc
+    from mtmc.verification.simulate import VerificationModel, reference_identification
+
+    vm = VerificationModel.build(ver, reference_identification(ver))
+    n = vm.x_true.shape[0]
+
+    def model(noise: Any) -> dict[str, Any]:
+        m = noise.shape[0]
+        out: dict[str, Any] = vm(noise)
+        x_meas = vm.noise.perturb(vm.true_readings(m), noise.reshape(m, n, 3))
+        _, r, _, _ = vm.solve(x_meas)
+        out["initial"] = (x_meas - vm.x_nom).reshape(m, -1)
+        out["residual"] = r.reshape(m, -1)
+        return out
+
+    keep = ["ve", "initial", "residual", "comp"]
+    res = mtmc.monte_carlo(model, vm.inputs(), trials, seed, keep=keep)
+    return res, vm
+
+
+def pooled(values: Any, n: int, key: str, out: dict[str, Any], factor: float = 1e3) -> None:
+    """Mean and s.d. over all points of all trials of ``values`` (trials x points), µm."""
+    a = np.asarray(values, dtype=np.float64) * factor
+    per_mean, per_sd = a.mean(axis=1), a.std(axis=1)
+    out[f"{key}.mean"] = mc(a.mean(), per_mean.std(ddof=1), n)
+    out[f"{key}.sd"] = mc(a.std(), per_sd.std(ddof=1) + per_mean.std(ddof=1), n)
+
+
+#: Aguado et al. 2017 §3: initial 77.39 +- 40.91 µm, residual 12.34 +- 7.06 µm.
+AGUADO2017 = {"initial": (77.39, 40.91), "final": (12.34, 7.06)}
+
+
+def aguado2017(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
+    """Aguado et al. 2017: the initial and final errors (Fig. 5-6), their statistics."""
+    from mtmc.verification.simulate import simulate
+
+    study = load("aguado2017").study
+    n = max(50, int(study.trials * scale))
+    seed = study.seed
+    ver = study.verification()
+    sim = simulate(ver, n, seed)
+    res, vm = per_point(ver, n, seed)
+    init = np.asarray(res["initial"].samples).reshape(n, -1, 3)
+    comp = np.asarray(res["comp"].samples).reshape(n, -1, 3)
+    values: dict[str, Any] = {}
+    pooled(np.linalg.norm(init, axis=-1), n, "initial", values)
+    data: dict[str, Any] = {"initial": init * 1e3}
+    pooled(np.linalg.norm(comp, axis=-1), n, "final", values)
+    data["final"] = comp * 1e3
+    for name in (
+        "initial.mean",
+        "residual.mean",
+        "compensated.mean",
+        "compensated.max",
+    ):
+        est, u = sim.ve(name)
+        values[f"ve.{name}"] = mc(1e3 * est, 1e3 * u, n)
+    pu, gu = np.asarray(sim.point_u) * 1e3, np.asarray(sim.gum.point_u) * 1e3
+    values["point_u.mean"] = mc(pu.mean(), pu.mean() / math.sqrt(2.0), n)
+    values["point_u.max"] = mc(pu.max(), pu.max() / math.sqrt(2.0), n)
+    values["point_u_gum.mean"] = exact(gu.mean())
+    values["points"] = exact(vm.x_true.shape[0])
+    # the same trials as the study's run: its per-trial means equal ours
+    values["check.same_trials"] = exact(
+        float(np.allclose(np.asarray(sim.ve_samples), np.asarray(res["ve"].samples), atol=1e-12))
+    )
+    data["points"] = np.asarray(study.machine.tool_position(ver.q))
+    data["point_u"] = pu
+    data["bias"] = np.linalg.norm(np.asarray(sim.comp_bias), axis=1) * 1e3
+    return {
+        "settings": {"aguado2017": {"trials": n, "seed": seed}},
+        "values": values,
+    }, data
+
+
+def _hist_row(fig: Any, row: int, rows: int, e: Any, title: str) -> None:
+    labels = ("X", "Y", "Z")
+    for j in range(4):
+        ax = fig.add_subplot(rows, 4, 4 * row + j + 1)
+        x = (np.linalg.norm(e, axis=-1) if j == 3 else e[..., j]).ravel()
+        ax.hist(x, bins=50, color="C0" if j < 3 else "C3", alpha=0.8)
+        ax.set_xlabel(("distance" if j == 3 else f"error in {labels[j]}") + " / µm", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.set_yticks([])
+        if j == 0:
+            ax.set_title(title, fontsize=8, loc="left")
+
+
+def aguado2017_figures(data: dict[str, Any], out: Path) -> list[Path]:
+    """Fig. 5-6 (histograms) and maps of the per-point errors and calibration u."""
+    fig = new_figure(9.0, 4.4)
+    fig.subplots_adjust(left=0.03, right=0.98, bottom=0.11, top=0.93, hspace=0.55, wspace=0.12)
+    _hist_row(fig, 0, 2, data["initial"], "Fig. 5: initial error, all points of all tests")
+    _hist_row(fig, 1, 2, data["final"], "Fig. 6: error after compensation")
+    paths = [save(fig, out, "aguado2017_fig5_6.png")]
+
+    pts = data["points"]
+    maps = (
+        (np.linalg.norm(data["initial"], axis=-1).mean(axis=0), "mean initial error"),
+        (
+            np.linalg.norm(data["final"], axis=-1).mean(axis=0),
+            "mean error after compensation",
+        ),
+        (data["point_u"], "calibration u (Monte Carlo)"),
+    )
+    fig = new_figure(9.6, 3.0)
+    fig.subplots_adjust(left=0.06, right=0.95, bottom=0.16, top=0.9, wspace=0.55)
+    for i, (val, title) in enumerate(maps):
+        ax = fig.add_subplot(1, 3, i + 1)
+        sc = ax.scatter(pts[:, 0], pts[:, 1], c=val, cmap="viridis", s=40, edgecolors="k", lw=0.3)
+        fig.colorbar(sc, ax=ax, shrink=0.85, label="µm")
+        ax.set_title(title, fontsize=8)
+        ax.set_xlabel("X / mm", fontsize=7)
+        ax.set_ylabel("Y / mm", fontsize=7)
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=6)
+    paths.append(save(fig, out, "aguado2017_maps.png"))
+    return paths
+
+
+def aguado2017_tables(nb: Numbers) -> dict[str, str]:
+    """The generated tables of ``aguado2017.md``."""
+    s = nb["settings"]["aguado2017"]
+    (pi, psi), (pf, psf) = AGUADO2017["initial"], AGUADO2017["final"]
+    rows = [
+        [
+            "initial volumetric error, mean ± s.d. (Fig. 5)",
+            f"{pi:.2f} ± {psi:.2f}",
+            f"{fmt(v(nb, 'initial.mean'), 2)} ± {fmt(v(nb, 'initial.sd'), 2)}",
+        ],
+        [
+            "error after compensation, mean ± s.d. (Fig. 6)",
+            f"{pf:.2f} ± {psf:.2f}",
+            f"{fmt(v(nb, 'final.mean'), 2)} ± {fmt(v(nb, 'final.sd'), 2)}",
+        ],
+        [
+            "residual of the fit (eq. 17 of Aguado et al. 2016), mean",
+            "—",
+            fmt(v(nb, "ve.residual.mean"), 2),
+        ],
+        [
+            "calibration u per point, mean (Monte Carlo / GUM)",
+            "—",
+            f"{fmt(v(nb, 'point_u.mean'), 2)} / {fmt(v(nb, 'point_u_gum.mean'), 2)}",
+        ],
+    ]
+    same = "the same" if v(nb, "check.same_trials") == 1.0 else "NOT the same"
+    head = (
+        f"{int(v(nb, 'points'))} points, {s['trials']} tests, seed {s['seed']}; µm "
+        f"(the per-point run gives {same} verifications as `simulate`)."
+    )
+    return {"stats": head + "\n\n" + table(["", "Aguado et al. 2017", "mtmc"], rows)}
+
+
+#: Aguado et al. 2016 Tables I-IV: (initial max, mean, min, final max, mean, min), µm.
+AGUADO2016: dict[tuple[str, str], tuple[float, ...]] = {
+    ("mesh96", "none"): (63.7, 35.3, 0.0, 16.3, 7.7, 0.0),
+    ("mesh96", "pos1"): (121.1, 72.0, 44.8, 81.4, 41.6, 7.7),
+    ("mesh96", "pos2"): (85.0, 53.1, 29.4, 55.3, 25.9, 1.7),
+    ("mesh96", "pos3"): (122.1, 71.2, 43.0, 74.3, 32.3, 2.6),
+    ("mesh96", "pos4"): (111.1, 70.0, 26.8, 40.8, 21.5, 4.4),
+    ("cloud96", "pos1"): (121.1, 72.0, 45.5, 81.9, 32.8, 2.5),
+    ("cloud96", "pos2"): (85.0, 53.4, 29.4, 55.3, 26.1, 4.4),
+    ("cloud96", "pos3"): (140.7, 88.6, 29.4, 61.5, 39.0, 6.6),
+    ("cloud96", "pos4"): (108.3, 65.3, 25.6, 37.1, 16.3, 3.0),
+    ("mesh5408", "none"): (63.7, 33.7, 0.0, 14.6, 6.6, 0.0),
+    ("mesh5408", "pos1"): (121.1, 69.9, 44.8, 98.2, 35.1, 1.9),
+    ("mesh5408", "pos2"): (85.2, 50.2, 29.2, 88.0, 47.0, 22.2),
+    ("mesh5408", "pos3"): (140.7, 87.0, 6.15, 113.4, 40.5, 1.2),
+    ("mesh5408", "pos4"): (108.3, 63.6, 25.3, 46.1, 16.3, 8.0),
+}
+STATS = (
+    "initial.max",
+    "initial.mean",
+    "initial.min",
+    "residual.max",
+    "residual.mean",
+    "residual.min",
+)
+
+
+def aguado2016(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
+    """Aguado et al. 2016: Tables I-IV (3 point sets x 4 tracker positions) and Fig. 9."""
+    from mtmc.verification.identify import ve_stats
+    from mtmc.verification.simulate import reference_identification, simulate
+
+    study = load("aguado2016").study
+    n = max(50, int(study.trials * scale))
+    n9 = max(20, int(100 * scale))
+    seed = study.seed
+    values: dict[str, Any] = {}
+    data: dict[str, Any] = {}
+    for pts in ("mesh96", "cloud96", "mesh5408"):
+        ref = reference_identification(study.verification(points=pts, tracker="pos1"))
+        stats = np.concatenate([ve_stats(ref.initial_ve)[0], ve_stats(ref.residual_ve)[0]])
+        for name, x in zip(STATS, stats, strict=True):
+            values[f"{pts}.none.{name}"] = exact(1e3 * x)
+        for pos in ("pos1", "pos2", "pos3", "pos4"):
+            ver = study.verification(points=pts, tracker=pos)
+            sim = simulate(ver, n, seed)
+            for name in (*STATS, "compensated.mean"):
+                est, u = sim.ve(name)
+                values[f"{pts}.{pos}.{name}"] = mc(1e3 * est, 1e3 * u, n)
+            pu = np.asarray(sim.point_u) * 1e3
+            values[f"{pts}.{pos}.point_u.mean"] = mc(pu.mean(), pu.mean() / math.sqrt(2.0), n)
+            values[f"{pts}.{pos}.point_u_gum.mean"] = exact(1e3 * float(np.mean(sim.gum.point_u)))
+            if pts == "mesh5408" and pos in ("pos1", "pos4"):
+                res, _ = per_point(ver, n9, seed)
+                e0 = np.asarray(res["initial"].samples).reshape(n9, -1, 3)
+                e1 = np.asarray(res["residual"].samples).reshape(n9, -1, 3)
+                data[pos] = (
+                    np.linalg.norm(e0, axis=-1) * 1e3,
+                    np.linalg.norm(e1, axis=-1) * 1e3,
+                )
+    data["none"] = (ref.initial_ve[0] * 1e3, ref.residual_ve[0] * 1e3)
+    settings = {"aguado2016": {"trials": n, "seed": seed, "fig9_trials": n9}}
+    return {"settings": settings, "values": values}, data
+
+
+def aguado2016_figures(data: dict[str, Any], out: Path) -> list[Path]:
+    """Fig. 9: initial and final errors on the 5408-point mesh, no noise and pos 1 and 4."""
+    fig = new_figure(8.4, 3.0)
+    fig.subplots_adjust(left=0.05, right=0.98, bottom=0.17, top=0.88, wspace=0.15)
+    for i, (title, idx) in enumerate((("initial error", 0), ("final error (eq. 17)", 1))):
+        ax = fig.add_subplot(1, 2, i + 1)
+        hi = max(float(np.percentile(data[k][idx], 99.5)) for k in ("none", "pos1", "pos4"))
+        bins = np.linspace(0.0, hi, 60)
+        for key, label, c in (
+            ("none", "no noise", "k"),
+            ("pos1", "pos 1", "C3"),
+            ("pos4", "pos 4", "C0"),
+        ):
+            ax.hist(
+                np.ravel(data[key][idx]),
+                bins=bins,
+                density=True,
+                histtype="step",
+                color=c,
+                lw=1.2,
+                label=label,
+            )
+        ax.set_xlabel(f"{title} / µm", fontsize=8)
+        ax.set_yticks([])
+        ax.set_title(f"Fig. 9: {title}, 5408 points", fontsize=8)
+        ax.legend(fontsize=7)
+        ax.tick_params(labelsize=7)
+    return [save(fig, out, "aguado2016_fig9.png")]
+
+
+def printed(x: float) -> str:
+    """A number of the paper as printed (one decimal, two where it has them)."""
+    return f"{x:.1f}" if abs(10 * x - round(10 * x)) < 1e-9 else f"{x:.2f}"
+
+
+def aguado2016_tables(nb: Numbers) -> dict[str, str]:
+    """The generated tables of ``aguado2016.md``: Table I, and II-IV one per point set."""
+    out = {}
+    header = ["", "initial max", "mean", "min", "final max", "mean", "min"]
+    extra = ["mtmc after compensation, mean", "calibration u mean, MC / GUM"]
+    for pts in ("mesh96", "cloud96", "mesh5408"):
+        paper = AGUADO2016.get((pts, "none"))
+        rows = [
+            ["paper, no noise", *(printed(x) for x in paper)] if paper else None,
+            ["mtmc, no noise", *(fmt(v(nb, f"{pts}.none.{k}")) for k in STATS)],
+        ]
+        if pts == "mesh96":
+            out["table1"] = table(header, [r for r in rows if r])
+            trows = []
+        else:
+            trows = [[*r, "—", "—"] for r in rows if r]
+        for pos in ("pos1", "pos2", "pos3", "pos4"):
+            p = AGUADO2016[(pts, pos)]
+            trows.append([f"paper, {pos}", *(printed(x) for x in p), "—", "—"])
+            trows.append(
+                [
+                    f"mtmc, {pos}",
+                    *(fmt(v(nb, f"{pts}.{pos}.{k}")) for k in STATS),
+                    fmt(v(nb, f"{pts}.{pos}.compensated.mean")),
+                    (
+                        f"{fmt(v(nb, f'{pts}.{pos}.point_u.mean'))} / "
+                        f"{fmt(v(nb, f'{pts}.{pos}.point_u_gum.mean'))}"
+                    ),
+                ]
+            )
+        out[f"table.{pts}"] = table(header + extra, trows)
+    s = nb["settings"]["aguado2016"]
+    out["settings"] = (
+        f"{s['trials']} verifications per row, seed {s['seed']}; Fig. 9 pools "
+        f"{s['fig9_trials']} verifications per position."
+    )
+    return out
+
+
+# ---------------------------------------------------------------------------- Wang et al.
+
+#: Wang, Cheung and Kong 2022 Table 2: (b, c) -> measured r_max, r_avg, model r_max, r_avg.
+WANG2022_T2 = {
+    (0, 0): (0.9, 0.4, 0.8, 0.4),
+    (0, 5): (5.5, 1.3, 5.1, 1.2),
+    (0, -5): (5.4, 1.1, 5.3, 1.1),
+    (5, 0): (1.1, 0.6, 0.8, 0.4),
+    (5, 5): (5.6, 1.6, 5.5, 1.5),
+    (5, -5): (5.7, 1.4, 5.4, 1.5),
+    (10, 0): (1.6, 0.6, 1.3, 0.8),
+    (10, 5): (6.8, 2.3, 6.2, 2.0),
+    (10, -5): (6.4, 2.2, 6.1, 1.8),
+}
+#: Table 3: per sphere, the residuals x, y, z after the best fit (µm); Fig. 7: mean 4.5 µm.
+WANG2022_T3 = ((0.4, 0.9, 0.2), (0.5, 0.8, 0.4), (0.7, 0.8, 0.3), (0.7, 1.0, 0.3), (0.6, 0.7, 0.2))
+WANG2022_FIG7 = 4.5
+
+
+def wang2022(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
+    """Wang, Cheung and Kong 2022: Table 2, Table 3 and Fig. 7 of the shipped study."""
+    from mtmc.artefact.study import simulate
+
+    study = load("wang2022").study
+    n = max(200, int(study.trials * scale))
+    seed = study.seed
+    res = simulate(study, trials=n, seed=seed)
+    j = res.to_json()
+    values: dict[str, Any] = {}
+    for pose in j["poses"]:
+        b, c = round(pose["b_deg"]), round(pose["c_deg"])
+        for key in ("r_max_um", "r_avg_um", "r_max_model_um", "r_avg_model_um"):
+            e = pose[key]
+            k = f"t2[{b},{c}].{key[:-3]}"
+            values[f"{k}.noise_free"] = exact(e["noise_free"])
+            values[f"{k}.mc"] = mc(e["estimate"], e["u"], n)
+            values[f"{k}.mc_u"] = mc(e["u"], e["u"] / math.sqrt(2.0), n)
+            values[f"{k}.gum_u"] = exact(e["gum_u"])
+    t3 = np.asarray(j["table3_um"], dtype=np.float64)
+    t3_mean = np.asarray(res.mc_mean["table3"]).reshape(t3.shape) * 1e3
+    t3_u = np.asarray(res.mc_u["table3"]).reshape(t3.shape) * 1e3
+    for i in range(t3.shape[0]):
+        for a, ax in enumerate("xyz"):
+            values[f"t3[{i + 1}].{ax}.noise_free"] = exact(t3[i, a])
+            values[f"t3[{i + 1}].{ax}.mc"] = mc(t3_mean[i, a], t3_u[i, a], n)
+    vol = np.linalg.norm(np.asarray(j["volumetric_um"]), axis=-1)
+    values["fig7.mean_um"] = exact(j["volumetric_mean_um"])
+    values["fig7.max_um"] = exact(vol.max())
+    return {"settings": {"wang2022": {"trials": n, "seed": seed}}, "values": values}, {"res": res}
+
+
+def wang2022_figures(data: dict[str, Any], out: Path) -> list[Path]:
+    """Fig. 7: the error vectors at the balls, magnified 10 000 times (the library's plot)."""
+    from mtmc.artefact.plot import plot_error_vectors
+
+    out.mkdir(parents=True, exist_ok=True)
+    import matplotlib
+
+    with matplotlib.rc_context({"figure.dpi": 80, "savefig.dpi": 80}):
+        path = plot_error_vectors(data["res"], out / "wang2022_fig7.png")
+    return [path]
+
+
+def wang2022_tables(nb: Numbers) -> dict[str, str]:
+    """The generated tables of ``wang2022.md``."""
+    s = nb["settings"]["wang2022"]
+    rows = []
+    for (b, c), p in WANG2022_T2.items():
+        k = f"t2[{b},{c}]"
+        rows.append(
+            [
+                f"{b}°",
+                f"{c}°",
+                f"{p[0]:.1f} / {p[1]:.1f}",
+                (
+                    f"{fmt(v(nb, f'{k}.r_max.noise_free'), 2)} / "
+                    f"{fmt(v(nb, f'{k}.r_avg.noise_free'), 2)}"
+                ),
+                (
+                    f"{fmt(v(nb, f'{k}.r_max.mc'), 2)} ± {fmt(v(nb, f'{k}.r_max.mc_u'), 2)} / "
+                    f"{fmt(v(nb, f'{k}.r_avg.mc'), 2)} ± {fmt(v(nb, f'{k}.r_avg.mc_u'), 2)}"
+                ),
+                f"{fmt(v(nb, f'{k}.r_max.gum_u'), 2)} / {fmt(v(nb, f'{k}.r_avg.gum_u'), 2)}",
+                f"{p[2]:.1f} / {p[3]:.1f}",
+                (
+                    f"{fmt(v(nb, f'{k}.r_max_model.noise_free'), 2)} / "
+                    f"{fmt(v(nb, f'{k}.r_avg_model.noise_free'), 2)}"
+                ),
+            ]
+        )
+    t2 = table(
+        [
+            "b",
+            "c",
+            "paper ① r_max / r_avg",
+            "mtmc ① noise-free",
+            "mtmc ① MC mean ± u",
+            "mtmc ① GUM u",
+            "paper ② r_max / r_avg",
+            "mtmc ② noise-free",
+        ],
+        rows,
+    )
+    rows = []
+    for i, p3 in enumerate(WANG2022_T3):
+        k = f"t3[{i + 1}]"
+        rows.append(
+            [
+                str(i + 1),
+                " / ".join(f"{x:.1f}" for x in p3),
+                " / ".join(fmt(v(nb, f"{k}.{a}.noise_free"), 2) for a in "xyz"),
+                ", ".join(fmt(v(nb, f"{k}.{a}.mc"), 2) for a in "xyz"),
+            ]
+        )
+    t3 = table(
+        ["sphere", "paper x / y / z", "mtmc noise-free x / y / z", "mtmc MC mean x, y, z"], rows
+    )
+    fig7 = (
+        f"Mean length of the 45 error vectors: paper {WANG2022_FIG7:.1f} µm, mtmc "
+        f"{fmt(v(nb, 'fig7.mean_um'), 2)} µm (largest {fmt(v(nb, 'fig7.max_um'), 2)} µm)."
+    )
+    head = f"{s['trials']} trials, seed {s['seed']}; µm."
+    return {"settings": head, "table2": t2, "table3": t3, "fig7": fig7}
+
+
 # ---------------------------------------------------------------------------- driver
 
 Case = tuple[
@@ -353,6 +813,9 @@ Case = tuple[
 
 CASES: dict[str, Case] = {
     "stryczek": (stryczek, stryczek_figures, stryczek_tables),
+    "aguado2017": (aguado2017, aguado2017_figures, aguado2017_tables),
+    "aguado2016": (aguado2016, aguado2016_figures, aguado2016_tables),
+    "wang2022": (wang2022, wang2022_figures, wang2022_tables),
 }
 
 _BLOCK = re.compile(r"(<!-- generated: (\S+) -->\n)(.*?)(^<!-- end generated -->)", re.S | re.M)
@@ -413,7 +876,10 @@ def main(argv: list[str] | None = None) -> int:
         (NUMBERS / f"{name}.json").write_text(json.dumps(numbers, indent=1) + "\n")
         for p in figures(data, FIGURES):
             print(f"{p.relative_to(ROOT)}: {p.stat().st_size // 1024} kB")
-        md.write_text(fill(md.read_text(encoding="utf-8"), blocks(name, numbers)), encoding="utf-8")
+        md.write_text(
+            fill(md.read_text(encoding="utf-8"), blocks(name, numbers)),
+            encoding="utf-8",
+        )
         print(f"{md.relative_to(ROOT)}: tables written")
     if stale:
         print("stale tables: " + ", ".join(stale), file=sys.stderr)
