@@ -117,6 +117,15 @@ def test_figures_written_and_small(name: str, reruns: dict[str, Any]) -> None:
         assert (TUTORIALS / shown).is_file(), shown
 
 
+@pytest.mark.parametrize("name", [*NAMES, "README"])
+def test_links_resolve(name: str) -> None:
+    text = (TUTORIALS / f"{name}.md").read_text(encoding="utf-8")
+    links = re.findall(r"\]\(([^)#\s]+)\)", text)
+    assert links
+    for link in links:
+        assert (TUTORIALS / link).exists(), f"{name}.md links to {link}, which does not exist"
+
+
 def _blocks(name: str, lang: str) -> list[str]:
     text = (TUTORIALS / f"{name}.md").read_text(encoding="utf-8")
     return re.findall(rf"```{lang}\n(.*?)```", text, flags=re.S)
