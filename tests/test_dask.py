@@ -222,3 +222,31 @@ def test_the_dask_example_script_runs():
     )
     assert done.returncode == 0, done.stderr
     assert "same numbers" in done.stdout
+
+
+def test_an_artefact_study_on_the_cluster_is_bit_identical(client):
+    from mtmc.study import load_study
+
+    study = load_study(Path(__file__).resolve().parents[1] / "examples/studies/wang2022.toml")
+    here = study.run(trials=300, seed=8)
+    there = study.run(trials=300, seed=8, executor="dask", scheduler=client)
+    assert here.to_dict() == there.to_dict()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["verify", "simulate", "aguado2017.toml", "-n", "40"],
+        ["artefact", "simulate", "wang2022.toml", "-n", "300"],
+    ],
+)
+def test_verify_and_artefact_simulate_on_the_cluster(client, capsys, argv):
+    from mtmc.cli.main import main
+
+    argv = [*argv[:2], str(EXAMPLES.parent / "studies" / argv[2]), *argv[3:], "--json"]
+    assert main([*argv, "--seed", "3"]) == 0
+    here = capsys.readouterr().out
+    assert main([*argv, "--seed", "3", "--scheduler", client.scheduler.address]) == 0
+    assert capsys.readouterr().out == here
+    assert main([*argv, "--seed", "3", "--workers", "2"]) == 0
+    assert capsys.readouterr().out == here

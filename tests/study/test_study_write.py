@@ -126,7 +126,13 @@ def test_a_killed_run_leaves_no_result(tmp_path, sig):
 
 @pytest.mark.parametrize(
     ("name", "trials"),
-    [("mass_calibration", 3000), ("bcs_origin", 2000), ("five_axis", 3000), ("aguado2017", 40)],
+    [
+        ("mass_calibration", 3000),
+        ("bcs_origin", 2000),
+        ("five_axis", 3000),
+        ("aguado2017", 40),
+        ("wang2022", 300),
+    ],
 )
 def test_two_workers_give_the_same_result_as_one(name, trials):
     study = load_study(STUDIES / f"{name}.toml")

@@ -42,7 +42,13 @@ class ArtefactKindStudy(Study):
         """Simulate the study (:func:`mtmc.artefact.study.simulate`) and tabulate it."""
         from mtmc.artefact.study import simulate
 
-        res = simulate(self.study, trials=settings.trials, seed=settings.seed, progress=progress)
+        res = simulate(
+            self.study,
+            trials=settings.trials,
+            seed=settings.seed,
+            progress=progress,
+            **settings.parallel,
+        )
         j = res.to_json()
         rows = []
         for pose in j["poses"]:
