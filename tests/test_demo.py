@@ -115,3 +115,10 @@ def test_cli_demo_ends_with_the_report_path(capsys, tmp_path, monkeypatch):
     assert main(argv) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last == f"Report: {tmp_path / 'd' / 'index.html'}"
+    assert main([*argv[:2], str(tmp_path / "w"), *argv[3:], "--workers", "2"]) == 0
+    for d in ("d", "w"):
+        assert (tmp_path / d / "ball_centre" / "result.json").is_file()
+    one, two = (
+        json.loads((tmp_path / d / "ball_centre" / "result.json").read_text()) for d in "dw"
+    )
+    assert one["quantities"] == two["quantities"]

@@ -63,6 +63,7 @@ def run_demo(
     studies: Sequence[str] | None = None,
     progress: Callable[[str], Any] | None = None,
     echo: Callable[[str], Any] = print,
+    **parallel: Any,
 ) -> Path:
     """Run the shipped studies into ``out`` and write ``out/index.html``.
 
@@ -81,6 +82,8 @@ def run_demo(
         CLI's Rich bar); None: no bar.
     echo : callable
         Where the one-line summaries go.
+    **parallel
+        ``workers``, ``executor``, ``scheduler`` of every run (:meth:`Study.run`).
 
     Returns
     -------
@@ -104,7 +107,7 @@ def run_demo(
         started = now()
         bar = progress(name) if progress is not None else contextlib.nullcontext(None)
         with bar as step:
-            result = study.run(trials=trials, seed=seed, progress=step)
+            result = study.run(trials=trials, seed=seed, progress=step, **parallel)
         write_result(
             result,
             folder / stem,

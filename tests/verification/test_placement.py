@@ -43,3 +43,14 @@ def test_place_cli_json(capsys) -> None:  # type: ignore[no-untyped-def]
     assert set(d["reference"]) == {"pos1", "pos2", "pos3", "pos4"}
     assert d["candidates"] > 0
     assert d["reference"]["pos1"]["u_um"] > d["reference"]["pos3"]["u_um"] > 0
+
+
+def test_place_cli_confirms_by_monte_carlo_on_two_workers(capsys) -> None:  # type: ignore[no-untyped-def]
+    args = ["verify", "place", str(STUDY), "--trials", "20", "--grid", "2", "--refine", "0"]
+    args += ["--points", "mesh96", "--seed", "4", "--json"]
+    assert main(args) == 0
+    one = json.loads(capsys.readouterr().out)
+    assert main([*args, "--workers", "2"]) == 0
+    two = json.loads(capsys.readouterr().out)
+    assert one == two
+    assert one["best"]["u_mc_um"] > 0

@@ -131,6 +131,9 @@ def demo_cmd(
     trials: int | None = typer.Option(None, "--trials", "-n", help="Trials of every study."),
     seed: int | None = typer.Option(None, "--seed", help="Seed of every study."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
 ) -> None:
     """Run the shipped studies into OUT and write OUT/index.html linking their reports."""
     from mtmc.demo import run_demo
@@ -142,6 +145,13 @@ def demo_cmd(
         return progress_bar(f"{label}: Monte Carlo", False if quiet else None)
 
     try:
-        run_demo(out, trials=trials, seed=seed, progress=bar, echo=typer.echo)
+        run_demo(
+            out,
+            trials=trials,
+            seed=seed,
+            progress=bar,
+            echo=typer.echo,
+            **parallel_options(workers, executor, scheduler),
+        )
     except (MtmcError, OSError) as exc:
         fail(exc)

@@ -297,6 +297,9 @@ def place_cmd(
     grid: int = typer.Option(11, "--grid", min=2, help="Candidates per horizontal axis."),
     refine: int = typer.Option(300, "--refine", min=0, help="Evaluations of the refinement."),
     as_json: bool = JSON_OPTION,
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
 ) -> None:
     """Search the tracker position with the smallest mean calibration uncertainty."""
     import math
@@ -317,6 +320,7 @@ def place_cmd(
             refine=refine,
             trials=trials,
             seed=st.seed if seed is None else seed,
+            **parallel_options(workers, executor, scheduler),
         )
     except MtmcError as exc:
         fail(exc)

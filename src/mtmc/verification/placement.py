@@ -108,6 +108,7 @@ def place(
     trials: int = 0,
     seed: int | None = None,
     refine: int = 300,
+    **engine: Any,
 ) -> Placement:
     """Search tracker positions for the smallest mean calibration uncertainty.
 
@@ -130,6 +131,9 @@ def place(
         Evaluations of a Nelder–Mead refinement of the best grid node over its position
         and its three Euler angles (``"xyz"``), within the limits.
     seed : int, optional
+    **engine
+        ``workers``, ``executor``, ``scheduler`` of the confirming Monte Carlo
+        (:func:`mtmc.verification.simulate.simulate`).
 
     Returns
     -------
@@ -200,5 +204,5 @@ def place(
     if trials > 0:
         b = best[1]
         v2 = Verification(ver.model, ver.q, b, ver.true_errors, pose=ver.pose, fixed=ver.fixed)
-        u_mc = float(np.mean(simulate(v2, trials, seed).point_u))
+        u_mc = float(np.mean(simulate(v2, trials, seed, **engine).point_u))
     return Placement(best[1], best[0], u_mc, scored, rejected, refs)
