@@ -220,7 +220,7 @@ def _pos(x: Any, y: Any, file: str | None, line: int) -> tuple[float, float] | N
     return (_num(x, "x", file, line), _num(y, "y", file, line))
 
 
-def loads_assertions(text: str, *, file: str | None = None, validate: bool = True) -> Graph:  # noqa: C901
+def loads_assertions(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
     """Read a graph from the assertion database of Stryczek (Table 1).
 
     Parameters
@@ -255,160 +255,201 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
     (['p1', 'p2', 'p3'], ('p1', 'p2'), 'p3')
     """
     facts = _facts(text, file)
-    title, units = "", "mm"
-    probe = ProbeDefaults()
-    praw: dict[str, tuple[list[Any], int]] = {}
-    traw: dict[str, tuple[list[Any], int]] = {}
-    inputs: dict[str, list[str]] = {}
-    outs: dict[str, list[str]] = {}
-    marked: set[str] = set()
-    extra_p: dict[str, dict[str, Any]] = {}
-    extra_t: dict[str, dict[str, Any]] = {}
-    arc_lines: dict[str, int] = {}
-    p_refs: list[tuple[str, int]] = []
-
-    def err(msg: str, line: int, fld: str | None = None) -> GraphError:
-        return GraphError(msg, file=file, line=line, field=fld)
-
+    c = _Collected(file)
     for head, a, line in facts:
+        c.add(head, a, line)
+    producer = c.producers()
+    places = c.places(producer)
+    transitions = c.transitions({p.name: p.type for p in places})
+    graph = Graph(tuple(places), tuple(transitions), c.title, c.units, c.probe, file=file)
+    if validate:
+        check(graph)
+    return graph
+
+
+class _Collected:
+    """The facts of an assertion database, gathered by element, then turned into a graph."""
+
+    def __init__(self, file: str | None) -> None:
+        self.file = file
+        self.title, self.units = "", "mm"
+        self.probe = ProbeDefaults()
+        self.praw: dict[str, tuple[list[Any], int]] = {}
+        self.traw: dict[str, tuple[list[Any], int]] = {}
+        self.inputs: dict[str, list[str]] = {}
+        self.outs: dict[str, list[str]] = {}
+        self.marked: set[str] = set()
+        self.extra_p: dict[str, dict[str, Any]] = {}
+        self.extra_t: dict[str, dict[str, Any]] = {}
+        self.arc_lines: dict[str, int] = {}
+        self.p_refs: list[tuple[str, int]] = []
+        self.meas_at: dict[str, tuple[float, float, float]] = {}
+
+    def err(self, msg: str, line: int, fld: str | None = None) -> GraphError:
+        return GraphError(msg, file=self.file, line=line, field=fld)
+
+    def add(self, head: str, a: list[Any], line: int) -> None:
+        """Record one fact."""
+        if head in ("p", "t", "pt", "tp", "m"):
+            self._add_net(head, a, line)
+        else:
+            self._add_field(head, a, line)
+
+    def _add_net(self, head: str, a: list[Any], line: int) -> None:
+        """A place, a transition, an arc or a marking."""
+        file = self.file
         if head == "p":
             name = _name(a[0], "p", file, line)
-            if name in praw:
-                raise err(f"place {name} is asserted twice", line, name)
-            praw[name] = (a, line)
+            if name in self.praw:
+                raise self.err(f"place {name} is asserted twice", line, name)
+            self.praw[name] = (a, line)
         elif head == "t":
             name = _name(a[0], "t", file, line)
-            if name in traw:
-                raise err(f"transition {name} is asserted twice", line, name)
-            traw[name] = (a, line)
+            if name in self.traw:
+                raise self.err(f"transition {name} is asserted twice", line, name)
+            self.traw[name] = (a, line)
         elif head == "pt":
             t = _name(a[1], "t", file, line)
-            inputs.setdefault(t, []).append(_name(a[0], "p", file, line))
-            p_refs.append((inputs[t][-1], line))
-            arc_lines.setdefault(t, line)
+            self.inputs.setdefault(t, []).append(_name(a[0], "p", file, line))
+            self.p_refs.append((self.inputs[t][-1], line))
+            self.arc_lines.setdefault(t, line)
         elif head == "tp":
             t = _name(a[0], "t", file, line)
-            outs.setdefault(t, []).append(_name(a[1], "p", file, line))
-            p_refs.append((outs[t][-1], line))
-            arc_lines.setdefault(t, line)
-        elif head == "m":
-            marked.add(_name(a[0], "p", file, line))
-            p_refs.append((_name(a[0], "p", file, line), line))
-        elif head == "title":
-            title = str(a[0])
+            self.outs.setdefault(t, []).append(_name(a[1], "p", file, line))
+            self.p_refs.append((self.outs[t][-1], line))
+            self.arc_lines.setdefault(t, line)
+        else:  # m
+            self.marked.add(_name(a[0], "p", file, line))
+            self.p_refs.append((_name(a[0], "p", file, line), line))
+
+    def _add_field(self, head: str, a: list[Any], line: int) -> None:
+        """A title, units, probe defaults, or a field of a place or a transition."""
+        file = self.file
+        if head == "title":
+            self.title = str(a[0])
         elif head == "units":
-            units = str(a[0])
+            self.units = str(a[0])
         elif head == "probe":
             try:
                 u1, u2, u3 = (_num(v, "probe", file, line) for v in a)
-                probe = ProbeDefaults(u1, u2, u3, line=line)
+                self.probe = ProbeDefaults(u1, u2, u3, line=line)
             except MtmcError as exc:
-                raise err(exc.message, line, exc.field) from None
+                raise self.err(exc.message, line, exc.field) from None
         elif head in ("u", "dist", "unit"):
             name = _name(a[0], "p", file, line)
-            p_refs.append((name, line))
+            self.p_refs.append((name, line))
             val: Any = str(a[1])
             if head == "u":  # u(p, u) or, per coordinate, u(p, ux, uy, uz)
                 nums = tuple(_num(v, head, file, line) for v in a[1:])
                 val = nums[0] if len(nums) == 1 else nums
-            extra_p.setdefault(name, {})[head] = val
+            self.extra_p.setdefault(name, {})[head] = val
         elif head == "dir":
             name = _name(a[0], "t", file, line)
-            extra_t.setdefault(name, {})["direction"] = tuple(
+            self.extra_t.setdefault(name, {})["direction"] = tuple(
                 _num(v, "dir", file, line) for v in a[1:]
             )
         else:  # par
             name = _name(a[0], "t", file, line)
-            extra_t.setdefault(name, {})[str(a[1])] = a[2]
-    for name in (*inputs, *outs, *extra_t):
-        if name not in traw:
-            raise err(
-                f"an assertion names transition {name}, which has no t(...)",
-                arc_lines.get(name, 1),
-                name,
-            )
-    for name, line in p_refs:
-        if name not in praw:
-            raise err(f"an assertion names place {name}, which has no p(...)", line, name)
-    producer = {}
-    for t, (a, line) in traw.items():
-        o = outs.get(t, [])
-        if len(o) != 1:
-            raise err(
-                f"transition {t} has {len(o)} output arcs tp({t}, ...); expected exactly one",
-                line,
-                t,
-            )
-        producer[o[0]] = (t, str(a[3]))
-    places = []
-    meas_at: dict[str, tuple[float, float, float]] = {}
-    for name, (a, line) in praw.items():
-        code = str(a[3])
-        type_ = TYPE_CODES.get(code, code)
-        vals = [_num(v, f"place {name}", file, line) for v in a[4:7]]
-        ex = extra_p.get(name, {})
-        value: Any = None
-        if name in marked:
-            if type_ in ("x", "y", "z"):
-                value = vals["xyz".index(type_)]
-            elif type_ == "real":
-                # "r", R_x, R_y, R_z: R, 0, 0 is a real; with R_y or R_z non-zero it is
-                # a displacement per coordinate, a vector place (for displace)
-                if vals[1] == 0.0 and vals[2] == 0.0:
-                    value = vals[0]
-                else:
-                    type_, value = "vector", tuple(vals)
-            else:
-                value = tuple(vals)
-        elif name in producer and producer[name][1] == "meas":
-            meas_at[producer[name][0]] = (vals[0], vals[1], vals[2])
-        try:
-            places.append(
-                Place(
+            self.extra_t.setdefault(name, {})[str(a[1])] = a[2]
+
+    def producers(self) -> dict[str, tuple[str, str]]:
+        """Check the references; the producing transition and its op of each output place."""
+        for name in (*self.inputs, *self.outs, *self.extra_t):
+            if name not in self.traw:
+                raise self.err(
+                    f"an assertion names transition {name}, which has no t(...)",
+                    self.arc_lines.get(name, 1),
                     name,
-                    type_,
-                    value,
-                    u=ex.get("u"),
-                    dist=ex.get("dist"),
-                    unit=ex.get("unit"),
-                    pos=_pos(a[1], a[2], file, line),
-                    line=line,
                 )
-            )
-        except MtmcError as exc:
-            raise err(exc.message, line, exc.field) from None
-    types = {p.name: p.type for p in places}
-    transitions = []
-    for name, (a, line) in traw.items():
-        op = str(a[3])
-        params = dict(extra_t.get(name, {}))
-        out = outs[name][0]
-        if op == "meas":
-            params.setdefault("at", meas_at.get(name, (0.0, 0.0, 0.0)))
-            if "direction" not in params:
-                params["direction"] = {
-                    "x": (1.0, 0.0, 0.0),
-                    "y": (0.0, 1.0, 0.0),
-                    "z": (0.0, 0.0, 1.0),
-                }.get(types[out], (0.0, 0.0, -1.0))
-        try:
-            transitions.append(
-                Transition(
-                    name,
-                    op,
-                    tuple(inputs.get(name, ())),
-                    out,
-                    tuple(params.items()),
-                    pos=_pos(a[1], a[2], file, line),
-                    line=line,
+        for name, line in self.p_refs:
+            if name not in self.praw:
+                raise self.err(f"an assertion names place {name}, which has no p(...)", line, name)
+        producer = {}
+        for t, (a, line) in self.traw.items():
+            o = self.outs.get(t, [])
+            if len(o) != 1:
+                raise self.err(
+                    f"transition {t} has {len(o)} output arcs tp({t}, ...); expected exactly one",
+                    line,
+                    t,
                 )
-            )
-        except MtmcError as exc:
-            raise err(exc.message, line, exc.field) from None
-    graph = Graph(tuple(places), tuple(transitions), title, units, probe, file=file)
-    if validate:
-        check(graph)
-    return graph
+            producer[o[0]] = (t, str(a[3]))
+        return producer
+
+    def places(self, producer: dict[str, tuple[str, str]]) -> list[Place]:
+        """The places (and, in passing, the point of each measurement)."""
+        file = self.file
+        places = []
+        for name, (a, line) in self.praw.items():
+            code = str(a[3])
+            type_ = TYPE_CODES.get(code, code)
+            vals = [_num(v, f"place {name}", file, line) for v in a[4:7]]
+            ex = self.extra_p.get(name, {})
+            value: Any = None
+            if name in self.marked:
+                type_, value = _marked_value(type_, vals)
+            elif name in producer and producer[name][1] == "meas":
+                self.meas_at[producer[name][0]] = (vals[0], vals[1], vals[2])
+            try:
+                places.append(
+                    Place(
+                        name,
+                        type_,
+                        value,
+                        u=ex.get("u"),
+                        dist=ex.get("dist"),
+                        unit=ex.get("unit"),
+                        pos=_pos(a[1], a[2], file, line),
+                        line=line,
+                    )
+                )
+            except MtmcError as exc:
+                raise self.err(exc.message, line, exc.field) from None
+        return places
+
+    def transitions(self, types: dict[str, str]) -> list[Transition]:
+        """The transitions; a measurement takes its point and direction from its output place."""
+        transitions = []
+        for name, (a, line) in self.traw.items():
+            op = str(a[3])
+            params = dict(self.extra_t.get(name, {}))
+            out = self.outs[name][0]
+            if op == "meas":
+                params.setdefault("at", self.meas_at.get(name, (0.0, 0.0, 0.0)))
+                if "direction" not in params:
+                    params["direction"] = {
+                        "x": (1.0, 0.0, 0.0),
+                        "y": (0.0, 1.0, 0.0),
+                        "z": (0.0, 0.0, 1.0),
+                    }.get(types[out], (0.0, 0.0, -1.0))
+            try:
+                transitions.append(
+                    Transition(
+                        name,
+                        op,
+                        tuple(self.inputs.get(name, ())),
+                        out,
+                        tuple(params.items()),
+                        pos=_pos(a[1], a[2], self.file, line),
+                        line=line,
+                    )
+                )
+            except MtmcError as exc:
+                raise self.err(exc.message, line, exc.field) from None
+        return transitions
+
+
+def _marked_value(type_: str, vals: list[float]) -> tuple[str, Any]:
+    """The type and value of a marked place from its three numbers."""
+    if type_ in ("x", "y", "z"):
+        return type_, vals["xyz".index(type_)]
+    if type_ == "real":
+        # "r", R_x, R_y, R_z: R, 0, 0 is a real; with R_y or R_z non-zero it is
+        # a displacement per coordinate, a vector place (for displace)
+        if vals[1] == 0.0 and vals[2] == 0.0:
+            return type_, vals[0]
+        return "vector", tuple(vals)
+    return type_, tuple(vals)
 
 
 def load_assertions(path: str | Path, *, validate: bool = True) -> Graph:
@@ -449,7 +490,7 @@ def _f(v: Any) -> str:
     return repr(float(v)) if isinstance(v, float) else str(v)
 
 
-def dumps_assertions(graph: Graph) -> str:  # noqa: C901
+def dumps_assertions(graph: Graph) -> str:
     """Write a graph as the assertion database of Stryczek (with the extensions).
 
     Every place is written, the implicit ones too, so reading the text back gives the
@@ -478,39 +519,11 @@ def dumps_assertions(graph: Graph) -> str:  # noqa: C901
     pr = graph.probe
     lines.append(f"probe({_f(pr.u_axis)}, {_f(pr.u_probe)}, {_f(pr.u_perp)}).")
 
-    def xy(pos: tuple[float, ...] | None) -> str:
-        return "_, _" if pos is None else f"{_f(pos[0])}, {_f(pos[1])}"
-
     for name, type_ in plan.types.items():
-        p = graph.place(name)
-        code = _CODE_OF.get(type_, type_)
-        vals: list[float] = [0.0, 0.0, 0.0]
-        if p is not None and p.value is not None:
-            if isinstance(p.value, tuple):
-                vals = list(p.value)
-            elif type_ in ("x", "y", "z"):
-                vals["xyz".index(type_)] = p.value
-            else:
-                vals[0] = p.value
-        elif name in at_of:
-            vals = [float(v) for v in at_of[name]]
-        pos = p.pos if p is not None else None
-        lines.append(
-            f'p({_ref(name, "p")}, {xy(pos)}, "{code}", {", ".join(_f(v) for v in vals)}).'
-        )
-        if p is not None:
-            if p.marked:
-                lines.append(f"m({_ref(name, 'p')}).")
-            if p.u is not None:
-                us = p.u if isinstance(p.u, tuple) else (p.u,)
-                lines.append(f"u({_ref(name, 'p')}, {', '.join(_f(v) for v in us)}).")
-            if p.dist is not None:
-                lines.append(f"dist({_ref(name, 'p')}, {_f(p.dist)}).")
-            if p.unit is not None:
-                lines.append(f"unit({_ref(name, 'p')}, {p.unit}).")
+        lines += _place_facts(graph.place(name), name, type_, at_of.get(name))
     for t in graph.transitions:
         tn = _ref(t.name, "t")
-        lines.append(f"t({tn}, {xy(t.pos)}, {t.op}).")
+        lines.append(f"t({tn}, {_xy(t.pos)}, {t.op}).")
         for q in t.inputs:
             lines.append(f"pt({_ref(q, 'p')}, {tn}).")
         lines.append(f"tp({tn}, {_ref(t.out, 'p')}).")
@@ -522,3 +535,35 @@ def dumps_assertions(graph: Graph) -> str:  # noqa: C901
             else:
                 lines.append(f"par({tn}, {key}, {_f(v)}).")
     return "\n".join(lines) + "\n"
+
+
+def _xy(pos: tuple[float, ...] | None) -> str:
+    return "_, _" if pos is None else f"{_f(pos[0])}, {_f(pos[1])}"
+
+
+def _place_facts(p: Place | None, name: str, type_: str, at: Any) -> list[str]:
+    """The facts of one place: ``p(...)``, then ``m``, ``u``, ``dist``, ``unit`` as given."""
+    code = _CODE_OF.get(type_, type_)
+    vals: list[float] = [0.0, 0.0, 0.0]
+    if p is not None and p.value is not None:
+        if isinstance(p.value, tuple):
+            vals = list(p.value)
+        elif type_ in ("x", "y", "z"):
+            vals["xyz".index(type_)] = p.value
+        else:
+            vals[0] = p.value
+    elif at is not None:
+        vals = [float(v) for v in at]
+    pos = p.pos if p is not None else None
+    lines = [f'p({_ref(name, "p")}, {_xy(pos)}, "{code}", {", ".join(_f(v) for v in vals)}).']
+    if p is not None:
+        if p.marked:
+            lines.append(f"m({_ref(name, 'p')}).")
+        if p.u is not None:
+            us = p.u if isinstance(p.u, tuple) else (p.u,)
+            lines.append(f"u({_ref(name, 'p')}, {', '.join(_f(v) for v in us)}).")
+        if p.dist is not None:
+            lines.append(f"dist({_ref(name, 'p')}, {_f(p.dist)}).")
+        if p.unit is not None:
+            lines.append(f"unit({_ref(name, 'p')}, {p.unit}).")
+    return lines

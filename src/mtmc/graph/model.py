@@ -169,7 +169,7 @@ def _err(graph: Graph, msg: str, line: int | None, fld: str | None = None) -> Gr
     return GraphError(msg, file=graph.file, line=line, field=fld)
 
 
-def check(graph: Graph, *, nominal: bool = True) -> Plan:  # noqa: C901
+def check(graph: Graph, *, nominal: bool = True) -> Plan:
     """Validate a graph and compute its types, bound variants and firing order.
 
     With ``nominal`` (default) the nominal configuration is then checked too
@@ -207,6 +207,22 @@ def check(graph: Graph, *, nominal: bool = True) -> Plan:  # noqa: C901
     >>> plan.types["c"], plan.generations
     ('real', (('t1',),))
     """
+    places, trans = _index(graph)
+    producer = _check_arcs(graph, places, trans)
+    _check_marking(graph, places, producer)
+    order = _firing_order(graph, trans)
+    types, steps = _bind(graph, order)
+    plan = Plan(graph, types, tuple(steps), producer)
+    if not nominal:
+        return plan
+    from mtmc.graph.nominal import check_nominal
+
+    report = check_nominal(plan)
+    return Plan(graph, types, tuple(steps), producer, report.warnings)
+
+
+def _index(graph: Graph) -> tuple[dict[str, Place], dict[str, Transition]]:
+    """The places and transitions by name, each name declared once."""
     if not graph.transitions:
         raise _err(graph, "the graph has no transition", None, "transition")
     places: dict[str, Place] = {}
@@ -227,67 +243,89 @@ def check(graph: Graph, *, nominal: bool = True) -> Plan:  # noqa: C901
                 "name",
             )
         trans[t.name] = t
-    # arcs: bipartite, op known, fields known, single producer
+    return places, trans
+
+
+def _check_arcs(
+    graph: Graph, places: dict[str, Place], trans: dict[str, Transition]
+) -> dict[str, str]:
+    """Arcs bipartite, op and fields known, one producer per place: the producer of each."""
     producer: dict[str, str] = {}
     for t in graph.transitions:
-        for q in (*t.inputs, t.out):
-            if q in trans:
-                fld = "out" if q == t.out else "in"
-                raise _err(
-                    graph,
-                    f"transition {t.name}: {q} is a transition; the graph is bipartite, an arc "
-                    "joins a place and a transition",
-                    t.field_line(fld),
-                    fld,
-                )
-        if not ops.variants(t.op):
-            raise _err(
-                graph,
-                f"transition {t.name}: unknown op {t.op!r}; "
-                f"expected one of {', '.join(ops.op_names())}",
-                t.field_line("op"),
-                "op",
-            )
-        allowed = ops.OP_PARAMS.get(t.op, ())
-        for key, _ in t.params:
-            if key not in allowed:
-                hint = (
-                    f"; op {t.op} takes {', '.join(allowed)}"
-                    if allowed
-                    else f"; op {t.op} takes no other field"
-                )
-                raise _err(
-                    graph,
-                    f"transition {t.name}: unknown field {key!r}{hint}",
-                    t.field_line(key),
-                    key,
-                )
-        if t.op == "meas" and t.inputs:
-            raise _err(graph, f"transition {t.name}: meas takes no input", t.field_line("in"), "in")
-        if t.out in t.inputs:
-            raise _err(
-                graph,
-                f"transition {t.name}: {t.out} is both input and output (a cycle)",
-                t.field_line("out"),
-                "out",
-            )
-        if t.out in producer:
-            raise _err(
-                graph,
-                f"transition {t.name}: place {t.out} is already produced by {producer[t.out]}; "
-                "a place has at most one producer",
-                t.field_line("out"),
-                "out",
-            )
-        if t.out in places and places[t.out].marked:
-            raise _err(
-                graph,
-                f"transition {t.name}: place {t.out} is marked from the start (has a value) "
-                "and cannot also be produced",
-                t.field_line("out"),
-                "out",
-            )
+        _check_transition(graph, t, places, trans, producer)
         producer[t.out] = t.name
+    return producer
+
+
+def _check_transition(
+    graph: Graph,
+    t: Transition,
+    places: dict[str, Place],
+    trans: dict[str, Transition],
+    producer: dict[str, str],
+) -> None:
+    """The arcs, op and fields of one transition (``producer``: the places produced so far)."""
+    for q in (*t.inputs, t.out):
+        if q in trans:
+            fld = "out" if q == t.out else "in"
+            raise _err(
+                graph,
+                f"transition {t.name}: {q} is a transition; the graph is bipartite, an arc "
+                "joins a place and a transition",
+                t.field_line(fld),
+                fld,
+            )
+    if not ops.variants(t.op):
+        raise _err(
+            graph,
+            f"transition {t.name}: unknown op {t.op!r}; "
+            f"expected one of {', '.join(ops.op_names())}",
+            t.field_line("op"),
+            "op",
+        )
+    allowed = ops.OP_PARAMS.get(t.op, ())
+    for key, _ in t.params:
+        if key not in allowed:
+            hint = (
+                f"; op {t.op} takes {', '.join(allowed)}"
+                if allowed
+                else f"; op {t.op} takes no other field"
+            )
+            raise _err(
+                graph,
+                f"transition {t.name}: unknown field {key!r}{hint}",
+                t.field_line(key),
+                key,
+            )
+    if t.op == "meas" and t.inputs:
+        raise _err(graph, f"transition {t.name}: meas takes no input", t.field_line("in"), "in")
+    if t.out in t.inputs:
+        raise _err(
+            graph,
+            f"transition {t.name}: {t.out} is both input and output (a cycle)",
+            t.field_line("out"),
+            "out",
+        )
+    if t.out in producer:
+        raise _err(
+            graph,
+            f"transition {t.name}: place {t.out} is already produced by {producer[t.out]}; "
+            "a place has at most one producer",
+            t.field_line("out"),
+            "out",
+        )
+    if t.out in places and places[t.out].marked:
+        raise _err(
+            graph,
+            f"transition {t.name}: place {t.out} is marked from the start (has a value) "
+            "and cannot also be produced",
+            t.field_line("out"),
+            "out",
+        )
+
+
+def _check_marking(graph: Graph, places: dict[str, Place], producer: dict[str, str]) -> None:
+    """Every input marked or produced, every place used, every place ``dist`` parsed."""
     for t in graph.transitions:
         for q in t.inputs:
             if q not in producer and not (q in places and places[q].marked):
@@ -313,7 +351,10 @@ def check(graph: Graph, *, nominal: bool = True) -> Plan:  # noqa: C901
                 parse_distribution(p.dist)
             except MtmcError as exc:
                 raise _err(graph, f"place {p.name}: {exc.message}", p.line, "dist") from None
-    # firing order by generations (Kahn), sorted by name within each
+
+
+def _firing_order(graph: Graph, trans: dict[str, Transition]) -> list[tuple[Transition, int]]:
+    """The transitions with their generation, by generations (Kahn), by name within each."""
     marked = {p.name for p in graph.places if p.marked}
     remaining = dict(trans)
     order: list[tuple[Transition, int]] = []
@@ -335,34 +376,17 @@ def check(graph: Graph, *, nominal: bool = True) -> Plan:  # noqa: C901
         for n in ready:
             marked.add(trans[n].out)
         gen += 1
-    # types
+    return order
+
+
+def _bind(graph: Graph, order: list[tuple[Transition, int]]) -> tuple[dict[str, str], list[Step]]:
+    """The type of every place and the variant of every transition, in firing order."""
     types = {p.name: p.type for p in graph.places}
     steps = []
     for t, g in order:
         in_types = [types[p] for p in t.inputs]
         declared = types.get(t.out)
-        want = declared
-        if t.op == "meas":
-            coord = t.param("coordinate")
-            if coord is not None:
-                if coord not in COORDINATE_TYPES:
-                    raise _err(
-                        graph,
-                        f"transition {t.name}: coordinate must be x, y or z, got {coord!r}",
-                        t.field_line("coordinate"),
-                        "coordinate",
-                    )
-                if declared is not None and declared != coord:
-                    raise _err(
-                        graph,
-                        f"transition {t.name}: coordinate = {coord!r} but place {t.out} "
-                        f"is declared {declared}",
-                        t.field_line("coordinate"),
-                        "coordinate",
-                    )
-                want = coord
-            elif declared is None:
-                want = "point"
+        want = _meas_output(graph, t, declared) if t.op == "meas" else declared
         try:
             v = ops.bind(t.op, in_types, output=want)
         except MtmcError as exc:
@@ -379,10 +403,30 @@ def check(graph: Graph, *, nominal: bool = True) -> Plan:  # noqa: C901
             except MtmcError as exc:
                 raise _err(graph, exc.message, exc.line, exc.field) from None
         steps.append(Step(t, v, g))
-    plan = Plan(graph, types, tuple(steps), producer)
-    if not nominal:
-        return plan
-    from mtmc.graph.nominal import check_nominal
+    return types, steps
 
-    report = check_nominal(plan)
-    return Plan(graph, types, tuple(steps), producer, report.warnings)
+
+def _meas_output(graph: Graph, t: Transition, declared: str | None) -> str | None:
+    """The output type a ``meas`` asks for: its ``coordinate``, else the declared type or point."""
+    want = declared
+    coord = t.param("coordinate")
+    if coord is not None:
+        if coord not in COORDINATE_TYPES:
+            raise _err(
+                graph,
+                f"transition {t.name}: coordinate must be x, y or z, got {coord!r}",
+                t.field_line("coordinate"),
+                "coordinate",
+            )
+        if declared is not None and declared != coord:
+            raise _err(
+                graph,
+                f"transition {t.name}: coordinate = {coord!r} but place {t.out} "
+                f"is declared {declared}",
+                t.field_line("coordinate"),
+                "coordinate",
+            )
+        want = coord
+    elif declared is None:
+        want = "point"
+    return want

@@ -172,7 +172,7 @@ class Place:
     pos: tuple[float, float] | None = None
     line: int | None = field(default=None, compare=False, repr=False)
 
-    def __post_init__(self) -> None:  # noqa: C901
+    def __post_init__(self) -> None:
         _check_name(self.name, "place", self.line)
         what = f"place {self.name}"
         if self.type not in PLACE_TYPES:
@@ -189,6 +189,11 @@ class Place:
                 line=self.line,
                 field="value",
             )
+        self._check_value(what)
+        self._check_u(what)
+        self._check_dist_unit_pos(what)
+
+    def _check_value(self, what: str) -> None:
         if self.value is not None:
             if self.type in ("point", "vector", "unit"):
                 vec = _vector3(self.value, what, "value", self.line)
@@ -199,6 +204,8 @@ class Place:
                 object.__setattr__(self, "value", vec)
             else:
                 object.__setattr__(self, "value", _finite(self.value, what, "value", self.line))
+
+    def _check_u(self, what: str) -> None:
         if self.u is not None:
             u: float | tuple[float, ...]
             if isinstance(self.u, list | tuple):
@@ -222,6 +229,8 @@ class Place:
                     f"{what}: u needs a nominal value (add value = ...)", line=self.line, field="u"
                 )
             object.__setattr__(self, "u", u)
+
+    def _check_dist_unit_pos(self, what: str) -> None:
         if self.dist is not None:
             if not isinstance(self.dist, str):
                 raise GraphError(f"{what}: dist must be a string", line=self.line, field="dist")

@@ -16,6 +16,7 @@ import json
 import math
 import re
 import tomllib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -130,7 +131,7 @@ def _where(e: tomllib.TOMLDecodeError) -> tuple[int | None, int | None]:
     return (int(m.group(1)), int(m.group(2))) if m else (None, None)
 
 
-def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph:  # noqa: C901
+def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
     """Read a graph from TOML text.
 
     Parameters
@@ -171,6 +172,26 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
     >>> g.transitions[0].inputs
     ('a', 'a')
     """
+    data = _parse_toml(text, file)
+    lines = _Lines(text)
+
+    def err(msg: str, line: int | None, fld: str | None) -> GraphError:
+        return GraphError(msg, file=file, line=line, field=fld)
+
+    title, units, probe = _header(data, lines, err)
+    places = _places(data, lines, err)
+    transitions = _transitions(data, lines, err)
+    graph = Graph(tuple(places), tuple(transitions), title, units, probe, file=file)
+    if validate:
+        check(graph)
+    return graph
+
+
+_Err = Callable[[str, int | None, str | None], GraphError]
+
+
+def _parse_toml(text: str, file: str | None) -> dict[str, Any]:
+    """The TOML table of ``text``; a :class:`ParseError` with line and column if it is not TOML."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -181,11 +202,11 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
             line, col = len(lines_), len(lines_[-1]) + 1
             msg += " at the end of the file"
         raise ParseError(f"not valid TOML: {msg}", file=file, line=line, column=col) from None
-    lines = _Lines(text)
+    return data
 
-    def err(msg: str, line: int | None, fld: str | None) -> GraphError:
-        return GraphError(msg, file=file, line=line, field=fld)
 
+def _header(data: dict[str, Any], lines: _Lines, err: _Err) -> tuple[str, str, ProbeDefaults]:
+    """The top-level keys checked, then the title, the length unit and the probe defaults."""
     for key in data:
         if key not in _TOP_KEYS:
             raise err(
@@ -218,6 +239,11 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
             exc.message, lines.probe.get(exc.field or "", lines.probe_line), exc.field
         ) from None
 
+    return title, units, probe
+
+
+def _places(data: dict[str, Any], lines: _Lines, err: _Err) -> list[Place]:
+    """The ``[[place]]`` tables as places, errors at the line of the offending key."""
     places = []
     raw_places = data.get("place", [])
     if not isinstance(raw_places, list):
@@ -240,6 +266,11 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
         except MtmcError as exc:
             raise err(exc.message, keys.get(exc.field or "", line), exc.field) from None
 
+    return places
+
+
+def _transitions(data: dict[str, Any], lines: _Lines, err: _Err) -> list[Transition]:
+    """The ``[[transition]]`` tables as transitions, errors at the line of the offending key."""
     transitions = []
     raw_trans = data.get("transition", [])
     if not isinstance(raw_trans, list):
@@ -272,10 +303,7 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
             )
         except MtmcError as exc:
             raise err(exc.message, keys.get(exc.field or "", line), exc.field) from None
-    graph = Graph(tuple(places), tuple(transitions), title, units, probe, file=file)
-    if validate:
-        check(graph)
-    return graph
+    return transitions
 
 
 def load(path: str | Path, *, validate: bool = True) -> Graph:

@@ -598,7 +598,23 @@ class Program:
             self.init += keys
         return ops[taken:]
 
-    def run(self, qa: _F, m: int) -> _F:  # noqa: C901
+    def _sources(
+        self, qa: _F, qkeys: list[tuple[str, int]], lo: int, hi: int, m: int
+    ) -> dict[str, Src]:
+        """The inputs of poses ``lo:hi``: constants, axis columns, arrays, fitted functions."""
+        src: dict[str, Src] = dict(self.const)
+        if qkeys:
+            qt = np.ascontiguousarray(qa[lo:hi].T)
+            for key, i in qkeys:
+                src[key] = qt[i]
+        for name, arr in self.arrays.items():
+            src[name] = arr[lo:hi]
+        for name, (qk, f) in self.single.items():
+            c = f.coefficients[lo:hi] if f.coefficients.shape[0] == m else f.coefficients
+            src[name] = np.einsum("...k,...k->...", f.basis(src[qk]), c)
+        return src
+
+    def run(self, qa: _F, m: int) -> _F:
         """The vectors at the ``m`` poses: array (m, n_vectors, 3)."""
         y = np.empty((m, len(self.start), 3))
         bufs: dict[int, Any] = {}  # buffers by block length, reused
@@ -615,16 +631,7 @@ class Program:
                 bufs[b] = (cur, spare, np.empty(b), trig)
             cur, spare, w, trig_out = bufs[b]
             vs, sp = list(cur), list(spare)
-            src: dict[str, Src] = dict(self.const)
-            if qkeys:
-                qt = np.ascontiguousarray(qa[lo:hi].T)
-                for key, i in qkeys:
-                    src[key] = qt[i]
-            for name, arr in self.arrays.items():
-                src[name] = arr[lo:hi]
-            for name, (qk, f) in self.single.items():
-                c = f.coefficients[lo:hi] if f.coefficients.shape[0] == m else f.coefficients
-                src[name] = np.einsum("...k,...k->...", f.basis(src[qk]), c)
+            src = self._sources(qa, qkeys, lo, hi, m)
             for g in self.before[0][0]:
                 g.evaluate(src, b)
             for n, v in enumerate(vs):

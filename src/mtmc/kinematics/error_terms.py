@@ -162,7 +162,7 @@ def parse_error_name(name: str) -> ErrorTerm:
     return ErrorTerm(s, "location", axis, direction, angular)
 
 
-def list_error_terms(topology: Topology, *, which: str = "standard") -> tuple[ErrorTerm, ...]:  # noqa: C901
+def list_error_terms(topology: Topology, *, which: str = "standard") -> tuple[ErrorTerm, ...]:
     """The error terms of a machine, in a fixed order.
 
     Parameters
@@ -192,6 +192,17 @@ def list_error_terms(topology: Topology, *, which: str = "standard") -> tuple[Er
     for ax in topology.axes:
         for j, ch in enumerate(_DIRS + _ROTS):
             out.append(ErrorTerm(f"E{ch}{ax}", "component", ax, j % 3, j >= 3))
+    out += _squareness_terms(topology, which)
+    out += _location_terms(topology)
+    for kind, tag in (("tool", "T"), ("part", "P")):
+        for j, ch in enumerate(_DIRS + _ROTS):
+            out.append(ErrorTerm(f"E{ch}{tag}", kind, tag, j % 3, j >= 3))
+    return tuple(out)
+
+
+def _squareness_terms(topology: Topology, which: str) -> list[ErrorTerm]:
+    """The squareness terms of the linear axes (see `list_error_terms` for ``which``)."""
+    out: list[ErrorTerm] = []
     lin = topology.linear_axes
     primary = [a for a in lin if a in "XYZ"]
     for ax in lin:
@@ -206,6 +217,12 @@ def list_error_terms(topology: Topology, *, which: str = "standard") -> tuple[Er
         for e in sorted(set(refs)):
             r = 3 - d - e
             out.append(ErrorTerm(f"E{_ROTS[r]}0{ax}", "squareness", ax, r, True))
+    return out
+
+
+def _location_terms(topology: Topology) -> list[ErrorTerm]:
+    """The four location terms of each rotary axis: two offsets, then two tilts."""
+    out: list[ErrorTerm] = []
     for ax in topology.rotary_axes:
         d = AXIS_DIRECTION[ax]
         for j in range(3):
@@ -214,10 +231,7 @@ def list_error_terms(topology: Topology, *, which: str = "standard") -> tuple[Er
         for j in range(3):
             if j != d:
                 out.append(ErrorTerm(f"E{_ROTS[j]}0{ax}", "location", ax, j, True))
-    for kind, tag in (("tool", "T"), ("part", "P")):
-        for j, ch in enumerate(_DIRS + _ROTS):
-            out.append(ErrorTerm(f"E{ch}{tag}", kind, tag, j % 3, j >= 3))
-    return tuple(out)
+    return out
 
 
 def _check_term_for(topology: Topology, term: ErrorTerm) -> None:
