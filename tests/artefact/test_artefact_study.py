@@ -154,3 +154,37 @@ def test_centre_noise_has_the_law_of_the_point_noise(study) -> None:  # type: ig
         np.testing.assert_allclose(res["centres"][out].u, res["points"][out].u, rtol=0.12)
     with pytest.raises(InputError):
         study_model(study, noise="centres", exact_fit=True)
+
+
+def test_exact_fit_batch_equals_one_ball_and_one_trial_at_a_time(study) -> None:  # type: ignore[no-untyped-def]
+    """Batched sphere fits over (trials, repetitions, poses, balls) and the identification
+    by one factorised pseudo-inverse = a loop of single fits and per-trial least squares."""
+    from mtmc.geometry.fits import fit_sphere
+
+    model, inputs, pr = study_model(study, exact_fit=True)
+    rng = np.random.default_rng(np.random.SeedSequence(31))
+    m = 2
+    draws = {k: d.sample(rng, m) for k, d in inputs.items()}
+    batch = model(**draws)
+    meas = pr.meas
+    P, N, k = meas.points.shape[:3]
+    R = study.repetitions
+    AS = meas.axis_map * study.repeatability[None, None, :]
+    z = draws["probe"].reshape(m, R, P, N, k, 3)
+    radius = study.setup.artefact.radius
+    J = np.tile(pr.J, (R, 1))
+    rot = study.setup.artefact.rotation
+    for i in range(m):
+        centres = np.empty((R, P, N, 3))
+        for r in range(R):
+            for p in range(P):
+                for n in range(N):
+                    pts = meas.points[p, n] + z[i, r, p, n] @ AS[p].T
+                    one = fit_sphere(pts, radius)
+                    centres[r, p, n] = one.geometry.centre  # type: ignore[union-attr]
+        got = batch["centres"][i].reshape(P, N, 3)
+        np.testing.assert_allclose(got, centres.mean(axis=0), rtol=0, atol=1e-12)
+        cal = pr.cal + draws["cmm"][i].reshape(N, 3) @ rot.T
+        dF = (cal[None, None] - centres).reshape(-1)
+        E, *_ = np.linalg.lstsq(J, dF, rcond=None)
+        np.testing.assert_allclose(batch["setup"][i], E, rtol=0, atol=1e-12)
