@@ -57,8 +57,8 @@ def test_json_equals_library_result(capsys):
     assert got["gum"] == {
         "estimate": g.estimate,
         "u": g.u,
-        "k": g.k,
-        "interval": list(g.interval),
+        "k": g.coverage_factor(),
+        "interval": list(g.coverage_interval()),
     }
     assert got["validation"] == {
         "d_low": v.d_low,

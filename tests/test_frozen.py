@@ -51,7 +51,14 @@ def test_frozen_gum_result_and_budget() -> None:
         lambda a, b: np.stack([a + b, a - b], axis=-1),
         {"a": Normal(1.0, 0.1), "b": Normal(2.0, 0.2)},
     )
-    _writes_refused(res.estimate, res.u, res.cov, res.k, *res.interval)
+    _writes_refused(
+        res.estimate,
+        res.u,
+        res.cov,
+        res.coverage_factor(),
+        res.expanded_uncertainty(),
+        *res.coverage_interval(),
+    )
     _writes_refused(res.sensitivities["a"], res.budget[0].sensitivity)
     with pytest.raises(TypeError):
         res.sensitivities["c"] = 1.0  # type: ignore[index]

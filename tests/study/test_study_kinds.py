@@ -62,7 +62,7 @@ def test_mass_calibration_is_monte_carlo_and_gum_of_the_model(results):
     assert q.mc["symmetric"] == list(mc.coverage_interval(0.95, "symmetric"))
     g = gum(model, inputs)
     assert q.gum["u"] == g.u
-    assert q.gum["k"] == g.k
+    assert q.gum["k"] == g.coverage_factor()
     v = validate(g, mc, p=0.95, kind="shortest")
     assert q.validation["d_low"] == v.d_low
     assert q.validation["kind"] == "shortest"

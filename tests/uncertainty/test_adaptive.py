@@ -68,8 +68,9 @@ def test_adaptive_matches_large_fixed_run_and_is_its_prefix():
 
 
 def test_adaptive_stopping_rule_recomputed_by_hand():
-    # the run stops at the first n >= 2 where 2 s <= delta for y, u, y_low, y_high
-    r = monte_carlo(model, INPUTS, seed=3, adaptive=True, tolerance=0.015)
+    # the run stops at the first n >= 2 where 2 s <= delta for y, u and the shortest
+    # interval's y_low, y_high
+    r = monte_carlo(model, INPUTS, seed=3, adaptive=True, tolerance=0.015, kind="shortest")
     h = r.block_trials
     assert r.blocks > 3
 

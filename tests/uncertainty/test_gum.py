@@ -108,9 +108,11 @@ def test_linear_model_u_closed_form_and_budget():
         assert entry.share == pytest.approx(term / terms.sum(), rel=1e-13)
     assert sum(e.share for e in res.budget) == pytest.approx(1.0, rel=1e-14)
     assert res.dof == math.inf
-    assert res.k == pytest.approx(1.959963984540054, rel=1e-14)
-    assert res.interval[0] == pytest.approx(res.estimate - res.k * res.u, rel=1e-14)
-    assert res.expanded_uncertainty == pytest.approx(res.k * res.u)
+    k = res.coverage_factor()
+    assert k == pytest.approx(1.959963984540054, rel=1e-14)
+    assert res.coverage_interval()[0] == pytest.approx(res.estimate - k * res.u, rel=1e-14)
+    assert res.expanded_uncertainty() == pytest.approx(k * res.u)
+    assert res.coverage_factor(0.99) == pytest.approx(2.5758293035489004, rel=1e-14)
     assert isinstance(res, GumResult)
 
 
@@ -158,8 +160,8 @@ def test_welch_satterthwaite_gum_h1_end_gauge():
     assert res.sensitivities["dtheta"] == pytest.approx(-50_000_623.6 * 11.5e-6, rel=1e-12)
     assert res.sensitivities["alpha_s"] == 0.0
     assert math.floor(res.dof) == 16
-    assert round(res.k, 2) == 2.12
-    assert round(res.k * res.u) == 67
+    assert round(res.coverage_factor(), 2) == 2.12
+    assert round(res.expanded_uncertainty()) == 67
     # hand computation of eq. (G.2b) from the contributions c_i u_i of Table H.1
     contrib = np.array(
         [25.0, 5.8, 3.9, 6.7, 50_000_623.6 * 0.1 * 0.58e-6, 50_000_623.6 * 11.5e-6 * 0.029]
@@ -249,8 +251,8 @@ def test_vector_output_covariance_is_c_ux_ct():
     np.testing.assert_allclose(res.estimate, [r0 * np.cos(phi0) + off, r0 * np.sin(phi0)])
     np.testing.assert_allclose(res.sensitivities["x"], jac[:, :2], rtol=1e-13)
     np.testing.assert_allclose(res.sensitivities["o"], jac[:, 2], atol=1e-15)
-    assert res.k.shape == (2,)
-    assert res.interval[0].shape == (2,)
+    assert res.coverage_factor().shape == (2,)
+    assert res.coverage_interval()[0].shape == (2,)
     shares = sum(e.share for e in res.budget)
     np.testing.assert_allclose(shares, [1.0, 1.0], rtol=1e-13)
 

@@ -46,7 +46,8 @@ def test_shortest_is_brute_force_minimum():
     q, _ = coverage_indices(x.size, 0.95)
     s = sorted(x.tolist())
     best = min(range(len(s) - q), key=lambda j: (s[j + q] - s[j], j))
-    assert r.coverage_interval(0.95) == (s[best], s[best + q])
+    assert r.coverage_interval(0.95, "shortest") == (s[best], s[best + q])
+    assert r.coverage_interval(0.95) == r.coverage_interval(0.95, "symmetric")
 
 
 def test_normal_samples_vs_closed_form():
@@ -69,9 +70,7 @@ def test_normal_samples_vs_closed_form():
     assert r.expanded_uncertainty() == pytest.approx(z * sigma, abs=5 * se)
     assert r.expanded_uncertainty(kind="symmetric") == pytest.approx(0.5 * (hi - lo))
     # k = U/u: the error of U (5 se) plus that of u (5 σ/√(2M)), relative to σ
-    assert r.implied_coverage_factor() == pytest.approx(
-        z, abs=5 * se / sigma + 5 * z / math.sqrt(2 * M)
-    )
+    assert r.coverage_factor() == pytest.approx(z, abs=5 * se / sigma + 5 * z / math.sqrt(2 * M))
 
 
 def test_rectangular_samples_vs_closed_form():

@@ -147,8 +147,8 @@ def propagate(
             out["gum"] = {
                 "estimate": g.estimate,
                 "u": g.u,
-                "k": g.k,
-                "interval": list(g.interval),
+                "k": g.coverage_factor(),
+                "interval": list(g.coverage_interval()),
             }
             out["validation"] = {
                 "d_low": v.d_low,

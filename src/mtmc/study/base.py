@@ -265,15 +265,16 @@ def quantity(
     gum_d = val_d = None
     budget: list[dict[str, Any]] = []
     if gum_result is not None:
-        gk = float(gum_result.k)
+        gk = float(gum_result.coverage_factor())
         gu = float(gum_result.u)
+        g_lo, g_hi = gum_result.coverage_interval()
         gum_d = {
             "estimate": float(gum_result.estimate),
             "u": gu,
             "k": gk,
             "U": gk * gu,
             "dof": float(gum_result.dof),
-            "interval": [float(gum_result.interval[0]), float(gum_result.interval[1])],
+            "interval": [float(g_lo), float(g_hi)],
             "method": gum_result.method,
         }
         v = validate(gum_result, mc, p=p, ndig=settings.ndig, kind=settings.interval)  # type: ignore[arg-type]

@@ -97,10 +97,12 @@ class BudgetEntry:
 class GumResult:
     """Result of the GUM uncertainty framework for one (scalar or vector) output.
 
-    For a scalar output, ``estimate``, ``u``, ``dof``, ``k`` are floats and ``interval``
-    a pair of floats; for an output of ``d`` components they are arrays of shape
-    ``(d,)`` (per component) and ``cov`` is the full ``(d, d)`` covariance. Every array
-    of the result is a read-only copy.
+    For a scalar output, ``estimate``, ``u``, ``dof`` are floats, and so are
+    :meth:`coverage_factor` and :meth:`expanded_uncertainty`, :meth:`coverage_interval` a
+    pair of floats; for an output of ``d`` components they are arrays of shape ``(d,)``
+    (per component) and ``cov`` is the full ``(d, d)`` covariance. Every array of the
+    result is a read-only copy. The three coverage methods are named and called as those
+    of :class:`~mtmc.uncertainty.results.MonteCarloResult`.
 
     Attributes
     ----------
@@ -113,13 +115,8 @@ class GumResult:
     dof : float or ndarray
         Effective degrees of freedom by Welch–Satterthwaite (JCGM 100 eq. (G.2b)),
         not rounded.
-    k : float or ndarray
-        Coverage factor for ``p``: ``t_{(1+p)/2}(⌊ν_eff⌋)``, or the normal quantile when
-        ``ν_eff`` is infinite.
     p : float
-        Coverage probability.
-    interval : tuple
-        ``(y - k u, y + k u)``.
+        Coverage probability of :func:`gum`, the default of the coverage methods.
     sensitivities : mapping
         ``name -> c`` for each input (see :class:`BudgetEntry`), read-only.
     budget : tuple of BudgetEntry
@@ -132,22 +129,65 @@ class GumResult:
     u: Any
     cov: NDArray[np.float64]
     dof: Any
-    k: Any
     p: float
-    interval: tuple[Any, Any]
     sensitivities: Mapping[str, Any]
     budget: tuple[BudgetEntry, ...]
     method: str
 
     def __post_init__(self) -> None:
         # read-only copies: arrays cannot be written, ``sensitivities`` gains no keys
-        for name in ("estimate", "u", "cov", "dof", "k", "interval", "sensitivities", "budget"):
+        for name in ("estimate", "u", "cov", "dof", "sensitivities", "budget"):
             object.__setattr__(self, name, frozen_value(getattr(self, name)))
 
-    @property
-    def expanded_uncertainty(self) -> Any:
-        """``U_p = k u(y)`` (JCGM 100 §6.2.1)."""
-        return self.k * self.u
+    def coverage_factor(self, p: float | None = None) -> Any:
+        """The coverage factor ``k_p`` with ``U_p = k_p u(y)`` (JCGM 100 G.3.2, G.4.1).
+
+        Parameters
+        ----------
+        p : float, optional
+            Coverage probability; default: the ``p`` of the result.
+
+        Returns
+        -------
+        float or ndarray, shape (d,)
+            ``t_{(1+p)/2}(⌊ν_eff⌋)`` (:func:`coverage_factor`), the normal quantile when
+            ``ν_eff`` is infinite; per component for a vector output (read-only).
+        """
+        q = self.p if p is None else p
+        if np.ndim(self.dof) == 0:
+            return coverage_factor(q, float(self.dof))
+        return frozen_value(np.array([coverage_factor(q, float(v)) for v in self.dof]))
+
+    def expanded_uncertainty(self, p: float | None = None) -> Any:
+        """The expanded uncertainty ``U_p = k_p u(y)`` (JCGM 100 §6.2.1).
+
+        Parameters
+        ----------
+        p : float, optional
+            Coverage probability; default: the ``p`` of the result.
+
+        Returns
+        -------
+        float or ndarray, shape (d,)
+            Per component for a vector output (read-only).
+        """
+        return frozen_value(self.coverage_factor(p) * self.u)
+
+    def coverage_interval(self, p: float | None = None) -> tuple[Any, Any]:
+        """The coverage interval ``(y - U_p, y + U_p)`` (JCGM 100 §6.2.1).
+
+        Parameters
+        ----------
+        p : float, optional
+            Coverage probability; default: the ``p`` of the result.
+
+        Returns
+        -------
+        (float, float) or (ndarray, ndarray) of shape (d,)
+            ``(y_low, y_high)``, per component for a vector output (read-only).
+        """
+        big_u = self.coverage_factor(p) * self.u
+        return frozen_value(self.estimate - big_u), frozen_value(self.estimate + big_u)
 
 
 @dataclass(frozen=True)
@@ -490,17 +530,12 @@ def gum(
     dofs = np.array([inp.dof for inp in items])
     contrib = np.array(contrib_var)  # (n_inputs, d)
     nu = np.array([welch_satterthwaite(contrib[:, j], dofs) for j in range(contrib.shape[1])])
-    k = np.array([coverage_factor(p, v) for v in nu])
-    low = y0 - k * u_y
-    high = y0 + k * u_y
     return GumResult(
         estimate=_out(y0, vector_out),
         u=_out(u_y, vector_out),
         cov=cov_y,
         dof=_out(nu, vector_out),
-        k=_out(k, vector_out),
         p=p,
-        interval=(_out(low, vector_out), _out(high, vector_out)),
         sensitivities=sensitivities,
         budget=tuple(budget),
         method=method,
@@ -568,8 +603,7 @@ def validate(
         )
     if kind not in ("symmetric", "shortest"):
         raise InputError(f"expected kind 'symmetric' or 'shortest', got {kind!r}", field="kind")
-    k = gum_result.k if p == gum_result.p else coverage_factor(p, gum_result.dof)
-    expanded = k * gum_result.u
+    expanded = gum_result.expanded_uncertainty(p)
     y_low, y_high = mc_result.coverage_interval(p, kind=kind)
     y = gum_result.estimate
     d_low = abs(y - expanded - float(y_low))

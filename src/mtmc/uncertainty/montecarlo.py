@@ -517,7 +517,7 @@ def monte_carlo(
     workers: int = 1,
     normal_method: NormalMethod = "default",
     nan_policy: NanPolicy = "raise",
-    kind: Literal["shortest", "symmetric"] = "shortest",
+    kind: Literal["symmetric", "shortest"] = "symmetric",
     max_trials: int = 10**8,
     executor: ExecutorKind | Any = "thread",
     scheduler: Any = None,
@@ -570,8 +570,9 @@ def monte_carlo(
         :class:`~mtmc.errors.InputError` giving their number and the first trial, or
         ``"omit"`` them (their number is in the result's ``omitted``). With named
         outputs a trial is left out of every output when one of them is not finite.
-    kind : {"shortest", "symmetric"}, keyword-only
-        Coverage interval whose endpoints the adaptive stopping rule watches.
+    kind : {"symmetric", "shortest"}, default "symmetric", keyword-only
+        Coverage interval whose endpoints the adaptive stopping rule watches (as
+        :meth:`MonteCarloResult.coverage_interval`).
     max_trials : int, default 10**8, keyword-only
         The adaptive procedure gives up with :class:`~mtmc.errors.ConvergenceError`
         beyond this number of trials.
@@ -667,8 +668,8 @@ def monte_carlo(
     where the output PDF is flat near the interval's ends (JCGM 101 §9.3) the position of
     the pooled shortest interval scatters more than ``s_x`` suggests (on §9.3 with
     ``ndig = 2``, errors of up to about 2.5 δ were seen over 28 seeds), while its length
-    is well determined. Where the endpoints themselves matter, ask for ``kind="symmetric"``
-    or a smaller ``tolerance``.
+    is well determined. Where the endpoints of a shortest interval matter, watch the
+    symmetric one (the default) or ask for a smaller ``tolerance``.
     """
     if not callable(model):
         raise InputError(f"expected a callable model, got {type(model).__name__}", field="model")

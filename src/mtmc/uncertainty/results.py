@@ -571,7 +571,7 @@ class MonteCarloResult:
 
     # ------------------------------------------------------------------ intervals
     def coverage_interval(
-        self, p: float = 0.95, kind: IntervalKind = "shortest"
+        self, p: float = 0.95, kind: IntervalKind = "symmetric"
     ) -> tuple[float, float]:
         """A coverage interval for the output with coverage probability ``p``.
 
@@ -579,12 +579,13 @@ class MonteCarloResult:
         ----------
         p : float, default 0.95
             Coverage probability.
-        kind : {"shortest", "symmetric"}
+        kind : {"symmetric", "shortest"}, default "symmetric"
             ``"symmetric"``: the probabilistically symmetric interval ``[ỹ_r, ỹ_{r+q}]``
-            (JCGM 101 §7.7.2). ``"shortest"``: ``[ỹ_{r*}, ỹ_{r*+q}]`` with ``r*`` the ``r``
-            minimising ``ỹ_{r+q} - ỹ_r`` over ``r = 1..M-q`` (JCGM 101 §7.7.3; the first
-            on ties). ``ỹ`` are the sorted values, indices 1-based, ``q``, ``r`` from
-            :func:`coverage_indices`.
+            (JCGM 101 §7.7.2), the one JCGM 101 §8 compares with the GUM interval and
+            the default everywhere in mtmc. ``"shortest"`` (on request):
+            ``[ỹ_{r*}, ỹ_{r*+q}]`` with ``r*`` the ``r`` minimising ``ỹ_{r+q} - ỹ_r`` over
+            ``r = 1..M-q`` (JCGM 101 §7.7.3; the first on ties). ``ỹ`` are the sorted
+            values, indices 1-based, ``q``, ``r`` from :func:`coverage_indices`.
 
         Returns
         -------
@@ -618,7 +619,7 @@ class MonteCarloResult:
             return float(s[j]), float(s[j + q])
         raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
 
-    def expanded_uncertainty(self, p: float = 0.95, kind: IntervalKind = "shortest") -> float:
+    def expanded_uncertainty(self, p: float = 0.95, kind: IntervalKind = "symmetric") -> float:
         """Half the length of the coverage interval: ``U_p = (y_high - y_low)/2``.
 
         JCGM 101 gives the interval itself; for a symmetric output PDF this half-length
@@ -629,7 +630,8 @@ class MonteCarloResult:
         Parameters
         ----------
         p : float, default 0.95
-        kind : {"shortest", "symmetric"}
+        kind : {"symmetric", "shortest"}, default "symmetric"
+            As :meth:`coverage_interval`.
 
         Returns
         -------
@@ -638,12 +640,22 @@ class MonteCarloResult:
         lo, hi = self.coverage_interval(p, kind)
         return 0.5 * (hi - lo)
 
-    def implied_coverage_factor(self, p: float = 0.95, kind: IntervalKind = "shortest") -> float:
-        """``U_p / u(y)``: the coverage factor the Monte Carlo interval implies.
+    def coverage_factor(self, p: float = 0.95, kind: IntervalKind = "symmetric") -> float:
+        """The coverage factor ``k_p`` with ``U_p = k_p u(y)``: here ``U_p / u(y)``.
 
-        Not to be confused with :func:`mtmc.uncertainty.gum.coverage_factor`, the
-        t-quantile ``k_p`` of the GUM for ``ν_eff`` degrees of freedom: for a Gaussian
-        output the two agree.
+        The same quantity as :meth:`mtmc.uncertainty.gum.GumResult.coverage_factor`, there
+        the t-quantile of the GUM for ``ν_eff`` degrees of freedom, here implied by the
+        Monte Carlo interval: for a Gaussian output the two agree.
+
+        Parameters
+        ----------
+        p : float, default 0.95
+        kind : {"symmetric", "shortest"}, default "symmetric"
+            As :meth:`coverage_interval`.
+
+        Returns
+        -------
+        float
         """
         self._require_scalar("a coverage factor")
         return self.expanded_uncertainty(p, kind) / float(self.u)
@@ -754,13 +766,13 @@ class MonteCarloResult:
                 out["p"] = float(p)
                 out["interval_shortest"] = list(self.coverage_interval(p, "shortest"))
                 out["interval_symmetric"] = list(self.coverage_interval(p, "symmetric"))
-                out["U"] = self.expanded_uncertainty(p)
+                out["U"] = self.expanded_uncertainty(p, "shortest")
                 out["rank_error"] = self.rank_error
         elif self.dim == 0:
             out["p"] = float(p)
             out["interval_shortest"] = list(self.coverage_interval(p, "shortest"))
             out["interval_symmetric"] = list(self.coverage_interval(p, "symmetric"))
-            out["U"] = self.expanded_uncertainty(p)
+            out["U"] = self.expanded_uncertainty(p, "shortest")
         else:
             out["cov"] = self.cov.tolist()
         return out
