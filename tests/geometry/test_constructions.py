@@ -30,7 +30,7 @@ from mtmc.geometry import (
     plane_from_point_normal,
     plane_from_points,
     project_point_plane,
-    unit,
+    unit_vector,
     vector,
 )
 
@@ -52,7 +52,7 @@ def _points(rng: np.random.Generator, k: int = 1) -> np.ndarray:
 def test_middle_vector_unit_displace() -> None:
     assert_array_equal(middle([1, 2, 3], [3, 6, 9]), [[2, 4, 6]])
     assert_array_equal(vector([1, 2, 3], [3, 6, 9]), [[2, 4, 6]])
-    assert_allclose(unit([[3, 4, 12], [0, -2, 0]]), [[3 / 13, 4 / 13, 12 / 13], [0, -1, 0]])
+    assert_allclose(unit_vector([[3, 4, 12], [0, -2, 0]]), [[3 / 13, 4 / 13, 12 / 13], [0, -1, 0]])
     assert_array_equal(displace([1, 1, 1], [[0, 0, 2], [1, 0, 0]]), [[1, 1, 3], [2, 1, 1]])
     # a displacement by a constant along a direction (Stryczek's r_2 above the table)
     assert_allclose(displace([1, 1, 1], [0, 0, 7], length=[2.5]), [[1, 1, 3.5]])
@@ -183,7 +183,7 @@ def test_zero_vector() -> None:
         match=r"field v: the vector has zero length in 1 of 2 trials \(first: trial 0\); "
         "expected a non-zero vector",
     ):
-        unit([[0, 0, 0], [1, 0, 0]])
+        unit_vector([[0, 0, 0], [1, 0, 0]])
     with pytest.raises(DegenerateGeometryError, match="field u: the vector has zero length"):
         angle_between([0, 0, 0], [1, 0, 0])
     with pytest.raises(DegenerateGeometryError, match="the vector has zero length"):
@@ -248,7 +248,7 @@ def test_nan_propagates_without_a_degenerate_error() -> None:
     plane = plane_from_points(a, [1, 0, 0], [0, 1, 0])
     assert_array_equal(plane.normal[0], [0, 0, 1])
     assert np.isnan(plane.normal[1]).all()
-    assert np.isnan(unit(a[1])).all()
+    assert np.isnan(unit_vector(a[1])).all()
     assert np.isnan(intersect_line_plane(Line(a, [0, 0, 1]), plane)[1]).all()
 
 

@@ -10,7 +10,6 @@ import pytest
 from mtmc.errors import GraphError, ParseError
 from mtmc.graph import check_graph, load_graph, run_graph
 from mtmc.graph.assertions import dumps_assertions, load_assertions, loads_assertions
-from mtmc.graph.files import read_graph
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
 
@@ -64,7 +63,7 @@ def test_export_import_keeps_the_graph_and_its_numbers(name, tmp_path):
     text = dumps_assertions(g)
     path = tmp_path / f"{name}.pl"
     path.write_text(text)
-    g2 = read_graph(path)
+    g2 = load_graph(path)
     assert dumps_assertions(g2) == text
     p1, p2 = check_graph(g), check_graph(g2)
     assert p1.types == p2.types

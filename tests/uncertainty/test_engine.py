@@ -14,9 +14,9 @@ from mtmc.uncertainty.results import Moments, MonteCarloResult, MonteCarloResult
 from mtmc.uncertainty.sampling import (
     MAX_SEED_BLOCK_VALUES,
     SEED_BLOCK_SIZE,
-    draw,
     input_generator,
     iter_blocks,
+    sample_inputs,
     seed_block_trials,
 )
 
@@ -52,12 +52,12 @@ def test_seed_block_rule_keeps_narrow_inputs_and_bounds_wide_ones():
     assert seed_block_trials(65) == MAX_SEED_BLOCK_VALUES // 65
     assert seed_block_trials(10**7) == 1
     # a narrow input: still the first values of its seed block's generator
-    x = draw({"x": Normal(0, 1)}, 10, seed=9)["x"]
+    x = sample_inputs({"x": Normal(0, 1)}, 10, seed=9)["x"]
     np.testing.assert_array_equal(x, input_generator(9, 0, "x").standard_normal(10))
     # a wide input: seed block k of its own size, row by row
     w = IID(Normal(0, 1), 300)
     s = seed_block_trials(300)
-    got = draw({"w": w}, s + 5, seed=9)["w"]
+    got = sample_inputs({"w": w}, s + 5, seed=9)["w"]
     ref1 = input_generator(9, 1, "w").standard_normal(s * 300).reshape(s, 300)[:5]
     np.testing.assert_array_equal(got[s:], ref1)
 
@@ -65,7 +65,7 @@ def test_seed_block_rule_keeps_narrow_inputs_and_bounds_wide_ones():
 @pytest.mark.parametrize("block_size", [1, 97, 4096, 100_000])
 def test_wide_input_draws_do_not_depend_on_block_size(block_size):
     inputs = {"w": IID(Normal(0, 1), 500), "x": Normal(0, 1)}
-    ref = draw(inputs, 5000, seed=4)
+    ref = sample_inputs(inputs, 5000, seed=4)
     got = {
         k: np.concatenate([s[k] for _, _, s in iter_blocks(inputs, 5000, 4, block_size)])
         for k in inputs

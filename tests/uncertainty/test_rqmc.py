@@ -15,7 +15,7 @@ from mtmc.errors import InputError
 from mtmc.uncertainty.montecarlo import RQMC_MIN_BLOCKS
 from mtmc.uncertainty.sampling import (
     SEED_BLOCK_SIZE,
-    draw,
+    sample_inputs,
     sobol_block_trials,
     sobol_layout,
     sobol_points,
@@ -52,8 +52,8 @@ def test_numbers_do_not_depend_on_blocks_workers_or_input_order():
     # the first trials of a longer run are those of a shorter one
     r4 = monte_carlo(SUM, INPUTS, 3 * SEED_BLOCK_SIZE, seed=5, sampling="sobol")
     assert np.array_equal(r4.samples[:m], r.samples)
-    # draw() gives the same inputs: x1 from dimension 0, x2 from dimension 1 (sorted names)
-    x = draw(INPUTS, m, 5, sampling="sobol")
+    # sample_inputs() gives the same inputs: x1 from dimension 0, x2 from dimension 1 (sorted names)
+    x = sample_inputs(INPUTS, m, 5, sampling="sobol")
     u = sobol_points(5, 1, 2, SEED_BLOCK_SIZE)
     np.testing.assert_array_equal(x["x2"][SEED_BLOCK_SIZE:], INPUTS["x2"].ppf(u[:, 1]))
     np.testing.assert_array_equal(r.samples, x["x1"] + x["x2"])

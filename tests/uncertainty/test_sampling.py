@@ -12,10 +12,10 @@ from mtmc.uncertainty.distributions import MultivariateNormal, Normal, Triangula
 from mtmc.uncertainty.sampling import (
     DEFAULT_BLOCK_SIZE,
     SEED_BLOCK_SIZE,
-    draw,
     input_generator,
     iter_blocks,
     resolve_seed,
+    sample_inputs,
 )
 
 INPUTS = {
@@ -42,7 +42,7 @@ def _concat(blocks):
 @pytest.mark.parametrize("block_size", [1000, 4096, 10**5, SEED_BLOCK_SIZE, DEFAULT_BLOCK_SIZE])
 @pytest.mark.parametrize("method", ["default", "box-muller"])
 def test_blocks_identical_to_draw(block_size, method):
-    ref = draw(INPUTS, TRIALS, seed=99, normal_method=method)
+    ref = sample_inputs(INPUTS, TRIALS, seed=99, normal_method=method)
     got, spans = _concat(iter_blocks(INPUTS, TRIALS, 99, block_size, normal_method=method))
     assert spans[0][0] == 0
     assert spans[-1][1] == TRIALS
@@ -55,7 +55,7 @@ def test_blocks_identical_to_draw(block_size, method):
 
 def test_seed_block_k_is_kth_spawned_child_keyed_by_name():
     seed = 2024
-    x = draw({"x": Normal(0, 1)}, 2 * SEED_BLOCK_SIZE + 10, seed)["x"]
+    x = sample_inputs({"x": Normal(0, 1)}, 2 * SEED_BLOCK_SIZE + 10, seed)["x"]
     key = int.from_bytes(hashlib.sha256(b"x").digest()[:8], "little")
     for k in range(3):
         child = np.random.SeedSequence(seed).spawn(k + 1)[k]
@@ -68,9 +68,9 @@ def test_seed_block_k_is_kth_spawned_child_keyed_by_name():
 
 
 def test_dict_order_and_other_inputs_do_not_matter():
-    a = draw({"x": Normal(0, 1), "y": Uniform(0, 1)}, 5000, 1)
-    b = draw({"y": Uniform(0, 1), "x": Normal(0, 1)}, 5000, 1)
-    c = draw({"x": Normal(0, 1), "z": Triangular(0, 1)}, 5000, 1)
+    a = sample_inputs({"x": Normal(0, 1), "y": Uniform(0, 1)}, 5000, 1)
+    b = sample_inputs({"y": Uniform(0, 1), "x": Normal(0, 1)}, 5000, 1)
+    c = sample_inputs({"x": Normal(0, 1), "z": Triangular(0, 1)}, 5000, 1)
     np.testing.assert_array_equal(a["x"], b["x"])
     np.testing.assert_array_equal(a["y"], b["y"])
     np.testing.assert_array_equal(a["x"], c["x"])
@@ -78,21 +78,23 @@ def test_dict_order_and_other_inputs_do_not_matter():
 
 
 def test_shorter_run_is_a_prefix_of_longer_run():
-    short = draw(INPUTS, 1000, 5)
-    long = draw(INPUTS, 3 * SEED_BLOCK_SIZE + 7, 5)
+    short = sample_inputs(INPUTS, 1000, 5)
+    long = sample_inputs(INPUTS, 3 * SEED_BLOCK_SIZE + 7, 5)
     for k in INPUTS:
         np.testing.assert_array_equal(short[k], long[k][:1000])
 
 
 def test_start_offset():
-    ref = draw(INPUTS, 50_000, 3)
+    ref = sample_inputs(INPUTS, 50_000, 3)
     got, _ = _concat(iter_blocks(INPUTS, 50_000, 3, 7000, start=20_000))
     for k in INPUTS:
         np.testing.assert_array_equal(got[k], ref[k][20_000:])
 
 
 def test_different_seeds_differ():
-    assert not np.array_equal(draw(INPUTS, 100, 1)["x"], draw(INPUTS, 100, 2)["x"])
+    assert not np.array_equal(
+        sample_inputs(INPUTS, 100, 1)["x"], sample_inputs(INPUTS, 100, 2)["x"]
+    )
 
 
 def test_block_views_are_read_only():
@@ -110,7 +112,9 @@ def test_resolve_seed():
     assert s >= 0
     assert s.bit_length() > 32
     # the recorded entropy reproduces the draws
-    np.testing.assert_array_equal(draw(INPUTS, 100, s)["x"], draw(INPUTS, 100, s)["x"])
+    np.testing.assert_array_equal(
+        sample_inputs(INPUTS, 100, s)["x"], sample_inputs(INPUTS, 100, s)["x"]
+    )
     assert resolve_seed(None) != s
 
 
@@ -131,14 +135,14 @@ def test_resolve_seed_errors(seed, msg):
 
 def test_argument_errors():
     with pytest.raises(InputError, match="field trials: expected an integer >= 1"):
-        draw(INPUTS, 0, 1)
+        sample_inputs(INPUTS, 0, 1)
     with pytest.raises(InputError, match="field block_size"):
         list(iter_blocks(INPUTS, 10, 1, 0))
     with pytest.raises(InputError, match="field normal_method"):
-        draw(INPUTS, 10, 1, normal_method="polar")  # type: ignore[arg-type]
+        sample_inputs(INPUTS, 10, 1, normal_method="polar")  # type: ignore[arg-type]
     with pytest.raises(DistributionError, match=r"field q: .*unknown distribution 'foo'"):
-        draw({"q": "foo(1)"}, 10, 1)
+        sample_inputs({"q": "foo(1)"}, 10, 1)
     with pytest.raises(InputError, match="field seed: expected the integer seed"):
-        draw(INPUTS, 10, None)  # type: ignore[arg-type]
+        sample_inputs(INPUTS, 10, None)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="mapping"):
-        draw([Normal(0, 1)], 10, 1)  # type: ignore[arg-type]
+        sample_inputs([Normal(0, 1)], 10, 1)  # type: ignore[arg-type]

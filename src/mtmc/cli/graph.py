@@ -46,9 +46,9 @@ FILE = typer.Argument(..., help="Graph file: .toml, or the assertion database (.
 
 
 def _read(path: Path) -> Graph:
-    from mtmc.graph.files import read_graph
+    from mtmc.graph.files import load_graph
 
-    return read_graph(path)
+    return load_graph(path)
 
 
 @app.command("check")

@@ -58,7 +58,7 @@ __all__ = [
     "plane_from_point_normal",
     "plane_from_points",
     "project_point_plane",
-    "unit",
+    "unit_vector",
     "vector",
 ]
 
@@ -128,7 +128,7 @@ def vector(a: npt.ArrayLike, b: npt.ArrayLike) -> NDArray[np.float64]:
     return bb - aa
 
 
-def unit(v: npt.ArrayLike) -> NDArray[np.float64]:
+def unit_vector(v: npt.ArrayLike) -> NDArray[np.float64]:
     """The unit vector ``v / |v|`` (transition ``unit_v``, Stryczek).
 
     Parameters
@@ -149,7 +149,7 @@ def unit(v: npt.ArrayLike) -> NDArray[np.float64]:
 
     Examples
     --------
-    >>> unit([3, 0, 4])
+    >>> unit_vector([3, 0, 4])
     array([[0.6, 0. , 0.8]])
     """
     vv = check_vectors(v, "v")
@@ -198,7 +198,7 @@ def displace(
         return pp + vv
     ll = check_scalars(length, "length")
     batch_size(p=pp, v=vv, length=ll)
-    return pp + ll[:, None] * unit(vv)
+    return pp + ll[:, None] * unit_vector(vv)
 
 
 def line_from_points(a: npt.ArrayLike, b: npt.ArrayLike) -> Line:

@@ -15,7 +15,7 @@ The names exported to :mod:`mtmc` carry ``graph`` where a bare name would be amb
 from mtmc.graph.assertions import dumps_assertions, load_assertions, loads_assertions
 from mtmc.graph.draw import draw as draw_graph
 from mtmc.graph.draw import to_dot as graph_to_dot
-from mtmc.graph.files import read_graph
+from mtmc.graph.files import load_graph
 from mtmc.graph.model import Graph, Plan, Step
 from mtmc.graph.model import check as check_graph
 from mtmc.graph.ops import rotary_axis
@@ -25,7 +25,6 @@ from mtmc.graph.sweep import Surrogate, SweepResult, fit_surrogate
 from mtmc.graph.sweep import sweep as sweep_graph
 from mtmc.graph.toml_format import dump as dump_graph
 from mtmc.graph.toml_format import dumps as dumps_graph
-from mtmc.graph.toml_format import load as load_graph
 from mtmc.graph.toml_format import loads as loads_graph
 from mtmc.graph.units import place_dimension
 
@@ -46,7 +45,6 @@ __all__: list[str] = [
     "run_graph",
     "graph_model",
     "rotary_axis",
-    "read_graph",
     "load_assertions",
     "loads_assertions",
     "dumps_assertions",

@@ -8,24 +8,26 @@ from mtmc.graph.assertions import load_assertions
 from mtmc.graph.model import Graph
 from mtmc.graph.toml_format import load
 
-__all__ = ["read_graph", "ASSERTION_SUFFIXES"]
+__all__ = ["load_graph", "ASSERTION_SUFFIXES"]
 
 #: Suffixes read as the assertion database of Stryczek (Table 1); the others as TOML.
 ASSERTION_SUFFIXES: tuple[str, ...] = (".pl", ".db", ".facts")
 
 
-def read_graph(path: str | Path) -> Graph:
-    """Read a graph: TOML (``.toml``), or the assertion database (``.pl``, ``.db``, ``.facts``).
+def load_graph(path: str | Path, *, validate: bool = True) -> Graph:
+    """Read a graph file: the assertion database (``.pl``, ``.db``, ``.facts``), else TOML.
 
     Parameters
     ----------
     path : str or Path
         The file.
+    validate : bool
+        Also run :func:`mtmc.graph.check_graph` (default), so the graph is runnable.
 
     Returns
     -------
     Graph
-        The validated graph.
+        The graph (validated unless ``validate`` is false).
 
     Raises
     ------
@@ -34,5 +36,5 @@ def read_graph(path: str | Path) -> Graph:
         :func:`mtmc.graph.assertions.load_assertions`.
     """
     if Path(path).suffix.lower() in ASSERTION_SUFFIXES:
-        return load_assertions(path)
-    return load(path)
+        return load_assertions(path, validate=validate)
+    return load(path, validate=validate)

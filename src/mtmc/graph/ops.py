@@ -329,7 +329,7 @@ def _vector(a: Any, b: Any) -> Any:
 @variant("unit_v", ("vector",), "unit")
 def _unit_v(v: Any) -> Any:
     """The unit vector of a vector."""
-    return gc.unit(v)
+    return gc.unit_vector(v)
 
 
 @variant("unit_v", ("line",), "unit")

@@ -45,7 +45,7 @@ Examples
 --------
 >>> from mtmc.uncertainty.distributions import Normal, Uniform
 >>> inputs = {"x": Normal(0, 1), "y": Uniform(0, 1)}
->>> a = draw(inputs, 5000, seed=7)
+>>> a = sample_inputs(inputs, 5000, seed=7)
 >>> b = {k: np.concatenate([s[k] for _, _, s in iter_blocks(inputs, 5000, 7, 1234)])
 ...      for k in inputs}
 >>> all(np.array_equal(a[k], b[k]) for k in inputs)
@@ -78,7 +78,7 @@ __all__ = [
     "sobol_points",
     "SEED_BLOCK_SIZE",
     "seed_block_trials",
-    "draw",
+    "sample_inputs",
     "evaluation_block_size",
     "input_generator",
     "iter_blocks",
@@ -570,7 +570,7 @@ def iter_blocks(
         yield a, b, source.trials(a, b)
 
 
-def draw(
+def sample_inputs(
     inputs: Mapping[str, Any],
     trials: int,
     seed: int,
@@ -609,7 +609,7 @@ def draw(
     Examples
     --------
     >>> from mtmc.uncertainty.distributions import Normal
-    >>> x = draw({"x": Normal(1, 2)}, 100_000, seed=3)["x"]
+    >>> x = sample_inputs({"x": Normal(1, 2)}, 100_000, seed=3)["x"]
     >>> x.shape, bool(abs(x.mean() - 1) < 0.03)
     ((100000,), True)
     """
