@@ -507,8 +507,23 @@ def _frame(plane: Plane, line: Line, p: Any) -> Any:
 
 
 def _sq(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``|v|²`` row by row (column arithmetic: faster than ``einsum`` on ``(M, 3)``)."""
-    return v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]
+    """``|v|²`` column by column of a ``(3, M)`` array of coordinate rows."""
+    out: NDArray[np.float64] = v[0] * v[0]
+    out += v[1] * v[1]
+    out += v[2] * v[2]
+    return out
+
+
+def _cross_rows(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a × b`` of ``(3, M)`` arrays of coordinate rows (contiguous rows: no strides)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    np.multiply(a[1], b[2], out=out[0])
+    out[0] -= a[2] * b[1]
+    np.multiply(a[2], b[0], out=out[1])
+    out[1] -= a[0] * b[2]
+    np.multiply(a[0], b[1], out=out[2])
+    out[2] -= a[1] * b[0]
+    return out
 
 
 def rotary_axis(
@@ -580,18 +595,17 @@ def rotary_axis(
     al = None if alpha is None else check_scalars(alpha, "alpha")
     m = batch_size(p1=a, p2=b, p3=c, **({} if al is None else {"alpha": al}))
     a, b, c = (broadcast_batch(m, v) for v in (a, b, c))
-    ab, ac = b - a, c - a
-    n = _cross(ab, ac)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
-    sab, sac = _sq(ab), _sq(ac)
-    degenerate(
-        ~(_sq(n) > RTOL**2 * sab * sac),
-        "the three ball centres are collinear",
-        "three ball centres on a circle",
-        "axis",
-    )
     if al is None:
-        circ = gc.circle_from_points(a, b, c)
-        return Line(circ.centre, n)
+        ab, ac = b - a, c - a
+        normal = _cross(ab, ac)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
+        _check_collinear(_sq(ab.T), _sq(ac.T), _sq(normal.T))
+        return Line(gc.circle_from_points(a, b, c).centre, normal)
+    # the coordinates as contiguous rows, (3, M): column arithmetic without strides
+    ra, rb, rc = (np.ascontiguousarray(v.T) for v in (a, b, c))
+    ab, ac = rb - ra, rc - ra
+    n = _cross_rows(ab, ac)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
+    sab, sac = _sq(ab), _sq(ac)
+    _check_collinear(sab, sac, _sq(n))
     s = np.sin(al)
     degenerate(
         ~(np.abs(s) > RTOL),
@@ -599,24 +613,43 @@ def rotary_axis(
         "0 < alpha < pi",
         "alpha",
     )
-    w = b + c  # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
+    w = rb + rc  # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
     w *= 0.5
-    w -= a
-    cb = c - b  # |P3 P4| = |P3 - P2| / 2, eq. 11
+    w -= ra
+    cb = rc - rb  # |P3 P4| = |P3 - P2| / 2, eq. 11 (the rows may be the caller's)
     half_chord = np.sqrt(_sq(cb))
     half_chord *= 0.5
     length = np.sqrt(_sq(w))  # |P1 P4|, eq. 13
+    np.maximum(sab, sac, out=sab)
+    sab *= RTOL**2
     degenerate(
-        ~(length * length > RTOL**2 * np.maximum(sab, sac)),
+        ~(length * length > sab),
         "P1 coincides with P4, the middle of P2 and P3",
         "P1 away from the chord P2 P3",
         "axis",
     )
     # eq. 12: R = |P3 P4| / sin(alpha); eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
-    half_chord = half_chord / (length * s)  # not in place: alpha may carry the batch
-    centre = w * half_chord[:, None]
+    length *= s
+    half_chord /= length
+    # back to (M, 3) rows, C-ordered like any other batch (the same bits as one at a time)
+    centre = np.multiply(w.T, half_chord[:, None], order="C")
     centre += a
-    return Line(centre, n)
+    direction = np.ascontiguousarray(n.T)
+    centre.setflags(write=False)  # the Line keeps them without a copy
+    direction.setflags(write=False)
+    return Line(centre, direction)
+
+
+def _check_collinear(
+    sab: NDArray[np.float64], sac: NDArray[np.float64], sn: NDArray[np.float64]
+) -> None:
+    """Refuse collinear ball centres: ``|n|² <= RTOL² |P2 - P1|² |P3 - P1|²``."""
+    degenerate(
+        ~(sn > RTOL**2 * sab * sac),
+        "the three ball centres are collinear",
+        "three ball centres on a circle",
+        "axis",
+    )
 
 
 @variant("axis", ("point", "point", "point"), "line")

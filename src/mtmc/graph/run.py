@@ -59,6 +59,9 @@ __all__ = [
 #: the transitions stay in the processor cache. The numbers do not depend on it.
 GRAPH_BLOCK_SIZE: int = 16384
 
+#: Place types with one component.
+_SCALAR_TYPES = frozenset(("x", "y", "z", "real"))
+
 #: Parts of each place type in the flat layout used for the running sums: (name, size).
 PARTS: dict[str, tuple[tuple[str, int], ...]] = {
     "x": (("value", 1),),
@@ -381,23 +384,40 @@ def _marked_value(p: Place, factor: float, samples: Mapping[str, Any]) -> Any:
 
 
 def _full(value: Any, m: int) -> Any:
-    """A value with its batch of one (a constant) repeated to ``m`` trials."""
-    if isinstance(value, Line):
-        return Line(
-            *(np.broadcast_to(x, (m, *x.shape[1:])) for x in (value.point, value.direction))
-        )
-    if isinstance(value, Plane):
-        return Plane(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in (value.point, value.normal)))
-    if isinstance(value, Circle):
-        parts = (value.centre, value.normal, value.radius)
-        return Circle(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts))
-    if isinstance(value, Sphere):
+    """A value with its batch of one (a constant) repeated to ``m`` trials.
+
+    A value that already holds ``m`` trials is returned as it is (no copy, no new checks).
+    """
+    if isinstance(value, (Line, Plane, Circle, Sphere)):
+        if len(value) == m:
+            return value
+        if isinstance(value, Line):
+            return Line(
+                *(np.broadcast_to(x, (m, *x.shape[1:])) for x in (value.point, value.direction))
+            )
+        if isinstance(value, Plane):
+            parts0 = (value.point, value.normal)
+            return Plane(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts0))
+        if isinstance(value, Circle):
+            parts = (value.centre, value.normal, value.radius)
+            return Circle(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts))
         parts2 = (value.centre, value.radius)
         return Sphere(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts2))
     arr = np.asarray(value, dtype=np.float64)
     if arr.ndim == 0:
         arr = arr.reshape(1)
+    if arr.shape[0] == m:
+        return arr
     return np.broadcast_to(arr, (m, *arr.shape[1:]))
+
+
+def _last_use(plan: Plan) -> dict[str, int]:
+    """For each place read by a transition, the index of the last step that reads it."""
+    last: dict[str, int] = {}
+    for i, s in enumerate(plan.steps):
+        for p in s.transition.inputs:
+            last[p] = i
+    return last
 
 
 def evaluate(
@@ -441,10 +461,30 @@ def evaluate(
     for name in want:
         if name not in plan.types:
             raise InputError(f"the graph has no place {name}", file=g.file, field=name)
-    last_use: dict[str, int] = {}
-    for i, s in enumerate(plan.steps):
-        for p in s.transition.inputs:
-            last_use[p] = i
+    if specs is None:
+        specs = {
+            s.transition.name: _probe.meas_spec(s.transition, g.probe, g.factor)
+            for s in plan.steps
+            if s.transition.op == "meas"
+        }
+    values = _fire(plan, samples, m, want, specs, _last_use(plan))
+    return {k: _full(v, m) for k, v in values.items() if k in want}
+
+
+def _fire(
+    plan: Plan,
+    samples: Mapping[str, Any],
+    m: int,
+    want: frozenset[str] | set[str],
+    specs: Mapping[str, _probe.MeasSpec],
+    last_use: Mapping[str, int],
+) -> dict[str, Any]:
+    """Fire every transition once on a block of ``m`` trials.
+
+    Returns the values of the places in ``want`` and of those no transition reads
+    (constants as batches of one); the others are released after their last reader.
+    """
+    g = plan.graph
     values: dict[str, Any] = {}
     for pl in g.places:
         if pl.marked:
@@ -452,8 +492,7 @@ def evaluate(
     for i, s in enumerate(plan.steps):
         t = s.transition
         if t.op == "meas":
-            spec = specs[t.name] if specs is not None else _probe.meas_spec(t, g.probe, g.factor)
-            val = _probe.meas_value(t.name, spec, s.variant.output, samples, m)
+            val = _probe.meas_value(t.name, specs[t.name], s.variant.output, samples, m)
         else:
             try:
                 val = s.variant.func(*[values[p] for p in t.inputs])
@@ -469,7 +508,7 @@ def evaluate(
         for p in t.inputs:
             if last_use.get(p) == i and p not in want:
                 del values[p]
-    return {k: _full(v, m) for k, v in values.items() if k in want}
+    return values
 
 
 def _as_plan(graph: Graph | Plan) -> Plan:
@@ -511,6 +550,8 @@ class GraphModel:
     outputs: tuple[str, ...]
     inputs: Mapping[str, Distribution] = field(init=False, repr=False)
     specs: Mapping[str, _probe.MeasSpec] = field(init=False, repr=False)
+    _last_use: Mapping[str, int] = field(init=False, repr=False)
+    _want: frozenset[str] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         g = self.plan.graph
@@ -525,6 +566,8 @@ class GraphModel:
         }
         object.__setattr__(self, "inputs", MappingProxyType(inputs))
         object.__setattr__(self, "specs", MappingProxyType(specs))
+        object.__setattr__(self, "_last_use", MappingProxyType(_last_use(self.plan)))
+        object.__setattr__(self, "_want", frozenset(self.outputs))
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (GraphModel, (self.plan, self.outputs))
@@ -533,11 +576,15 @@ class GraphModel:
         """The output places of a block of trials, flattened (:func:`flatten`)."""
         m = max((np.shape(v)[0] for v in arrays.values() if np.ndim(v) > 0), default=1)
         arrays.pop(_TRIAL_INPUT, None)
-        vals = evaluate(self.plan, arrays, m, self.outputs, specs=self.specs)
+        vals = _fire(self.plan, arrays, m, self._want, self.specs, self._last_use)
+        types = self.plan.types
         out = {}
         for name in self.outputs:
-            flat = flatten(self.plan.types[name], vals[name], m)
-            out[name] = flat[:, 0] if flat.shape[1] == 1 else flat
+            if types[name] in _SCALAR_TYPES:  # the values as they are: no copy
+                v = np.asarray(vals[name], dtype=np.float64).reshape(-1)
+                out[name] = v if v.shape[0] == m else np.broadcast_to(v, (m,))
+            else:
+                out[name] = flatten(types[name], vals[name], m)
         return out
 
 

@@ -158,10 +158,10 @@ class _Digest:
 
 
 def _block_array(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
-    """One new C-ordered ``(d, rows)`` array from the pieces of a seed block."""
+    """One C-ordered ``(d, rows)`` array of the pieces of a seed block (a view if it is one)."""
     if len(parts) > 1:
         return np.ascontiguousarray(np.concatenate(parts, axis=1))
-    return np.array(parts[0], order="C")
+    return np.ascontiguousarray(parts[0])
 
 
 def _reduce(x: NDArray[np.float64], sketch: bool) -> tuple[Moments | None, Any]:

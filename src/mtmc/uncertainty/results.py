@@ -270,7 +270,8 @@ class Moments:
         sums; the same array gives the same bits.
         """
         n = int(xt.shape[1])
-        mean = xt.mean(axis=1)
+        mean = np.add.reduce(xt, axis=1)  # = xt.mean(axis=1), bit for bit
+        mean /= n
         dev = xt - mean[:, None]
         d = xt.shape[0]
         if d <= 32:  # dot products of rows in NumPy's own loops: no BLAS threads
@@ -282,7 +283,18 @@ class Moments:
             m2 = dev @ dev.T
         else:
             m2 = np.einsum("ij,ij->i", dev, dev)
-        return cls(n, mean, m2)
+        return cls._new(n, mean, m2)
+
+    @classmethod
+    def _new(cls, n: int, mean: NDArray[np.float64], m2: NDArray[np.float64]) -> Moments:
+        """Moments of new float64 arrays that nothing else holds (made read-only, no copy)."""
+        obj = object.__new__(cls)
+        mean.setflags(write=False)
+        m2.setflags(write=False)
+        object.__setattr__(obj, "n", n)
+        object.__setattr__(obj, "mean", mean)
+        object.__setattr__(obj, "m2", m2)
+        return obj
 
     def merge(self, other: Moments) -> Moments:
         """The moments of the union of both sets."""
@@ -294,8 +306,11 @@ class Moments:
         delta = other.mean - self.mean
         mean = self.mean + delta * (other.n / n)
         w = self.n * other.n / n
-        corr = np.outer(delta, delta) if self.m2.ndim == 2 else delta * delta
-        return Moments(n, mean, self.m2 + other.m2 + corr * w)
+        corr = np.multiply.outer(delta, delta) if self.m2.ndim == 2 else delta * delta
+        corr *= w
+        m2 = self.m2 + other.m2
+        m2 += corr
+        return Moments._new(n, mean, m2)
 
     @property
     def cov(self) -> NDArray[np.float64]:
