@@ -206,7 +206,28 @@ def check(graph: Graph, *, nominal: bool = True) -> Plan:
     >>> plan = check(g)
     >>> plan.types["c"], plan.generations
     ('real', (('t1',),))
+    >>> check(g) is plan  # a graph is immutable: checked once, its plan kept
+    True
     """
+    if nominal:
+        done = graph.__dict__.get("_plan")
+        if done is not None:
+            if done.warnings:
+                import warnings
+
+                from mtmc.graph.nominal import ConditioningWarning
+
+                for note in done.warnings:
+                    warnings.warn(note, ConditioningWarning, stacklevel=2)
+            return done  # type: ignore[no-any-return]
+    plan = _check(graph, nominal)
+    if nominal:
+        object.__setattr__(graph, "_plan", plan)
+    return plan
+
+
+def _check(graph: Graph, nominal: bool) -> Plan:
+    """:func:`check` without the kept plan."""
     places, trans = _index(graph)
     producer = _check_arcs(graph, places, trans)
     _check_marking(graph, places, producer)
