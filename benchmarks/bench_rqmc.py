@@ -9,17 +9,19 @@ good enough when ``2 s <= δ`` for ``u`` and both endpoints (the stopping rule o
 
 - pseudo-random: ``s`` falls as ``n^(-1/2)``, so the trials needed are
   ``n (2 s / δ)²`` from runs of ``n = 2¹⁴``;
-- RQMC: ``s`` of one scrambling is measured for ``n = 2⁸ ... 2¹⁴``; the trials needed
-  are the smallest such ``n`` that meets the rule, else ``2¹⁴ ⌈(2 s / δ)²⌉`` (whole
-  independent scramblings, whose average has ``s / √r``).
+- RQMC: ``s`` of one scrambling is measured for every ``n = 2⁴, 2⁵, ..., 2¹⁴``; the
+  trials needed are the smallest such ``n`` that meets the rule, else
+  ``2¹⁴ ⌈(2 s / δ)²⌉`` (whole independent scramblings, whose average has ``s / √r``).
 
 Two figures per sampling: for ``u`` alone, and for ``u`` and both endpoints.
 
 The seconds are the trials needed times the time per trial of a run of 2¹⁸ trials of
-that sampling (best of 3), measured in the same process. §9.3's output PDF is symmetric,
-so its shortest interval is the symmetric one; the symmetric endpoints are used because
-the position of a shortest interval is poorly determined for any sampling (see
-``docs/performance.md``).
+that sampling (best of 3), measured in the same process. Beside them, ``--runs`` also
+times one whole run of the trials needed for ``u`` (``monte_carlo`` or ``run_graph``
+with ``u`` and the interval read, best of 5), fixed costs included: what a user waits.
+§9.3's output PDF is symmetric, so its shortest interval is the symmetric one; the
+symmetric endpoints are used because the position of a shortest interval is poorly
+determined for any sampling (see ``docs/performance.md``).
 
 Run: ``python benchmarks/bench_rqmc.py [case ...] [--seeds R]`` (cases: 9.2.2 9.2.3
 9.2.4 9.3 9.4 9.4r axis_c; all by default, a few minutes: run them one by one on a
@@ -43,7 +45,7 @@ from mtmc.uncertainty.tolerance import numerical_tolerance
 
 ROOT = Path(__file__).resolve().parents[1]
 N_BLOCK = 2**14
-SIZES = (2**8, 2**10, 2**12, 2**14)
+SIZES = tuple(2**k for k in range(4, 15))
 TIMING_TRIALS = 2**18
 
 SUM4 = expression("x1 + x2 + x3 + x4")
@@ -127,6 +129,16 @@ def per_trial(case: str, sampling: str) -> float:
     return best / TIMING_TRIALS
 
 
+def whole_run(case: str, n: int, sampling: str) -> float:
+    """Seconds of one run of ``n`` trials, everything included (best of 5)."""
+    best = math.inf
+    for s in range(5):
+        t0 = time.perf_counter()
+        summaries(case, n, 50 + s, sampling)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
 def _needed(sd_at: dict[int, np.ndarray], delta: np.ndarray, rows: slice) -> int:
     """Trials for ``2 s <= δ`` on the summaries ``rows`` (see the module notes)."""
     for n in SIZES:
@@ -184,6 +196,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("cases", nargs="*", default=[*CASES, "axis_c"])
     ap.add_argument("--seeds", type=int, default=12)
+    ap.add_argument("--runs", action="store_true", help="also time whole runs (see notes)")
     args = ap.parse_args()
     load0 = os.getloadavg()[0]
     monte_carlo(SUM4, CASES["9.2.2"][1], 2**10, 1, sampling="sobol")  # SciPy's import
@@ -218,6 +231,13 @@ def main() -> None:
             f"{cells2[0]:>20}{cells2[1]:>18}{_sig2(ratio_e):>7}"
         )
     print("ratio: time to two digits, pseudo-random / RQMC (target >= 10)")
+    if args.runs:
+        print("whole runs of the trials needed for u, seconds (best of 5): random, sobol, ratio")
+        for case, r in rows:
+            nr, nq = r["random"][0], r["sobol"][0]
+            tr = whole_run(case, max(nr, 2), "random")
+            tq = whole_run(case, nq, "sobol")
+            print(f"{case:<8}{nr:>9}{tr:>10.5f}{nq:>9}{tq:>10.5f}{tr / tq:>7.2g}")
 
 
 if __name__ == "__main__":
