@@ -512,6 +512,7 @@ def identify(
         lam0=1e-8,
         atol=1e-12,
         solver="normal",
+        polish=2 if ident.ok else 0,
     )
     th, R, t = prob.split(res.x)
     resid = res.residuals.reshape(M, prob.n, 3)

@@ -9,18 +9,27 @@ the coefficients and the error left after compensation at every point are record
 trials run through the engine :func:`mtmc.uncertainty.monte_carlo` (seeded blocks); the
 model is vectorised over trials.
 
-Identification of the ``M`` trials (a shared factorisation, exact enough)
---------------------------------------------------------------------------
+Identification of the ``M`` trials (a shared factorisation, then exact)
+-----------------------------------------------------------------------
 The noise-free verification is identified once, exactly (:func:`identify`): solution
-``(θ̄, R̄, t̄)``, Jacobian ``J₀`` (3N × p) with QR factors giving ``A = J₀⁺``. Each trial
-is then solved by chord Gauss–Newton iterations ``δ = −A r(θ, R, t)`` with the residual
-computed per trial: the pose part exactly (``x = Rᵀ(p − t)``, ``R ← R Exp(δω)``), the
-machine part as ``p = p̄ + J_p (θ − θ̄)``. The neglected terms are the second-order terms
-of the machine model in ``θ − θ̄`` (products of noise-sized errors, below 1e-9 mm here)
-and the change of ``J₀`` over the trials' spread, which the chord iteration corrects
-through the residual. The result agrees with the exact per-trial solution of
-:func:`identify` to better than 1e-6 relative (tested; figures in
-``docs/verification.md``).
+``(θ̄, R̄, t̄)``, Jacobian ``J₀`` (3N × p) with QR factors giving ``A = J₀⁺`` and
+``H₀⁻¹ = (J₀ᵀJ₀)⁻¹``. Each trial is then solved in two stages, all trials at once:
+
+1. chord Gauss–Newton iterations ``δ = −A r(θ, R, t)``, the pose part exact
+   (``x = Rᵀ(p − t)``, ``R ← R Exp(δω)``), the machine part linearised,
+   ``p = p̄ + J_p (θ − θ̄)``. Their fixed point solves ``J₀ᵀ r = 0``, not the trial's own
+   normal equations ``J(θ, R, t)ᵀ r = 0``: it lies about 10⁻⁴ u from the trial's optimum
+   (``u`` the coefficient's standard uncertainty), which is 10⁻² relative for a
+   coefficient near zero.
+2. ``refine`` exact steps ``δ = −H₀⁻¹ J(θ, R, t)ᵀ r(θ, R, t)``: the residual from the
+   machine model itself at each trial's parameters and the exact gradient (the machine's
+   analytic Jacobian per trial, contracted with the residual block by block, never
+   stored for all trials). Their fixed point is the trial's exact least-squares solution;
+   ``H₀`` only sets the rate, a factor of about 10⁻⁵ per step (the change of ``J``
+   between trials and the curvature of the rotation), so two steps reach the rounding
+   floor. The result equals the per-trial solution of :func:`identify` and of
+   ``scipy.optimize.least_squares`` to better than 10⁻⁶ relative on every coefficient
+   (tested; figures in ``docs/performance.md``).
 
 Inputs of the engine (named): ``noise``, ``iid(normal(0, 1), 3N)``, the standard normal
 numbers of ``(L, α, β)`` of each point; optionally ``repeatability`` (``3N`` standard
@@ -57,6 +66,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
 from mtmc.instruments.laser_tracker import LaserTracker
+from mtmc.kinematics.functions import ErrorFunction
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.uncertainty.distributions import IID, Normal
 from mtmc.uncertainty.gum import Validation, gum, validate
@@ -68,6 +78,7 @@ from mtmc.verification.identify import (
     _skew,
     expmap,
     identify,
+    logmap,
     ve_stats,
 )
 
@@ -179,7 +190,15 @@ class VerificationModel:
     repeatability: float
     pose_u: _F  # (6,)
     reflector_u: float
+    model: ErrorModel = field(repr=False)
+    q: _F = field(repr=False)  # (N, n_axes)
+    free: NDArray[np.int64] = field(repr=False)  # free parameters of the model
+    base: _F = field(repr=False)  # (P,) full parameter vector with the fixed values
+    Hinv: _F = field(repr=False)  # (p, p) (J0^T J0)^-1
+    basis: tuple[tuple[str, NDArray[np.int64], _F], ...] = field(repr=False)
+    exact: bool = False
     iterations: int = 3
+    refine: int = 2
 
     @classmethod
     def build(
@@ -190,6 +209,7 @@ class VerificationModel:
         repeatability: float = 0.0,
         pose_u: npt.ArrayLike | None = None,
         reflector_u: float = 0.0,
+        refine: int | None = None,
     ) -> VerificationModel:
         """Precompute the reference solution's factors.
 
@@ -205,6 +225,11 @@ class VerificationModel:
             only when the pose is not identified.
         reflector_u : float
             Standard uncertainty of each component of the reflector offset, mm.
+        refine : int, optional
+            Exact steps after the chord iterations (module notes). By default
+            :data:`REFINE` for at most :data:`REFINE_POINTS` points, none above: an exact
+            step costs about 8 µs per point and trial (the machine's Jacobian at every
+            trial), so the 5408-point mesh keeps the chord solution (within 2·10⁻⁴ u).
 
         Returns
         -------
@@ -216,6 +241,7 @@ class VerificationModel:
         J0 = reference.jacobian[0]
         Q, R = np.linalg.qr(J0)
         A = np.linalg.solve(R, Q.T)
+        Ri = np.linalg.inv(R)
         m = ver.model
         Jp = m.jacobian(ver.q, th[0], exact=ver.exact)[:, :, prob.free]
         eq = ver.q if ver.eval_q is None else ver.eval_q
@@ -259,6 +285,14 @@ class VerificationModel:
             repeatability=float(repeatability),
             pose_u=pu,
             reflector_u=float(reflector_u),
+            model=m,
+            q=ver.q,
+            free=prob.free,
+            base=prob.base,
+            Hinv=Ri @ Ri.T,
+            basis=_error_basis(m, ver.q),
+            exact=ver.exact,
+            refine=(REFINE if ver.n_points <= REFINE_POINTS else 0) if refine is None else refine,
         )
 
     def inputs(self) -> dict[str, IID]:
@@ -298,7 +332,7 @@ class VerificationModel:
         return np.einsum("mij,mni->mnj", R, p - t[:, None, :])
 
     def solve(self, x_meas: Any) -> tuple[Any, Any, Any, Any]:
-        """Identify ``m`` sets of readings ``(m, N, 3)``.
+        """Identify ``m`` sets of readings ``(m, N, 3)`` (chord, then exact steps).
 
         Returns
         -------
@@ -322,9 +356,53 @@ class VerificationModel:
             if self.pose:
                 R = R @ expmap(d[:, k : k + 3])
                 t = t + d[:, k + 3 : k + 6]
+        for _ in range(self.refine):  # exact steps, all trials at once
+            d = -self.gradient(est, R, t, x_meas) @ self.Hinv
+            est[:, :k] += d[:, :k]
+            if self.pose:
+                R = R @ expmap(d[:, k : k + 3])
+                t = t + d[:, k + 3 : k + 6]
+        if self.pose:  # the pose as reported by identify: Log(R0^T R), t - t0
+            est[:, k : k + 3] = logmap(np.swapaxes(self.R_nom, -1, -2) @ R)
+            est[:, k + 3 : k + 6] = t - self.t_nom
         p = self.p_fit + ((est[:, :k] - self.est0[:k]) @ Jt).reshape(m, N, 3)
         r = (p - t[:, None, :]) @ R - x_meas
         return est, r, R, t
+
+    def gradient(self, est: _F, R: _F, t: _F, x_meas: Any) -> _F:
+        """Exact gradient ``J(θ, R, t)ᵀ r`` of ``½|r|²`` for ``m`` trials, shape (m, p).
+
+        ``r = Rᵀ(p(q; θ) − t) − x_meas`` with the machine model evaluated at each trial's
+        parameters; ``∂r/∂θ = Rᵀ ∂p/∂θ`` from the machine's analytic Jacobian (per
+        trial, in blocks of about :data:`_ROWS` points), ``∂r/∂δω = [x]×``,
+        ``∂r/∂δt = −Rᵀ`` (the parametrisation of :func:`identify`).
+        """
+        m, N = x_meas.shape[:2]
+        k = self.n_theta
+        mach = self.model.machine
+        th = np.broadcast_to(self.base, (m, self.base.size)).copy()
+        th[:, self.free] = est[:, :k]
+        g_th = np.zeros((m, self.base.size))
+        g = np.zeros(est.shape)
+        names = tuple(n for n, _, _ in self.basis)
+        step = max(1, _ROWS // N)
+        for a in range(0, m, step):  # blocks of trials, bounded memory
+            b = min(m, a + step)
+            qq = np.broadcast_to(self.q, (b - a, *self.q.shape)).reshape((b - a) * N, -1)
+            errs = {n: (th[a:b, idx] @ B.T).ravel() for n, idx, B in self.basis}
+            p = mach.tool_position(qq, errs, exact=self.exact).reshape(b - a, N, 3)
+            xr = (p - t[a:b, None, :]) @ R[a:b]  # model readings
+            r = xr - x_meas[a:b]
+            w = np.einsum("mij,mnj->mni", R[a:b], r).reshape(-1, 3)  # R r: base frame
+            Je = mach.jacobian(qq, errs, names=names, exact=self.exact)
+            s = np.einsum("rce,rc->re", Je, w).reshape(b - a, N, -1)
+            for ie, (_, idx, B) in enumerate(self.basis):
+                g_th[a:b, idx] = s[:, :, ie] @ B
+            if self.pose:
+                g[a:b, k : k + 3] = np.sum(np.cross(r, xr), axis=1)
+                g[a:b, k + 3 : k + 6] = -np.einsum("mij,mj->mi", R[a:b], r.sum(axis=1))
+        g[:, :k] = g_th[:, self.free]
+        return g
 
     def __call__(
         self,
@@ -349,6 +427,34 @@ class VerificationModel:
         ce = np.sqrt(np.sum(comp * comp, axis=-1))
         ve = np.concatenate([ve_stats(init), ve_stats(res), ve_stats(ce)], axis=1)
         return {"ve": ve, "coef": est, "comp": comp.reshape(m, -1)}
+
+
+#: Default exact steps of :meth:`VerificationModel.solve`, and the most points for them.
+REFINE: int = 2
+REFINE_POINTS: int = 1000
+
+#: Points per block of the exact gradient (about 30 MB of machine Jacobian).
+_ROWS = 65536
+
+
+def _error_basis(model: ErrorModel, q: _F) -> tuple[tuple[str, NDArray[np.int64], _F], ...]:
+    """Per error of ``model``: its name, its parameters' indices and basis ``(N, n)``.
+
+    The basis is taken at the points (a column of ones for a constant): the error's value
+    at point ``i`` is ``B[i] · θ[idx]`` and ``∂p/∂θ[idx] = ∂p/∂e · B``.
+    """
+    mach = model.machine
+    qa = mach.positions(q)
+    out = []
+    for n in model.error_names:
+        idx = [j for j, pn in enumerate(model.parameter_names) if pn == n or pn.startswith(n + "[")]
+        tmpl = model.templates[n]
+        if isinstance(tmpl, ErrorFunction):
+            B = tmpl.basis(qa[:, mach.axes.index(mach.error_term(n).axis)])
+        else:
+            B = np.ones((qa.shape[0], 1))
+        out.append((n, np.array(idx, dtype=np.int64), np.ascontiguousarray(B, dtype=np.float64)))
+    return tuple(out)
 
 
 def _ro(a: Any) -> _F:
@@ -510,6 +616,7 @@ def simulate(
     repeatability: float = 0.0,
     pose_u: npt.ArrayLike | None = None,
     reflector_u: float = 0.0,
+    refine: int | None = None,
     workers: int = 1,
     executor: Any = "thread",
     scheduler: Any = None,
@@ -524,6 +631,8 @@ def simulate(
     seed : int or None
     repeatability, pose_u, reflector_u
         Optional further inputs (see :meth:`VerificationModel.build`).
+    refine : int, optional
+        Exact steps of the identification (see :meth:`VerificationModel.build`).
     workers, executor, scheduler, progress
         Passed to the engine.
 
@@ -533,7 +642,12 @@ def simulate(
     """
     ref = reference_identification(ver)
     vm = VerificationModel.build(
-        ver, ref, repeatability=repeatability, pose_u=pose_u, reflector_u=reflector_u
+        ver,
+        ref,
+        repeatability=repeatability,
+        pose_u=pose_u,
+        reflector_u=reflector_u,
+        refine=refine,
     )
     res = monte_carlo(
         vm,
