@@ -51,14 +51,7 @@ def test_frozen_gum_result_and_budget() -> None:
         lambda a, b: np.stack([a + b, a - b], axis=-1),
         {"a": Normal(1.0, 0.1), "b": Normal(2.0, 0.2)},
     )
-    _writes_refused(
-        res.estimate,
-        res.u,
-        res.cov,
-        res.coverage_factor(),
-        res.expanded_uncertainty(),
-        *res.coverage_interval(),
-    )
+    _writes_refused(res.estimate_vector, res.u_vector, res.dof_vector, res.cov)
     _writes_refused(res.sensitivities["a"], res.budget[0].sensitivity)
     with pytest.raises(TypeError):
         res.sensitivities["c"] = 1.0  # type: ignore[index]
@@ -103,7 +96,7 @@ def test_frozen_monte_carlo_result() -> None:
         trials=200,
         seed=1,
     )
-    _writes_refused(res.estimate, res.u, res.cov, res.samples)
+    _writes_refused(res.estimate_vector, res.u_vector, res.cov, res.samples)
     with pytest.raises(dataclasses.FrozenInstanceError):
         res.samples = np.zeros((200, 2))  # type: ignore[misc]
 

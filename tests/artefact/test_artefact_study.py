@@ -151,7 +151,9 @@ def test_centre_noise_has_the_law_of_the_point_noise(study) -> None:  # type: ig
         res[noise] = monte_carlo(model, inputs, trials=1500, seed=11, keep=False)
     assert study_model(study, noise="centres")[1]["probe"].dim == 3 * 135
     for out in ("setup", "r_max_measured", "centres"):
-        np.testing.assert_allclose(res["centres"][out].u, res["points"][out].u, rtol=0.12)
+        np.testing.assert_allclose(
+            res["centres"][out].u_vector, res["points"][out].u_vector, rtol=0.12
+        )
     with pytest.raises(InputError):
         study_model(study, noise="centres", exact_fit=True)
 

@@ -118,6 +118,6 @@ def test_per_coordinate_u_of_a_marked_point():
         ]
     )
     res = run_graph(loads(text), trials=200_000, seed=4, outputs=["c"])
-    u = res.places["c"].result.u  # mm: half of (2, 0, 6) µm
+    u = res.places["c"].result.u_vector  # mm: half of (2, 0, 6) µm
     np.testing.assert_allclose(u[[0, 2]], [0.001, 0.003], rtol=0.01)  # se of u: 0.16 %
     assert u[1] < 1e-15  # a constant coordinate (to rounding of its mean)

@@ -102,7 +102,7 @@ def test_adaptive_vector_output():
     )
     assert r.dim == 2
     assert r.trials % 10_000 == 0
-    assert abs(r.u[1] - 5.0) <= 2 * numerical_tolerance(5.0, 1)
+    assert abs(r.u_vector[1] - 5.0) <= 2 * numerical_tolerance(5.0, 1)
 
 
 def test_adaptive_gives_up():

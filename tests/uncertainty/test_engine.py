@@ -107,8 +107,8 @@ def test_moments_only_equal_the_sample_summaries():
         a, b = full[name], light[name]
         assert not b.kept
         assert b.m == a.m
-        np.testing.assert_allclose(b.estimate, a.estimate, rtol=1e-13, atol=1e-15)
-        np.testing.assert_allclose(b.u, a.u, rtol=1e-11)
+        np.testing.assert_allclose(b.estimate_vector, a.estimate_vector, rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(b.u_vector, a.u_vector, rtol=1e-11)
         np.testing.assert_allclose(b.cov, a.cov, rtol=1e-10, atol=1e-16)
     with pytest.raises(InputError, match="not kept"):
         light["sum"].coverage_interval(0.95)
@@ -136,7 +136,7 @@ def test_streamed_summaries_are_bit_identical_whatever_the_blocks(block_size, wo
         executor=executor,
     )
     for name in ref:
-        np.testing.assert_array_equal(got[name].estimate, ref[name].estimate)
+        np.testing.assert_array_equal(got[name].estimate_vector, ref[name].estimate_vector)
         np.testing.assert_array_equal(got[name].cov, ref[name].cov)
 
 
@@ -212,7 +212,7 @@ def test_moments_merge_is_the_moments_of_the_union():
 
 def test_vector_summaries_are_read_only():
     r = monte_carlo(two, INPUTS, trials=2000, seed=1)
-    for arr in (r["pair"].estimate, r["pair"].u, r["pair"].cov, r["pair"].samples):
+    for arr in (r["pair"].estimate_vector, r["pair"].u_vector, r["pair"].cov, r["pair"].samples):
         with pytest.raises(ValueError, match="read-only"):
             arr[0] = 99.0
     light = MonteCarloResult(

@@ -247,12 +247,28 @@ def test_vector_output_covariance_is_c_ux_ct():
     ux[2, 2] = u_off**2
     ref = jac @ ux @ jac.T
     np.testing.assert_allclose(res.cov, ref, rtol=1e-13)
-    np.testing.assert_allclose(res.u, np.sqrt(np.diag(ref)), rtol=1e-13)
-    np.testing.assert_allclose(res.estimate, [r0 * np.cos(phi0) + off, r0 * np.sin(phi0)])
+    np.testing.assert_allclose(res.u_vector, np.sqrt(np.diag(ref)), rtol=1e-13)
+    np.testing.assert_allclose(res.estimate_vector, [r0 * np.cos(phi0) + off, r0 * np.sin(phi0)])
     np.testing.assert_allclose(res.sensitivities["x"], jac[:, :2], rtol=1e-13)
     np.testing.assert_allclose(res.sensitivities["o"], jac[:, 2], atol=1e-15)
-    assert res.coverage_factor().shape == (2,)
-    assert res.coverage_interval()[0].shape == (2,)
+    for i in range(2):
+        one = res.component(i)
+        k = coverage_factor(res.p, res.dof_vector[i])
+        assert one.estimate == res.estimate_vector[i]
+        assert one.u == res.u_vector[i]
+        assert one.coverage_interval() == pytest.approx(
+            (
+                res.estimate_vector[i] - k * res.u_vector[i],
+                res.estimate_vector[i] + k * res.u_vector[i],
+            ),
+            rel=1e-15,
+        )
+        np.testing.assert_allclose(one.sensitivities["x"], jac[i, :2], rtol=1e-13)
+        assert one.budget[1].sensitivity == pytest.approx(jac[i, 2], abs=1e-15)
+    with pytest.raises(InputError, match="u_vector"):
+        _ = res.u
+    with pytest.raises(InputError, match="component"):
+        res.coverage_interval()
     shares = sum(e.share for e in res.budget)
     np.testing.assert_allclose(shares, [1.0, 1.0], rtol=1e-13)
 
@@ -384,10 +400,10 @@ def test_gum_h2_resistance_reactance_impedance_with_correlated_inputs():
         ]
     )
     np.testing.assert_allclose(g.cov, jac @ cov @ jac.T, rtol=1e-9)
-    np.testing.assert_allclose(g.estimate, published_y, atol=0.0005)
-    np.testing.assert_allclose(g.u, published_u, atol=0.001)
+    np.testing.assert_allclose(g.estimate_vector, published_y, atol=0.0005)
+    np.testing.assert_allclose(g.u_vector, published_u, atol=0.001)
     for (i, j), r in published_r.items():
-        assert abs(g.cov[i, j] / (g.u[i] * g.u[j]) - r) <= 0.0005
+        assert abs(g.cov[i, j] / (g.u_vector[i] * g.u_vector[j]) - r) <= 0.0005
 
 
 @pytest.mark.parametrize(("a", "method"), [(9.0, "complex-step"), (11.0, "central-difference")])

@@ -43,7 +43,7 @@ def test_linear_two_output_model_ellipse_against_bivariate_normal():
     se = np.sqrt((np.outer(np.diag(exact_cov), np.diag(exact_cov)) + exact_cov**2) / m)
     assert np.all(np.abs(mc.cov - exact_cov) <= 5 * se)
     se_mean = np.sqrt(np.diag(exact_cov) / m)
-    assert np.all(np.abs(mc.estimate - a @ mean) <= 5 * se_mean)
+    assert np.all(np.abs(mc.estimate_vector - a @ mean) <= 5 * se_mean)
 
     p = 0.95
     k2_exact = -2.0 * math.log(1.0 - p)  # χ²_2 quantile, closed form
@@ -62,7 +62,7 @@ def test_linear_two_output_model_ellipse_against_bivariate_normal():
 
     gres = gum(model, inputs)
     np.testing.assert_allclose(gres.cov, exact_cov, rtol=1e-9, atol=1e-15)
-    np.testing.assert_allclose(gres.estimate, a @ mean, rtol=1e-12)
+    np.testing.assert_allclose(gres.estimate_vector, a @ mean, rtol=1e-12)
 
 
 def _polar_moments(mu, v):
@@ -137,8 +137,8 @@ def test_jcgm102_magnitude_and_phase(x1, r, mag, u_mag, ph, u_ph, gu_mag, gu_ph)
     # deviation from the sample fourth moment).
     y, s = mc.samples[:, 0], mc.samples[:, 1]
     for vals, est, unc, exact_mean, exact_sd in (
-        (y, mc.estimate[0], mc.u[0], e_r, sd_r),
-        (s, mc.estimate[1], mc.u[1], e_t, sd_t),
+        (y, mc.estimate_vector[0], mc.u_vector[0], e_r, sd_r),
+        (s, mc.estimate_vector[1], mc.u_vector[1], e_t, sd_t),
     ):
         m4 = np.mean((vals - vals.mean()) ** 4)
         se_sd = math.sqrt(max(m4 - exact_sd**4, 0.0) / m) / (2 * exact_sd)
@@ -157,9 +157,9 @@ def test_jcgm102_magnitude_and_phase(x1, r, mag, u_mag, ph, u_ph, gu_mag, gu_ph)
 
     # GUF: sensitivities (1, 0) and (0, 1/x1) at (x1, 0): u(|Z|) = u, u(arg Z) = u/x1
     g = gum(_mag_phase, inputs)
-    close(g.u[0], gu_mag)
-    close(g.u[1], gu_ph)
-    np.testing.assert_allclose(g.u, [u, u / x1], rtol=1e-4)
+    close(g.u_vector[0], gu_mag)
+    close(g.u_vector[1], gu_ph)
+    np.testing.assert_allclose(g.u_vector, [u, u / x1], rtol=1e-4)
 
 
 def test_ellipse_scale_from_values_of_a_known_region():

@@ -150,7 +150,7 @@ def test_vector_output_and_vector_input():
     exact = np.array([[1.25, 0.25], [0.25, 2.25]])
     se = np.sqrt((np.outer(np.diag(exact), np.diag(exact)) + exact**2) / M)
     assert np.all(np.abs(r.cov[:2, :2] - exact) <= 5 * se)
-    np.testing.assert_allclose(r.estimate[:2], [1, 2], atol=5 * math.sqrt(2.25 / M))
+    np.testing.assert_allclose(r.estimate_vector[:2], [1, 2], atol=5 * math.sqrt(2.25 / M))
 
 
 def test_bad_arguments():

@@ -128,9 +128,9 @@ def test_vector_cov_and_components():
     assert r.cov.shape == (2, 2)
     se = np.sqrt((np.outer(np.diag(cov), np.diag(cov)) + cov**2) / M)
     assert np.all(np.abs(r.cov - cov) <= 5 * se)
-    np.testing.assert_allclose(r.u, np.sqrt(np.diag(r.cov)), rtol=1e-12)
+    np.testing.assert_allclose(r.u_vector, np.sqrt(np.diag(r.cov)), rtol=1e-12)
     c1 = r.component(1)
-    assert c1.estimate == pytest.approx(r.estimate[1], rel=1e-15)
+    assert c1.estimate == pytest.approx(r.estimate_vector[1], rel=1e-15)
     with pytest.raises(InputError, match="need a scalar output"):
         r.coverage_interval()
 

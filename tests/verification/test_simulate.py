@@ -90,7 +90,7 @@ def test_gum_of_the_engine_agrees_with_the_analytic_linearisation(setup) -> None
     ver = _ver(s)
     vm = VerificationModel.build(ver, reference_identification(ver))
     g = gum(lambda noise: vm(noise)["coef"], vm.inputs())
-    assert np.allclose(g.u, gum_verification(vm).u, rtol=1e-4)
+    assert np.allclose(g.u_vector, gum_verification(vm).u, rtol=1e-4)
 
 
 def test_jcgm101_validation_of_a_near_linear_case(setup) -> None:  # type: ignore[no-untyped-def]

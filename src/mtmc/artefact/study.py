@@ -342,7 +342,7 @@ def gum_outputs(study: ArtefactStudy, pr: _Prepared | None = None) -> dict[str, 
         return np.concatenate([out[k] for k in ANALYSIS_OUTPUTS], axis=1)
 
     g = gum(model, inputs)
-    est, u = np.atleast_1d(g.estimate), np.atleast_1d(g.u)
+    est, u = g.estimate_vector, g.u_vector
     res: dict[str, Any] = {}
     start = 0
     for name in ANALYSIS_OUTPUTS:
@@ -496,8 +496,8 @@ def simulate(
     n = trials if trials is not None else study.trials
     s = seed if seed is not None else study.seed
     res = monte_carlo(model, inputs, trials=n, seed=s, keep=False, **engine)
-    mean = _joined(res, "estimate", P)
-    u = _joined(res, "u", P)
+    mean = _joined(res, "estimate_vector", P)
+    u = _joined(res, "u_vector", P)
     gum_u: dict[str, _F] = {}
     Vm = _centre_covariance(study, pr)
     if gum_too:

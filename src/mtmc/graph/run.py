@@ -157,7 +157,7 @@ class PlaceSummary:
     @property
     def mean(self) -> NDArray[np.float64]:
         """Mean of the components (layout of :func:`flatten`), ``(k,)``, mm / rad."""
-        return np.atleast_1d(np.asarray(self.result.estimate, dtype=np.float64))
+        return self.result.estimate_vector
 
     @property
     def cov(self) -> NDArray[np.float64]:

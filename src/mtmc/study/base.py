@@ -250,10 +250,10 @@ def quantity(
     p = settings.p
     lo_s, hi_s = mc.coverage_interval(p, "shortest")
     lo_y, hi_y = mc.coverage_interval(p, "symmetric")
-    u = float(mc.u)
+    u = mc.u
     big_u = 0.5 * (hi_s - lo_s)
     mc_d = {
-        "estimate": float(mc.estimate),
+        "estimate": mc.estimate,
         "u": u,
         "U": big_u,
         "k": big_u / u if u > 0 else None,
@@ -265,16 +265,16 @@ def quantity(
     gum_d = val_d = None
     budget: list[dict[str, Any]] = []
     if gum_result is not None:
-        gk = float(gum_result.coverage_factor())
-        gu = float(gum_result.u)
+        gk = gum_result.coverage_factor()
+        gu = gum_result.u
         g_lo, g_hi = gum_result.coverage_interval()
         gum_d = {
-            "estimate": float(gum_result.estimate),
+            "estimate": gum_result.estimate,
             "u": gu,
             "k": gk,
             "U": gk * gu,
-            "dof": float(gum_result.dof),
-            "interval": [float(g_lo), float(g_hi)],
+            "dof": gum_result.dof,
+            "interval": [g_lo, g_hi],
             "method": gum_result.method,
         }
         v = validate(gum_result, mc, p=p, ndig=settings.ndig, kind=settings.interval)  # type: ignore[arg-type]
@@ -309,9 +309,9 @@ def quantity(
     hist = mc.histogram(bins=HISTOGRAM_BINS)
     m, est, us = convergence(np.asarray(mc.samples))
     if big_u > 0:
-        y_txt, u_txt = round_to_uncertainty(float(mc.estimate), big_u, settings.ndig)
+        y_txt, u_txt = round_to_uncertainty(mc.estimate, big_u, settings.ndig)
     else:
-        y_txt, u_txt = f"{float(mc.estimate):.6g}", "0"
+        y_txt, u_txt = f"{mc.estimate:.6g}", "0"
     return Quantity(
         name=name,
         unit=unit,

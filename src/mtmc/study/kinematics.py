@@ -128,7 +128,7 @@ class KinematicsStudy(Study):
             for n, d in self.errors.items()
         )
         nominal = model()  # (1, 3P): the tool positions with every error at zero
-        u = np.asarray(mc.u, dtype=np.float64).reshape(-1, 3)
+        u = mc.u_vector.reshape(-1, 3)
         field = PointField(
             name="u_tool",
             title="Standard uncertainty of the tool position at each pose, √(u²x + u²y + u²z)",

@@ -22,6 +22,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from collections.abc import Callable, Mapping
@@ -97,24 +98,26 @@ class BudgetEntry:
 class GumResult:
     """Result of the GUM uncertainty framework for one (scalar or vector) output.
 
-    For a scalar output, ``estimate``, ``u``, ``dof`` are floats, and so are
+    Every attribute has one type: the arrays ``estimate_vector``, ``u_vector`` and
+    ``dof_vector`` have shape ``(d,)`` for an output of ``d`` components (``(1,)`` for a
+    scalar output); ``estimate``, ``u`` and ``dof`` are the floats of a scalar output (an
+    :class:`~mtmc.errors.InputError` for a vector one), and so are
     :meth:`coverage_factor` and :meth:`expanded_uncertainty`, :meth:`coverage_interval` a
-    pair of floats; for an output of ``d`` components they are arrays of shape ``(d,)``
-    (per component) and ``cov`` is the full ``(d, d)`` covariance. Every array of the
-    result is a read-only copy. The three coverage methods are named and called as those
-    of :class:`~mtmc.uncertainty.results.MonteCarloResult`.
+    pair of floats. Every array of the result is a read-only copy. The three coverage
+    methods and the attribute names are those of
+    :class:`~mtmc.uncertainty.results.MonteCarloResult`.
 
     Attributes
     ----------
-    estimate : float or ndarray, shape (d,)
+    estimate_vector : ndarray, shape (d,)
         ``y = f(x)`` at the input estimates (JCGM 100 §4.1.4).
-    u : float or ndarray, shape (d,)
-        Standard uncertainty ``u(y)`` (JCGM 100 eq. (10), (13)).
+    u_vector : ndarray, shape (d,)
+        Standard uncertainty ``u(y)`` of each component (JCGM 100 eq. (10), (13)).
     cov : ndarray, shape (d, d)
         Covariance ``U_y = C U_x Cᵀ`` (JCGM 102 §6.2); ``(1, 1)`` for a scalar output.
-    dof : float or ndarray
-        Effective degrees of freedom by Welch–Satterthwaite (JCGM 100 eq. (G.2b)),
-        not rounded.
+    dof_vector : ndarray, shape (d,)
+        Effective degrees of freedom of each component by Welch–Satterthwaite
+        (JCGM 100 eq. (G.2b)), not rounded (``inf`` where every input is exactly known).
     p : float
         Coverage probability of :func:`gum`, the default of the coverage methods.
     sensitivities : mapping
@@ -123,23 +126,123 @@ class GumResult:
         One entry per input, in the order of ``inputs``.
     method : str
         ``"complex-step"`` or ``"central-difference"``: how ``c`` was computed.
+    scalar : bool
+        Whether the output is a scalar (the model returned ``(m,)``) rather than a
+        vector (``(m, d)``, even with ``d = 1``).
     """
 
-    estimate: Any
-    u: Any
+    estimate_vector: NDArray[np.float64]
+    u_vector: NDArray[np.float64]
     cov: NDArray[np.float64]
-    dof: Any
+    dof_vector: NDArray[np.float64]
     p: float
     sensitivities: Mapping[str, Any]
     budget: tuple[BudgetEntry, ...]
     method: str
+    scalar: bool = True
 
     def __post_init__(self) -> None:
         # read-only copies: arrays cannot be written, ``sensitivities`` gains no keys
-        for name in ("estimate", "u", "cov", "dof", "sensitivities", "budget"):
+        for name in ("estimate_vector", "u_vector", "dof_vector"):
+            arr = np.atleast_1d(np.array(getattr(self, name), dtype=np.float64))
+            object.__setattr__(self, name, arr)
+        for name in ("estimate_vector", "u_vector", "cov", "dof_vector", "sensitivities", "budget"):
             object.__setattr__(self, name, frozen_value(getattr(self, name)))
+        if self.scalar and self.estimate_vector.shape != (1,):
+            raise InputError("a scalar output has one component", field="scalar")
 
-    def coverage_factor(self, p: float | None = None) -> Any:
+    @property
+    def dim(self) -> int:
+        """0 for a scalar output, ``d`` for a vector output."""
+        return 0 if self.scalar else int(self.estimate_vector.shape[0])
+
+    def _scalar_value(self, name: str) -> float:
+        if not self.scalar:
+            raise InputError(
+                f"{name} is the float of a scalar output; this one has d = {self.dim} "
+                f"components: use {name}_vector (shape (d,)) or component(i)",
+                field=name,
+            )
+        return float(getattr(self, f"{name}_vector")[0])
+
+    @property
+    def estimate(self) -> float:
+        """``y = f(x)`` of a scalar output (JCGM 100 §4.1.4), a float.
+
+        Raises
+        ------
+        InputError
+            For a vector output: its estimate is :attr:`estimate_vector`.
+        """
+        return self._scalar_value("estimate")
+
+    @property
+    def u(self) -> float:
+        """Standard uncertainty ``u(y)`` of a scalar output (JCGM 100 eq. (10)), a float.
+
+        Raises
+        ------
+        InputError
+            For a vector output: its standard uncertainties are :attr:`u_vector`.
+        """
+        return self._scalar_value("u")
+
+    @property
+    def dof(self) -> float:
+        """Effective degrees of freedom ``ν_eff`` of a scalar output (JCGM 100 eq. (G.2b)).
+
+        Raises
+        ------
+        InputError
+            For a vector output: its degrees of freedom are :attr:`dof_vector`.
+        """
+        return self._scalar_value("dof")
+
+    def component(self, i: int) -> GumResult:
+        """The scalar result of component ``i`` of a vector output.
+
+        Parameters
+        ----------
+        i : int
+            Index of the component, ``0 <= i < d``.
+
+        Returns
+        -------
+        GumResult
+            Scalar: ``y_i``, ``u(y_i)``, ``ν_eff,i``, the sensitivities ``∂f_i/∂x`` and the
+            budget lines of component ``i``; the same ``p`` and method.
+
+        Raises
+        ------
+        InputError
+            For a scalar output, or ``i`` out of range.
+        """
+        if self.scalar:
+            raise InputError("component() needs a vector output", field="scalar")
+        if not -self.dim <= i < self.dim:
+            raise InputError(f"expected 0 <= i < {self.dim}, got {i}", field="i")
+        j = i % self.dim
+        return GumResult(
+            estimate_vector=self.estimate_vector[j : j + 1],
+            u_vector=self.u_vector[j : j + 1],
+            cov=self.cov[j : j + 1, j : j + 1],
+            dof_vector=self.dof_vector[j : j + 1],
+            p=self.p,
+            sensitivities={n: _row(c, j) for n, c in self.sensitivities.items()},
+            budget=tuple(
+                dataclasses.replace(
+                    e,
+                    sensitivity=_row(e.sensitivity, j),
+                    contribution=float(e.contribution[j]),
+                    share=float(e.share[j]),
+                )
+                for e in self.budget
+            ),
+            method=self.method,
+            scalar=True,
+        )
+
+    def coverage_factor(self, p: float | None = None) -> float:
         """The coverage factor ``k_p`` with ``U_p = k_p u(y)`` (JCGM 100 G.3.2, G.4.1).
 
         Parameters
@@ -149,16 +252,18 @@ class GumResult:
 
         Returns
         -------
-        float or ndarray, shape (d,)
+        float
             ``t_{(1+p)/2}(⌊ν_eff⌋)`` (:func:`coverage_factor`), the normal quantile when
-            ``ν_eff`` is infinite; per component for a vector output (read-only).
-        """
-        q = self.p if p is None else p
-        if np.ndim(self.dof) == 0:
-            return coverage_factor(q, float(self.dof))
-        return frozen_value(np.array([coverage_factor(q, float(v)) for v in self.dof]))
+            ``ν_eff`` is infinite.
 
-    def expanded_uncertainty(self, p: float | None = None) -> Any:
+        Raises
+        ------
+        InputError
+            For a vector output (see :meth:`component`).
+        """
+        return coverage_factor(self.p if p is None else p, self.dof)
+
+    def expanded_uncertainty(self, p: float | None = None) -> float:
         """The expanded uncertainty ``U_p = k_p u(y)`` (JCGM 100 §6.2.1).
 
         Parameters
@@ -168,12 +273,16 @@ class GumResult:
 
         Returns
         -------
-        float or ndarray, shape (d,)
-            Per component for a vector output (read-only).
-        """
-        return frozen_value(self.coverage_factor(p) * self.u)
+        float
 
-    def coverage_interval(self, p: float | None = None) -> tuple[Any, Any]:
+        Raises
+        ------
+        InputError
+            For a vector output (see :meth:`component`).
+        """
+        return self.coverage_factor(p) * self.u
+
+    def coverage_interval(self, p: float | None = None) -> tuple[float, float]:
         """The coverage interval ``(y - U_p, y + U_p)`` (JCGM 100 §6.2.1).
 
         Parameters
@@ -183,11 +292,16 @@ class GumResult:
 
         Returns
         -------
-        (float, float) or (ndarray, ndarray) of shape (d,)
-            ``(y_low, y_high)``, per component for a vector output (read-only).
+        (float, float)
+            ``(y_low, y_high)``.
+
+        Raises
+        ------
+        InputError
+            For a vector output (see :meth:`component`).
         """
-        big_u = self.coverage_factor(p) * self.u
-        return frozen_value(self.estimate - big_u), frozen_value(self.estimate + big_u)
+        big_u = self.expanded_uncertainty(p)
+        return self.estimate - big_u, self.estimate + big_u
 
 
 @dataclass(frozen=True)
@@ -531,14 +645,15 @@ def gum(
     contrib = np.array(contrib_var)  # (n_inputs, d)
     nu = np.array([welch_satterthwaite(contrib[:, j], dofs) for j in range(contrib.shape[1])])
     return GumResult(
-        estimate=_out(y0, vector_out),
-        u=_out(u_y, vector_out),
+        estimate_vector=y0,
+        u_vector=u_y,
         cov=cov_y,
-        dof=_out(nu, vector_out),
+        dof_vector=nu,
         p=p,
         sensitivities=sensitivities,
         budget=tuple(budget),
         method=method,
+        scalar=not vector_out,
     )
 
 
@@ -547,6 +662,12 @@ def _component_name(items: list[_Input], offsets: list[int], j: int) -> str:
         if start <= j < start + inp.estimate.size:
             return inp.name if inp.scalar else f"{inp.name}[{j - start}]"
     return str(j)  # pragma: no cover
+
+
+def _row(c: Any, i: int) -> Any:
+    """Row ``i`` of a vector output's sensitivity: ``(d,) -> float``, ``(d, k) -> (k,)``."""
+    arr = np.asarray(c, dtype=np.float64)
+    return float(arr[i]) if arr.ndim == 1 else arr[i].copy()
 
 
 def _out(values: NDArray[np.float64], vector: bool) -> Any:
@@ -595,10 +716,10 @@ def validate(
         For a vector output, an unknown ``kind``, or ``p`` outside (0, 1).
     """
     p = check_probability(p)
-    if np.ndim(gum_result.estimate) != 0:
+    if not gum_result.scalar:
         raise InputError(
             "JCGM 101 §8 validation is defined for a scalar output; got an output of "
-            f"{np.size(gum_result.estimate)} components",
+            f"{gum_result.dim} components",
             field="gum_result",
         )
     if kind not in ("symmetric", "shortest"):

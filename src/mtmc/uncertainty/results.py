@@ -469,38 +469,66 @@ class MonteCarloResult:
         return 0 if self.samples.ndim == 1 else int(self.samples.shape[1])
 
     @cached_property
-    def estimate(self) -> Any:
-        """The estimate ``y``: the average of the values (JCGM 101 eq. (12)); float or (d,).
+    def estimate_vector(self) -> NDArray[np.float64]:
+        """The estimate ``y`` of every component, read-only, shape ``(d,)`` (``(1,)`` for a scalar).
 
-        A vector estimate is a read-only array.
+        The average of the values (JCGM 101 eq. (12), JCGM 102 §7.5).
         """
         if self.samples is None:
             assert self.moments is not None
             mean = np.array(self.moments.mean)
         else:
-            mean = self.samples.mean(axis=0)
-        if self.dim == 0:
-            return float(mean.reshape(-1)[0])
+            mean = np.atleast_1d(self.samples.mean(axis=0))
         mean.setflags(write=False)
         return mean
 
     @cached_property
-    def u(self) -> Any:
-        """Standard uncertainty ``u(y)``: standard deviation with divisor ``M - 1``.
+    def u_vector(self) -> NDArray[np.float64]:
+        """Standard uncertainties of the components, read-only, ``(d,)`` (``(1,)`` for a scalar).
 
-        JCGM 101 eq. (13), Stryczek eq. (5); float, or a read-only ``(d,)`` array for a
-        vector output.
+        The standard deviation of the values with divisor ``M - 1`` (JCGM 101 eq. (13),
+        Stryczek eq. (5)).
         """
         if self.samples is None:
             assert self.moments is not None
             c = self.moments.cov
             sd = np.sqrt(np.clip(np.diag(c) if c.ndim == 2 else c, 0.0, None))
         else:
-            sd = self.samples.std(axis=0, ddof=1)
-        if self.dim == 0:
-            return float(sd.reshape(-1)[0])
+            sd = np.atleast_1d(self.samples.std(axis=0, ddof=1))
         sd.setflags(write=False)
         return sd
+
+    @property
+    def estimate(self) -> float:
+        """The estimate ``y`` of a scalar output (JCGM 101 eq. (12)), a float.
+
+        Raises
+        ------
+        InputError
+            For a vector output: its estimate is :attr:`estimate_vector`.
+        """
+        self._require_scalar_value("estimate")
+        return float(self.estimate_vector[0])
+
+    @property
+    def u(self) -> float:
+        """Standard uncertainty ``u(y)`` of a scalar output (JCGM 101 eq. (13)), a float.
+
+        Raises
+        ------
+        InputError
+            For a vector output: its standard uncertainties are :attr:`u_vector`.
+        """
+        self._require_scalar_value("u")
+        return float(self.u_vector[0])
+
+    def _require_scalar_value(self, name: str) -> None:
+        if self.dim != 0:
+            raise InputError(
+                f"{name} is the float of a scalar output; this one has d = {self.dim} "
+                f"components: use {name}_vector (shape (d,)) or component(i)",
+                field=name,
+            )
 
     @cached_property
     def cov(self) -> NDArray[np.float64]:
@@ -673,7 +701,7 @@ class MonteCarloResult:
         float
         """
         self._require_scalar("a coverage factor")
-        return self.expanded_uncertainty(p, kind) / float(self.u)
+        return self.expanded_uncertainty(p, kind) / self.u
 
     def histogram(self, bins: int | str = "auto") -> Histogram:
         """Histogram data of a scalar output (for the plots of Stryczek, Fig. 3–4).
@@ -728,7 +756,7 @@ class MonteCarloResult:
                 field="samples",
             )
         pf = check_probability(p)
-        centre = np.asarray(self.estimate, dtype=np.float64)
+        centre = np.array(self.estimate_vector)
         cov = np.array(self.cov)
         if method == "mc":
             d2 = _mahalanobis2(self.values, centre, cov)
@@ -764,8 +792,8 @@ class MonteCarloResult:
             vector output ``cov``.
         """
         out: dict[str, Any] = {
-            "estimate": np.asarray(self.estimate).tolist(),
-            "u": np.asarray(self.u).tolist(),
+            "estimate": self.estimate_vector.tolist() if self.dim else self.estimate,
+            "u": self.u_vector.tolist() if self.dim else self.u,
             "trials": self.trials,
             "seed": self.seed,
             "adaptive": self.adaptive,

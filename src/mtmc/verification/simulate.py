@@ -661,19 +661,19 @@ def simulate(
         progress=progress,
     )
     ve, coef, comp = res["ve"], res["coef"], res["comp"]
-    cu = np.asarray(comp.u, dtype=np.float64).reshape(-1, 3)
+    cu = np.asarray(comp.u_vector).reshape(-1, 3)
     return VerificationMC(
         trials=int(res.trials),
         seed=res.seed,
         names=vm.names,
-        ve_estimate=_ro(ve.estimate),
-        ve_u=_ro(ve.u),
+        ve_estimate=_ro(ve.estimate_vector),
+        ve_u=_ro(ve.u_vector),
         ve_samples=_ro(ve.samples),
-        coef_estimate=_ro(coef.estimate),
-        coef_u=_ro(coef.u),
+        coef_estimate=_ro(coef.estimate_vector),
+        coef_u=_ro(coef.u_vector),
         coef_cov=_ro(coef.cov),
         coef_samples=_ro(coef.samples),
-        comp_bias=_ro(np.asarray(comp.estimate).reshape(-1, 3)),
+        comp_bias=_ro(comp.estimate_vector.reshape(-1, 3)),
         comp_u=_ro(cu),
         point_u=_ro(np.sqrt(np.sum(cu * cu, axis=1))),
         gum=gum_verification(vm),
