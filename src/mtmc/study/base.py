@@ -299,11 +299,11 @@ def quantity(
             budget.append(
                 {
                     "name": e.name,
-                    "estimate": float(np.asarray(e.estimate).reshape(-1)[0]),
-                    "u": float(np.asarray(e.u).reshape(-1)[0]),
-                    "sensitivity": float(np.asarray(e.sensitivity).reshape(-1)[0]),
-                    "contribution": float(e.contribution),
-                    "share": float(e.share),
+                    "estimate": float(e.estimate[0]),
+                    "u": float(e.u[0]),
+                    "sensitivity": float(e.sensitivity[0, 0]),
+                    "contribution": float(e.contribution[0]),
+                    "share": float(e.share[0]),
                 }
             )
     hist = mc.histogram(bins=HISTOGRAM_BINS)

@@ -66,32 +66,47 @@ class BudgetEntry:
     ----------
     name : str
         The input quantity.
-    estimate : float or ndarray, shape (k,)
-        Its estimate ``x`` (the expectation of its PDF).
-    u : float or ndarray, shape (k,)
-        Its standard uncertainty ``u(x)``.
-    sensitivity : float or ndarray
-        ``c = ∂f/∂x`` at the estimates: a float for a scalar input and output, shape
-        ``(k,)`` for a vector input, ``(d,)`` or ``(d, k)`` for a vector output.
-    contribution : float or ndarray, shape (d,)
+    estimate : ndarray, shape (k,)
+        Its estimate ``x`` (the expectation of its PDF); ``k = 1`` for a scalar input.
+    u : ndarray, shape (k,)
+        Its standard uncertainty ``u(x)``, per component.
+    sensitivity : ndarray, shape (d, k)
+        ``c = ∂f/∂x`` at the estimates, one row per output component (``d = 1`` for a
+        scalar output), one column per input component: ``sensitivity[0, 0]`` for a
+        scalar input and output.
+    contribution : ndarray, shape (d,)
         ``|c| u(x)`` (for a vector input, ``sqrt(c V cᵀ)`` with V its covariance).
-    share : float or ndarray, shape (d,)
+    share : ndarray, shape (d,)
         Its part of ``u²(y)``: ``contribution² / u²(y)`` (0 where ``u(y) = 0``).
+
+    Every array is a read-only copy.
     dof : float
         Degrees of freedom of ``u(x)`` (``inf`` if exactly known).
     """
 
     name: str
-    estimate: Any
-    u: Any
-    sensitivity: Any
-    contribution: Any
-    share: Any
+    estimate: NDArray[np.float64]
+    u: NDArray[np.float64]
+    sensitivity: NDArray[np.float64]
+    contribution: NDArray[np.float64]
+    share: NDArray[np.float64]
     dof: float
 
     def __post_init__(self) -> None:
-        for name in ("estimate", "u", "sensitivity", "contribution", "share"):
-            object.__setattr__(self, name, frozen_value(getattr(self, name)))
+        for name, ndim in (
+            ("estimate", 1),
+            ("u", 1),
+            ("sensitivity", 2),
+            ("contribution", 1),
+            ("share", 1),
+        ):
+            arr = np.array(getattr(self, name), dtype=np.float64)
+            if arr.ndim != ndim:
+                raise InputError(
+                    f"expected {name} of {ndim} dimension(s), got shape {arr.shape}",
+                    field=name,
+                )
+            object.__setattr__(self, name, frozen_value(arr))
 
 
 @dataclass(frozen=True)
@@ -120,8 +135,9 @@ class GumResult:
         (JCGM 100 eq. (G.2b)), not rounded (``inf`` where every input is exactly known).
     p : float
         Coverage probability of :func:`gum`, the default of the coverage methods.
-    sensitivities : mapping
-        ``name -> c`` for each input (see :class:`BudgetEntry`), read-only.
+    sensitivities : mapping of str to ndarray, shape (d, k)
+        ``name -> c = ∂f/∂x`` for each input (as :attr:`BudgetEntry.sensitivity`),
+        read-only.
     budget : tuple of BudgetEntry
         One entry per input, in the order of ``inputs``.
     method : str
@@ -136,7 +152,7 @@ class GumResult:
     cov: NDArray[np.float64]
     dof_vector: NDArray[np.float64]
     p: float
-    sensitivities: Mapping[str, Any]
+    sensitivities: Mapping[str, NDArray[np.float64]]
     budget: tuple[BudgetEntry, ...]
     method: str
     scalar: bool = True
@@ -228,13 +244,13 @@ class GumResult:
             cov=self.cov[j : j + 1, j : j + 1],
             dof_vector=self.dof_vector[j : j + 1],
             p=self.p,
-            sensitivities={n: _row(c, j) for n, c in self.sensitivities.items()},
+            sensitivities={n: c[j : j + 1] for n, c in self.sensitivities.items()},
             budget=tuple(
                 dataclasses.replace(
                     e,
-                    sensitivity=_row(e.sensitivity, j),
-                    contribution=float(e.contribution[j]),
-                    share=float(e.share[j]),
+                    sensitivity=e.sensitivity[j : j + 1],
+                    contribution=e.contribution[j : j + 1],
+                    share=e.share[j : j + 1],
                 )
                 for e in self.budget
             ),
@@ -611,7 +627,7 @@ def gum(
     u_y = np.sqrt(var_y)
 
     budget = []
-    sensitivities: dict[str, Any] = {}
+    sensitivities: dict[str, NDArray[np.float64]] = {}
     contrib_var = []
     for inp, start in zip(items, offsets, strict=True):
         size = inp.estimate.size
@@ -620,24 +636,17 @@ def gum(
         contrib_var.append(var_i)
         with np.errstate(divide="ignore", invalid="ignore"):
             share = np.where(var_y > 0, var_i / np.where(var_y > 0, var_y, 1.0), 0.0)
-        if inp.scalar and not vector_out:
-            c_out: Any = float(c_block[0, 0])
-        elif inp.scalar:
-            c_out = c_block[:, 0].copy()
-        elif not vector_out:
-            c_out = c_block[0].copy()
-        else:
-            c_out = c_block.copy()
+        c_out = c_block.copy()
         sensitivities[inp.name] = c_out
         u_x = np.sqrt(np.diag(inp.cov))
         budget.append(
             BudgetEntry(
                 name=inp.name,
-                estimate=float(inp.estimate[0]) if inp.scalar else inp.estimate.copy(),
-                u=float(u_x[0]) if inp.scalar else u_x,
+                estimate=inp.estimate,
+                u=u_x,
                 sensitivity=c_out,
-                contribution=_out(np.sqrt(var_i), vector_out),
-                share=_out(share, vector_out),
+                contribution=np.sqrt(var_i),
+                share=share,
                 dof=inp.dof,
             )
         )
@@ -662,16 +671,6 @@ def _component_name(items: list[_Input], offsets: list[int], j: int) -> str:
         if start <= j < start + inp.estimate.size:
             return inp.name if inp.scalar else f"{inp.name}[{j - start}]"
     return str(j)  # pragma: no cover
-
-
-def _row(c: Any, i: int) -> Any:
-    """Row ``i`` of a vector output's sensitivity: ``(d,) -> float``, ``(d, k) -> (k,)``."""
-    arr = np.asarray(c, dtype=np.float64)
-    return float(arr[i]) if arr.ndim == 1 else arr[i].copy()
-
-
-def _out(values: NDArray[np.float64], vector: bool) -> Any:
-    return np.asarray(values, dtype=np.float64).copy() if vector else float(values[0])
 
 
 def validate(
