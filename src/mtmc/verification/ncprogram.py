@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,10 +35,11 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.errors import InputError, ParseError, TopologyError
+from mtmc.errors import InputError, TopologyError
 from mtmc.io import write_text_atomic
 from mtmc.kinematics.topology import is_linear, is_rotary
 from mtmc.study.spec import Fields, Source, check_number
+from mtmc.verification.tomlfile import parse_study, read_study_file
 from mtmc.verification.workspace import MeasurementPlan, read_workspace
 
 __all__ = [
@@ -863,14 +863,7 @@ def loads_plan_study(text: str, file: str = "<study>") -> tuple[MeasurementPlan,
     InputError
         On any wrong field, naming the file, the line and the field.
     """
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        m = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
-        msg = str(exc).split(" (at line")[0]
-        line, col = (int(m.group(1)), int(m.group(2))) if m else (None, None)
-        raise ParseError(f"not valid TOML: {msg}", file=file, line=line, column=col) from None
-    top = Fields(Source.from_text(text, file), data)
+    top = parse_study(text, file)
     axes = _machine_axes(top)
     ws = top.table("workspace")
     nc = top.table("nc")
@@ -888,13 +881,4 @@ def load_plan_study(path: str | Path) -> tuple[MeasurementPlan, NCSettings]:
     InputError
         If the file cannot be read, or as :func:`loads_plan_study`.
     """
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(
-            f"cannot read the study file: {exc.strerror or exc}", file=str(path)
-        ) from None
-    except UnicodeDecodeError:
-        raise InputError("the study file is not UTF-8 text", file=str(path)) from None
-    return loads_plan_study(text, str(path))
+    return loads_plan_study(read_study_file(path), str(path))

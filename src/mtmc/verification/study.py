@@ -80,8 +80,9 @@ from mtmc.kinematics.functions import (
 )
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.parameters import ErrorModel
-from mtmc.study.spec import Fields, Source
+from mtmc.study.spec import Fields
 from mtmc.verification.simulate import Verification
+from mtmc.verification.tomlfile import parse_study, read_study_file
 
 __all__ = ["PointSet", "VerificationStudy", "load_verification_study", "loads_verification_study"]
 
@@ -260,6 +261,55 @@ def _points_of(pf: Fields, n_axes: int) -> _F:
         raise pf.error(str(exc)) from exc
 
 
+def read_trackers(tf: Fields) -> tuple[dict[str, LaserTracker], TrackerLimits | None]:
+    """The ``[tracker]`` table of a study: named positions and the optional limits.
+
+    ``noise`` (``"aguado2017"`` or a table), ``euler`` (the sequence, default ``"xyz"``),
+    ``[tracker.positions.NAME]`` with ``position`` (mm) and ``euler_deg``, and
+    ``[tracker.limits]`` with ``azimuth_deg``, ``elevation_deg``, ``height_mm`` and
+    ``acceptance_deg`` (each ``[low, high]``; the defaults of :class:`TrackerLimits`).
+
+    Raises
+    ------
+    InputError
+        Naming the file, line and field of a bad entry, or when no position is given.
+    """
+    tf.only(("noise", "euler", "positions", "limits"))
+    noise = _noise(tf)
+    seq = tf.text("euler", "xyz")
+    pf = tf.table("positions")
+    assert pf is not None
+    trackers: dict[str, LaserTracker] = {}
+    for name in pf.data:
+        one = pf.table(name)
+        assert one is not None
+        one.only(("position", "euler_deg"))
+        try:
+            trackers[name] = LaserTracker.from_euler(
+                _vector(one, "position"), _vector(one, "euler_deg"), seq=seq, degrees=True,
+                noise=noise, name=name,
+            )  # fmt: skip
+        except MtmcError as exc:
+            raise one.error(str(exc)) from exc
+    if not trackers:
+        raise pf.error("expected at least one tracker position")
+    limits = None
+    lf = tf.table("limits", required=False)
+    if lf is not None:
+        lf.only(("azimuth_deg", "elevation_deg", "height_mm", "acceptance_deg"))
+        d = TrackerLimits()
+        az = _pair(lf, "azimuth_deg", tuple(math.degrees(x) for x in d.azimuth))  # type: ignore[arg-type]
+        el = _pair(lf, "elevation_deg", tuple(math.degrees(x) for x in d.elevation))  # type: ignore[arg-type]
+        ac = _pair(lf, "acceptance_deg", tuple(math.degrees(x) for x in d.acceptance))  # type: ignore[arg-type]
+        limits = TrackerLimits(
+            azimuth=(math.radians(az[0]), math.radians(az[1])),
+            elevation=(math.radians(el[0]), math.radians(el[1])),
+            height=_pair(lf, "height_mm", d.height),
+            acceptance=(math.radians(ac[0]), math.radians(ac[1])),
+        )
+    return trackers, limits
+
+
 def loads_verification_study(  # noqa: C901 - one reader per table, in file order
     text: str, *, file: str = "<study>", folder: Path | None = None
 ) -> VerificationStudy:
@@ -282,17 +332,8 @@ def loads_verification_study(  # noqa: C901 - one reader per table, in file orde
     InputError, ParseError
         Naming the file, line and field of the first bad entry.
     """
-    import tomllib
-
-    from mtmc.errors import ParseError
-
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        line = getattr(exc, "lineno", None)
-        raise ParseError(f"not valid TOML: {exc}", file=file, line=line) from exc
-    src = Source.from_text(text, file, folder)
-    top = Fields(src, data)
+    top = parse_study(text, file, folder)
+    data = top.data
     top.only(
         (
             "title",
@@ -392,39 +433,9 @@ def loads_verification_study(  # noqa: C901 - one reader per table, in file orde
     # tracker
     tf = top.table("tracker")
     assert tf is not None
-    tf.only(("noise", "euler", "positions", "limits"))
-    noise = _noise(tf)
-    seq = tf.text("euler", "xyz")
-    pf = tf.table("positions")
-    assert pf is not None
-    trackers: dict[str, LaserTracker] = {}
-    for name in pf.data:
-        one = pf.table(name)
-        assert one is not None
-        one.only(("position", "euler_deg"))
-        try:
-            trackers[name] = LaserTracker.from_euler(
-                _vector(one, "position"), _vector(one, "euler_deg"), seq=seq, degrees=True,
-                noise=noise, name=name,
-            )  # fmt: skip
-        except MtmcError as exc:
-            raise one.error(str(exc)) from exc
-    if not trackers:
-        raise pf.error("expected at least one tracker position")
-    limits = None
-    lf = tf.table("limits", required=False)
-    if lf is not None:
-        lf.only(("azimuth_deg", "elevation_deg", "height_mm", "acceptance_deg"))
-        d = TrackerLimits()
-        az = _pair(lf, "azimuth_deg", tuple(math.degrees(x) for x in d.azimuth))  # type: ignore[arg-type]
-        el = _pair(lf, "elevation_deg", tuple(math.degrees(x) for x in d.elevation))  # type: ignore[arg-type]
-        ac = _pair(lf, "acceptance_deg", tuple(math.degrees(x) for x in d.acceptance))  # type: ignore[arg-type]
-        limits = TrackerLimits(
-            azimuth=(math.radians(az[0]), math.radians(az[1])),
-            elevation=(math.radians(el[0]), math.radians(el[1])),
-            height=_pair(lf, "height_mm", d.height),
-            acceptance=(math.radians(ac[0]), math.radians(ac[1])),
-        )
+    trackers, limits = read_trackers(tf)
+    noise = next(iter(trackers.values())).noise
+    assert noise is not None
     # points
     ps = top.table("points")
     assert ps is not None
@@ -439,7 +450,7 @@ def loads_verification_study(  # noqa: C901 - one reader per table, in file orde
     if not points:
         raise ps.error("expected at least one point set")
     # run
-    rf = top.table("run", required=False) or Fields(src, {}, ("run",))
+    rf = top.table("run", required=False) or Fields(top.source, {}, ("run",))
     rf.only(("trials", "seed", "points", "tracker", "repeatability_um", "reflector_um", "pose_u"))
     dp = rf.text("points", next(iter(points)), choices=tuple(points))
     dt = rf.text("tracker", next(iter(trackers)), choices=tuple(trackers))
@@ -483,9 +494,4 @@ def load_verification_study(path: str | Path) -> VerificationStudy:
     InputError
         If the file cannot be read, or as :func:`loads_verification_study`.
     """
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read the study file: {exc.strerror}", file=str(path)) from exc
-    return loads_verification_study(text, file=str(path), folder=p.parent)
+    return loads_verification_study(read_study_file(path), file=str(path), folder=Path(path).parent)
