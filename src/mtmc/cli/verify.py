@@ -42,10 +42,12 @@ def plan_cmd(
 ) -> None:
     """Discretise the workspace, write the NC programs and estimate the measuring time."""
     from mtmc.verification.ncprogram import estimate_time, load_plan_study, write_programs
+    from mtmc.verification.visibility import load_plan_visibility
 
     try:
         plan, nc = load_plan_study(study)
         estimate = estimate_time(plan, nc)
+        vis = load_plan_visibility(study, plan)
     except MtmcError as exc:
         fail(exc)
     if not out.is_dir():
@@ -66,6 +68,16 @@ def plan_cmd(
                 "seed": plan.seed,
                 "files": {k: str(v) for k, v in files.items()},
                 "time": estimate.to_dict(),
+                "visibility": None
+                if vis is None
+                else {
+                    name: {
+                        "ok": v.ok,
+                        "points": list(v.names),
+                        "failures": v.failures(plan.axes),
+                    }
+                    for name, v in vis.items()
+                },
             }
         )
         return
@@ -81,6 +93,12 @@ def plan_cmd(
     )
     for kind, path in files.items():
         typer.echo(f"{kind}: {path}")
+    if vis is None:
+        typer.echo("visibility: no [tracker.positions] in the study, not checked")
+    else:
+        typer.echo("visibility of the limit points (Aguado et al. 2016 eqs. 19-21):")
+        for v in vis.values():
+            typer.echo("  " + v.text(plan.axes).replace("\n", "\n  "))
 
 
 def _stats_um(est: Any, u: Any, base: int) -> dict[str, dict[str, float]]:
