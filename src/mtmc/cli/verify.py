@@ -197,51 +197,11 @@ def simulate_cmd(
     typer.echo(f"calibration u per point: max {pu['max']:.2f} um, mean {pu['mean']:.2f} um (MC)")
 
 
-def _read_data(path: Path, axes: tuple[str, ...]) -> tuple[Any, Any]:
-    """Commanded positions (N, n_axes) and tracker readings (N, 3) from the data CSV."""
-    import csv
-
-    import numpy as np
-
-    from mtmc.errors import InputError
-
-    want = [*axes, "x_lt", "y_lt", "z_lt"]
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except OSError as exc:
-        raise InputError(f"cannot read the data: {exc.strerror or exc}", file=str(path)) from None
-    rows = [
-        (i + 1, ln) for i, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")
-    ]
-    if not rows:
-        raise InputError("no header line", file=str(path))
-    head_line, head = rows[0]
-    header = [h.strip() for h in next(csv.reader([head]))]
-    missing = [c for c in want if c not in header]
-    if missing:
-        raise InputError(
-            f"missing columns {', '.join(missing)}; expected {','.join(want)}",
-            file=str(path), line=head_line,
-        )  # fmt: skip
-    idx = [header.index(c) for c in want]
-    vals = []
-    for ln, text in rows[1:]:
-        cells = next(csv.reader([text]))
-        try:
-            vals.append([float(cells[j]) for j in idx])
-        except (ValueError, IndexError):
-            raise InputError(
-                f"expected {len(header)} numbers, got {text!r}", file=str(path), line=ln
-            ) from None
-    arr = np.array(vals, dtype=np.float64)
-    if arr.shape[0] == 0:
-        raise InputError("no data rows", file=str(path))
-    return arr[:, : len(axes)], arr[:, len(axes) :]
-
-
 @app.command("identify")
 def identify_cmd(
-    data: Path = typer.Argument(..., help="CSV: axis positions and tracker readings (mm)."),
+    data: Path = typer.Argument(
+        ..., help="CSV: axis positions and tracker-frame coordinates or lengths per station (mm)."
+    ),
     study: Path = typer.Option(..., "--study", help="The verification study (TOML)."),
     tracker: str | None = typer.Option(None, "--tracker", help="Nominal tracker position."),
     as_json: bool = JSON_OPTION,
@@ -261,10 +221,13 @@ def identify_cmd(
     try:
         st = load_verification_study(study)
         ver = st.verification(None, tracker)
-        q, meas = _read_data(data, st.machine.axes)
+        from mtmc.verification.datafile import measured_points, read_identification_csv
         from mtmc.verification.identify import identify
 
-        r = identify(st.model, q, meas, ver.tracker, pose=st.pose, fixed=st.fixed)
+        d = read_identification_csv(data, st.machine.axes, st.trackers)
+        q = d.q
+        meas, lt = measured_points(d, st.machine, st.trackers, ver.tracker)
+        r = identify(st.model, q, meas, lt, pose=st.pose, fixed=st.fixed)
         if export is not None and out is not None:
             grid = {ax: np.unique(q[:, i]) for i, ax in enumerate(st.machine.axes)}
             used = {st.machine.error_term(n).axis for n in st.model.error_names}
@@ -283,6 +246,8 @@ def identify_cmd(
     ini, res = r.initial_stats()[0] * 1e3, r.residual_stats()[0] * 1e3
     result = {
         "points": int(q.shape[0]),
+        "data": d.kind,
+        "stations": list(d.stations),
         "status": r.messages()[0],
         "converged": bool(r.converged[0]),
         "iterations": int(r.iterations[0]),

@@ -1,0 +1,79 @@
+"""``mtmc verify identify`` from lengths per station (multilateration) and from coordinates."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtmc.cli.main import main
+from mtmc.errors import InputError
+from mtmc.verification.datafile import measured_points, parse_identification_csv
+from mtmc.verification.study import load_verification_study
+
+STUDY = Path(__file__).resolve().parents[2] / "examples" / "studies" / "aguado2016.toml"
+
+
+def _write(path: Path, head: list[str], q: np.ndarray, vals: np.ndarray) -> None:
+    rows = [",".join(head)] + [
+        ",".join(f"{v:.17g}" for v in (*a, *b)) for a, b in zip(q, vals, strict=True)
+    ]
+    path.write_text("# noise-free, simulated\n" + "\n".join(rows) + "\n")
+
+
+def test_lengths_give_the_same_identification_as_coordinates(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    st = load_verification_study(STUDY)
+    ver = st.verification("mesh96", "pos4")
+    p = ver.true_positions()  # the simulated machine, base frame
+    q = ver.q
+    names = ("pos1", "pos2", "pos3")
+    C = np.array([st.trackers[n].position for n in names])
+    L = np.linalg.norm(p[:, None, :] - C[None], axis=-1)  # (N, S)
+    _write(tmp_path / "lengths.csv", ["X", "Y", "Z", *(f"L_{n}" for n in names)], q, L)
+    _write(tmp_path / "xyz.csv", ["X", "Y", "Z", "x_lt", "y_lt", "z_lt"], q, ver.readings())
+    # multilateration recovers the points exactly (noise-free)
+    d = parse_identification_csv(
+        (tmp_path / "lengths.csv").read_text(), ("X", "Y", "Z"), st.trackers
+    )
+    assert d.kind == "lengths"
+    assert d.stations == names
+    pts, lt = measured_points(d, st.machine, st.trackers, ver.tracker)
+    assert np.abs(pts - p).max() < 1e-9
+    assert np.allclose(lt.rotation, np.eye(3))
+    assert np.allclose(lt.position, 0.0)
+    out = {}
+    for kind in ("lengths", "xyz"):
+        args = ["verify", "identify", str(tmp_path / f"{kind}.csv"), "--study", str(STUDY)]
+        assert main([*args, "--tracker", "pos4", "--json"]) == 0
+        out[kind] = json.loads(capsys.readouterr().out)
+    a, b = out["lengths"], out["xyz"]
+    assert a["data"] == "lengths"
+    assert a["stations"] == list(names)
+    assert b["data"] == "coordinates"
+    assert a["converged"]
+    assert b["converged"]
+    # the residual is frame-invariant: the same optimum, the pose absorbing the frames
+    for name, c in b["coefficients"].items():
+        if not name.startswith("LT."):
+            assert a["coefficients"][name]["estimate"] == pytest.approx(c["estimate"], rel=1e-6)
+            assert a["coefficients"][name]["u"] == pytest.approx(c["u"], rel=1e-6)
+    for k in ("max", "mean", "min"):
+        assert a["residual_ve_um"][k] == pytest.approx(b["residual_ve_um"][k], rel=1e-6, abs=1e-9)
+
+
+def test_bad_length_columns_are_named() -> None:
+    st = load_verification_study(STUDY)
+    with pytest.raises(InputError, match="L_nowhere"):
+        parse_identification_csv(
+            "X,Y,Z,L_pos1,L_nowhere,L_pos2\n0,0,0,1,1,1\n", ("X", "Y", "Z"), st.trackers, "d.csv"
+        )
+    with pytest.raises(InputError, match="three or more stations"):
+        parse_identification_csv(
+            "X,Y,Z,L_pos1,L_pos2\n0,0,0,1,1\n", ("X", "Y", "Z"), st.trackers, "d.csv"
+        )
+    with pytest.raises(InputError, match=r"d.csv:2.*expected 6 numbers"):
+        parse_identification_csv(
+            "X,Y,Z,x_lt,y_lt,z_lt\n0,0,zero,1,1,1\n", ("X", "Y", "Z"), {}, "d.csv"
+        )
