@@ -56,6 +56,7 @@ from numpy.typing import NDArray
 from mtmc.errors import IdentifiabilityError, InputError
 from mtmc.geometry.transforms import axis_angle_from_matrix
 from mtmc.instruments.laser_tracker import LaserTracker
+from mtmc.kinematics.functions import ErrorFunction
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.verification.lsq import STATUS, least_squares
 
@@ -296,6 +297,26 @@ class Identification:
         return ve_stats(self.residual_ve)
 
 
+def _error_basis(model: ErrorModel, q: _F) -> tuple[tuple[str, NDArray[np.int64], _F], ...]:
+    """Per error of ``model``: its name, its parameters' indices and basis ``(N, n)``.
+
+    The basis is taken at the points (a column of ones for a constant): the error's value
+    at point ``i`` is ``B[i] · θ[idx]`` and ``∂p/∂θ[idx] = ∂p/∂e · B``.
+    """
+    mach = model.machine
+    qa = mach.positions(q)
+    out = []
+    for n in model.error_names:
+        idx = [j for j, pn in enumerate(model.parameter_names) if pn == n or pn.startswith(n + "[")]
+        tmpl = model.templates[n]
+        if isinstance(tmpl, ErrorFunction):
+            B = tmpl.basis(qa[:, mach.axes.index(mach.error_term(n).axis)])
+        else:
+            B = np.ones((qa.shape[0], 1))
+        out.append((n, np.array(idx, dtype=np.int64), np.ascontiguousarray(B, dtype=np.float64)))
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class _Problem:
     """The readings model of one identification (shared by all trials)."""
@@ -328,11 +349,24 @@ class _Problem:
             t = np.broadcast_to(self.t0, (m, 3))
         return th, R, t
 
+    @property
+    def basis(self) -> tuple[tuple[str, NDArray[np.int64], _F], ...]:
+        """:func:`_error_basis` at the points (computed once)."""
+        if "basis" not in self.cache:
+            self.cache["basis"] = _error_basis(self.model, self.q)  # type: ignore[assignment]
+        out: tuple[tuple[str, NDArray[np.int64], _F], ...] = self.cache["basis"]  # type: ignore[assignment]
+        return out
+
+    def _errors(self, th: _F) -> tuple[_F, dict[str, _F]]:
+        """Rows ``(m·N, n_axes)`` and the error values at every point of every problem."""
+        m = th.shape[0]
+        qq = np.broadcast_to(self.q, (m, *self.q.shape)).reshape(m * self.n, -1)
+        return qq, {n: (th[:, idx] @ B.T).ravel() for n, idx, B in self.basis}
+
     def positions(self, th: _F) -> _F:
-        m, N = th.shape[0], self.n
-        qq = np.broadcast_to(self.q, (m, *self.q.shape)).reshape(m * N, -1)
-        tt = np.repeat(th, N, axis=0)
-        return self.model.tool_position(qq, tt, exact=self.exact).reshape(m, N, 3)
+        qq, errs = self._errors(th)
+        p = self.model.machine.tool_position(qq, errs, exact=self.exact)
+        return p.reshape(th.shape[0], self.n, 3)
 
     def readings(self, x: _F) -> _F:
         th, R, t = self.split(x)
@@ -353,9 +387,14 @@ class _Problem:
     def _jac(self, x: _F) -> _F:
         th, R, t = self.split(x)
         m, N = x.shape[0], self.n
-        qq = np.broadcast_to(self.q, (m, *self.q.shape)).reshape(m * N, -1)
-        Jp = self.model.jacobian(qq, np.repeat(th, N, axis=0), exact=self.exact)
-        Jp = Jp[:, :, self.free].reshape(m, N, 3, self.free.size)
+        qq, errs = self._errors(th)
+        names = tuple(n for n, _, _ in self.basis)
+        Je = self.model.machine.jacobian(qq, errs, names=names, exact=self.exact)
+        Je = Je.reshape(m, N, 3, len(names))
+        Jfull = np.zeros((m, N, 3, self.base.size))
+        for ie, (_, idx, B) in enumerate(self.basis):  # chain rule: dp/de times the basis
+            Jfull[..., idx] = Je[..., ie, None] * B[None, :, None, :]
+        Jp = Jfull[..., self.free]
         Jt = np.einsum("mij,mnik->mnjk", R, Jp)
         if self.pose:
             xc = self.cache.get("x")

@@ -66,7 +66,6 @@ from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
 from mtmc.instruments.laser_tracker import LaserTracker
-from mtmc.kinematics.functions import ErrorFunction
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.uncertainty.distributions import IID, Normal
 from mtmc.uncertainty.gum import Validation, gum, validate
@@ -74,6 +73,7 @@ from mtmc.uncertainty.montecarlo import monte_carlo
 from mtmc.verification.identify import (
     POSE_NAMES,
     Identification,
+    _error_basis,
     _problem,
     _skew,
     expmap,
@@ -435,26 +435,6 @@ REFINE_POINTS: int = 1000
 
 #: Points per block of the exact gradient (about 30 MB of machine Jacobian).
 _ROWS = 65536
-
-
-def _error_basis(model: ErrorModel, q: _F) -> tuple[tuple[str, NDArray[np.int64], _F], ...]:
-    """Per error of ``model``: its name, its parameters' indices and basis ``(N, n)``.
-
-    The basis is taken at the points (a column of ones for a constant): the error's value
-    at point ``i`` is ``B[i] · θ[idx]`` and ``∂p/∂θ[idx] = ∂p/∂e · B``.
-    """
-    mach = model.machine
-    qa = mach.positions(q)
-    out = []
-    for n in model.error_names:
-        idx = [j for j, pn in enumerate(model.parameter_names) if pn == n or pn.startswith(n + "[")]
-        tmpl = model.templates[n]
-        if isinstance(tmpl, ErrorFunction):
-            B = tmpl.basis(qa[:, mach.axes.index(mach.error_term(n).axis)])
-        else:
-            B = np.ones((qa.shape[0], 1))
-        out.append((n, np.array(idx, dtype=np.int64), np.ascontiguousarray(B, dtype=np.float64)))
-    return tuple(out)
 
 
 def _ro(a: Any) -> _F:
