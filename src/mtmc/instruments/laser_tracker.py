@@ -127,10 +127,15 @@ def cartesian(s: npt.ArrayLike) -> _F:
     ndarray, shape (..., 3)
         ``L (cos β cos α, cos β sin α, sin β)``, mm.
     """
+    L, ca, sa, ce, se = _trig(s)
+    return np.stack([L * ce * ca, L * ce * sa, L * se], axis=-1)
+
+
+def _trig(s: npt.ArrayLike) -> tuple[_F, _F, _F, _F, _F]:
+    """``L, cos α, sin α, cos β, sin β`` of spherical coordinates ``(..., 3)``."""
     a = np.asarray(s, dtype=np.float64)
     L, az, el = a[..., 0], a[..., 1], a[..., 2]
-    ce = np.cos(el)
-    return np.stack([L * ce * np.cos(az), L * ce * np.sin(az), L * np.sin(el)], axis=-1)
+    return L, np.cos(az), np.sin(az), np.cos(el), np.sin(el)
 
 
 def spherical_jacobian(s: npt.ArrayLike) -> _F:
@@ -146,10 +151,8 @@ def spherical_jacobian(s: npt.ArrayLike) -> _F:
     ndarray, shape (..., 3, 3)
         Columns: derivatives with respect to ``L`` (1), ``α`` (mm/rad), ``β`` (mm/rad).
     """
-    a = np.asarray(s, dtype=np.float64)
-    L, az, el = a[..., 0], a[..., 1], a[..., 2]
-    ca, sa, ce, se = np.cos(az), np.sin(az), np.cos(el), np.sin(el)
-    J = np.empty((*a.shape[:-1], 3, 3))
+    L, ca, sa, ce, se = _trig(s)
+    J = np.empty((*L.shape, 3, 3))
     J[..., :, 0] = np.stack([ce * ca, ce * sa, se], axis=-1)
     J[..., :, 1] = np.stack([-L * ce * sa, L * ce * ca, np.zeros_like(L)], axis=-1)
     J[..., :, 2] = np.stack([-L * se * ca, -L * se * sa, L * ce], axis=-1)
