@@ -67,6 +67,19 @@ def test_simulate_table_and_errors(capsys: pytest.CaptureFixture[str], tmp_path:
     assert "plan.repetitions" in err
 
 
+def test_simulate_workers_give_the_same_numbers(capsys: pytest.CaptureFixture[str]) -> None:
+    # 1500 trials: three evaluation blocks of 689, spread over two threads
+    base = ["artefact", "simulate", str(STUDY), "--trials", "1500", "--seed", "8", "--json"]
+    assert main([*base, "--no-gum", "--workers", "1"]) == 0
+    one = json.loads(capsys.readouterr().out)
+    assert main([*base, "--no-gum", "--workers", "2", "--executor", "thread"]) == 0
+    two = json.loads(capsys.readouterr().out)
+    assert two == one  # bit for bit: the engine's seed blocks do not depend on the workers
+    assert one["poses"][0]["r_max_um"]["u"] > 0
+    assert main([*base, "--workers", "2", "--executor", "nope"]) == 2
+    assert "executor" in capsys.readouterr().err
+
+
 def test_fit_json_contract(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     c = np.array([12.0, -3.0, 40.0])
     pts = patch_points(c, 4.9985)
