@@ -129,3 +129,29 @@ def test_gravity_against_hand_computation(tmp_path: Path) -> None:
     assert e.value.line == 3
     with pytest.raises(InputError):
         gravity_effect([("H", "1", 0, 0, 0), ("V", "2", 0, 0, 0)])
+
+
+def test_best_rotation_newton_polar_against_the_svd() -> None:
+    from mtmc.artefact.analysis import _kabsch_svd, best_rotation
+    from mtmc.geometry.transforms import matrix_from_euler
+
+    rng = np.random.default_rng(np.random.SeedSequence(31))
+    B = 500
+    Y = rng.normal(size=(B, 5, 3)) * np.array([60.0, 30.0, 5.0])
+    R = np.asarray(matrix_from_euler(rng.normal(size=(B, 3)), "zyx")).reshape(B, 3, 3)
+    X = np.einsum("bji,bnj->bni", R, Y) + rng.normal(size=(B, 5, 3)) * 1e-3
+    X[: B // 2] = Y[: B // 2] + rng.normal(size=(B // 2, 5, 3)) * 1e-3  # near the identity
+    H = np.swapaxes(X - X.mean(1, keepdims=True), -1, -2) @ (Y - Y.mean(1, keepdims=True))
+    H[:3, :, 2] *= -1.0  # det H < 0: a reflection would fit better, the SVD path
+    H[3] = 0.0  # singular
+    got, ref = best_rotation(H), _kabsch_svd(H)
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        got @ np.swapaxes(got, -1, -2), np.broadcast_to(np.eye(3), H.shape), atol=1e-14
+    )
+    np.testing.assert_allclose(np.linalg.det(got), 1.0, rtol=0, atol=1e-13)
+    # batched over any leading axes = one matrix at a time
+    one = np.stack([best_rotation(h) for h in H[:20]])
+    np.testing.assert_allclose(
+        best_rotation(H[:20].reshape(4, 5, 3, 3)).reshape(20, 3, 3), one, rtol=0, atol=1e-15
+    )

@@ -94,9 +94,12 @@ def distances(centres: npt.ArrayLike) -> _F:
     [5.0, 1.0, 5.0990195135927845]
     """
     c = np.asarray(centres, dtype=np.float64)
-    i, j = np.array(pairs(c.shape[-2]), dtype=np.intp).reshape(-1, 2).T
-    d = c[..., i, :] - c[..., j, :]
-    return np.asarray(np.sqrt(np.einsum("...k,...k->...", d, d)), dtype=np.float64)
+    n = c.shape[-2]
+    if n < 2:
+        return np.zeros((*c.shape[:-2], 0))
+    # ball i against the balls after it, in the order of pairs(): slices, not an index
+    d = np.concatenate([c[..., i : i + 1, :] - c[..., i + 1 :, :] for i in range(n - 1)], -2)
+    return np.asarray(np.sqrt(d[..., 0] ** 2 + d[..., 1] ** 2 + d[..., 2] ** 2), np.float64)
 
 
 @dataclass(frozen=True, eq=False)

@@ -244,6 +244,7 @@ def study_model(
     if study.setup_u is not None:
         inputs["setup"] = IID(Normal(0.0, 1.0), 3 + 3 * N)
     c0 = meas.centres
+    KpT = np.ascontiguousarray(pr.Kp[: P * N].transpose(0, 2, 1))  # the same for every r
     A = meas.axis_map
     AS = A * study.repeatability[None, None, :]
 
@@ -267,8 +268,13 @@ def study_model(
             )
             centres = fit.geometry.centre.reshape(m, R, P, N, 3)  # type: ignore[union-attr]
         else:
-            dc = np.matmul(z.transpose(1, 0, 2), pr.Kp.transpose(0, 2, 1))  # (RPN, m, 3)
-            centres = c0[None, None] + dc.transpose(1, 0, 2).reshape(m, R, P, N, 3)
+            # the fits' linear maps, one GEMM per (pose, ball) over all trials and
+            # repetitions: (m R, 3n) @ (3n, 3)
+            zf = z.reshape(m * R, P * N, per)
+            dc = np.empty((m * R, P * N, 3))
+            for i in range(P * N):
+                np.matmul(zf[:, i], KpT[i], out=dc[:, i])
+            centres = c0[None, None] + dc.reshape(m, R, P, N, 3)
         if repeat is not None:
             centres = centres + np.einsum(
                 "pij,mrpnj->mrpni", pr.Arep, repeat.reshape(m, R, P, N, 3)
