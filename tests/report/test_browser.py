@@ -51,12 +51,17 @@ def chromium() -> str:
     return path
 
 
+def _report(tmp_path_factory, name: str, trials: int) -> Path:
+    """The report of a shipped study, run with ``trials`` trials."""
+    out = tmp_path_factory.mktemp("browser") / name
+    study = load_study(STUDIES / f"{name}.toml")
+    write_result(study.run(trials=trials, seed=2), out, study_text=study.source.text)
+    return out / "report.html"
+
+
 @pytest.fixture(scope="module")
 def page(tmp_path_factory):
-    out = tmp_path_factory.mktemp("browser") / "bcs_origin"
-    study = load_study(STUDIES / "bcs_origin.toml")
-    write_result(study.run(trials=4000, seed=2), out, study_text=study.source.text)
-    return out / "report.html"
+    return _report(tmp_path_factory, "bcs_origin", 4000)
 
 
 def _run(chromium: str, profile: Path, *args: str) -> subprocess.CompletedProcess[str]:
@@ -68,20 +73,25 @@ def _run(chromium: str, profile: Path, *args: str) -> subprocess.CompletedProces
     )
 
 
-def test_the_page_loads_without_console_messages_and_draws_every_plot(chromium, page, tmp_path):
+def _dom(chromium: str, page: Path, profile: Path) -> str:
+    """The page's DOM after its scripts ran; no console message on the way."""
     proc = _run(
         chromium,
-        tmp_path / "profile",
+        profile,
         "--enable-logging=stderr",
         "--v=0",
         "--window-size=1280,4000",
         "--dump-dom",
         page.as_uri(),
     )
-    dom = proc.stdout
-    assert "<figure" in dom, proc.stderr[-2000:]
+    assert "<figure" in proc.stdout, proc.stderr[-2000:]
     console = [ln for ln in proc.stderr.splitlines() if ":CONSOLE" in ln]
     assert console == []
+    return proc.stdout
+
+
+def test_the_page_loads_without_console_messages_and_draws_every_plot(chromium, page, tmp_path):
+    dom = _dom(chromium, page, tmp_path / "profile")
     figures = re.findall(r"<figure[^>]*>", dom)
     plots = [f for f in figures if "data-plot=" in f]
     assert len(plots) >= 2 * 7 + 6 + 2  # 7 quantities, 6 ellipses, the graph and the sweep
@@ -103,3 +113,28 @@ def test_a_screenshot_is_saved(chromium, page, tmp_path_factory):
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     assert len(data) > 50_000
     print(f"screenshot of the report: {shot}")
+
+
+@pytest.fixture(scope="module")
+def artefact_page(tmp_path_factory):
+    return _report(tmp_path_factory, "wang2022", 400)
+
+
+def test_the_artefact_report_draws_a_histogram_per_quantity(chromium, artefact_page, tmp_path):
+    dom = _dom(chromium, artefact_page, tmp_path / "profile")
+    hists = re.findall(r'<figure[^>]*data-plot="histogram:([^"]+)"[^>]*>(.*?)</figure>', dom, re.S)
+    names = [n for n, _ in hists]
+    # r_max and r_avg at the nine poses of Table 2, the 18 setup errors
+    assert sum(n.startswith("r_max.") for n in names) == 9
+    assert sum(n.startswith("r_avg.") for n in names) == 9
+    assert sum(n.startswith("setup.") for n in names) == 18
+    assert "r_max.b10_c5" in names
+    assert "setup.dw5z" in names
+    for name, body in hists:
+        # the bars (one path of the stairs), the interval band and the GUM curve
+        assert body.count("<path") >= 3, name
+        assert "GUM" in body, name
+        stairs = max(re.findall(r'<path d="([^"]*)"', body), key=len)
+        assert stairs.count("L") > 30, name  # 60 bins: a real histogram, not an empty axis
+    figures = re.findall(r'<figure[^>]*data-plot="histogram:[^"]*"[^>]*>', dom)
+    assert [f for f in figures if 'data-rendered="yes"' not in f] == []

@@ -45,3 +45,32 @@ def test_a_broken_artefact_field_keeps_its_line():
         loads_study("\n".join(lines), file="w.toml", folder=STUDY.parent)
     assert info.value.line == i + 1
     assert info.value.file == "w.toml"
+
+
+def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them():
+    from mtmc.artefact.study import loads_artefact_study, simulate
+
+    text = STUDY.read_text(encoding="utf-8")
+    r = load_study(STUDY).run(trials=300, seed=4)
+    ref = simulate(loads_artefact_study(text, str(STUDY), STUDY.parent), 300, 4)
+    q = {x.name: x for x in r.quantities}
+    assert len(q) == 9 + 9 + 18
+    # pose (b, c) = (5°, -5°) is the fifth of the plan
+    i = [tuple(p.values()) for p in ref.pose_labels()].index((5.0, -5.0))
+    rm = q["r_max.b5_c-5"]
+    # the kept samples give the engine's moments again (to rounding) and the GUM its u
+    assert rm.mc["estimate"] == pytest.approx(ref.mc_mean["r_max_measured"][i], rel=1e-12)
+    assert rm.mc["u"] == pytest.approx(ref.mc_u["r_max_measured"][i], rel=1e-9)
+    assert rm.gum["u"] == pytest.approx(ref.gum_u["r_max_measured"][i], rel=1e-12)
+    assert rm.gum["estimate"] == pytest.approx(ref.nominal.r_max_measured[0, i], rel=1e-9)
+    j = ref.study.names.index("dw3y")
+    s = q["setup.dw3y"]
+    assert s.mc["u"] == pytest.approx(ref.mc_u["setup"][j], rel=1e-9)
+    assert s.gum["k"] == pytest.approx(1.959964, rel=1e-6)  # normal: infinite dof
+    lo, hi = s.mc["shortest"]
+    samples = ref.samples["setup"][:, j]
+    assert np.mean((samples >= lo) & (samples <= hi)) == pytest.approx(0.95, abs=0.01)
+    # the histogram is a density of the samples
+    h = s.histogram
+    assert float(np.sum(np.diff(h["edges"]) * h["density"])) == pytest.approx(1.0, rel=1e-12)
+    assert ref.samples["r_max_measured"].shape == (300, 9)

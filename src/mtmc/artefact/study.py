@@ -56,8 +56,10 @@ from mtmc.kinematics.library import library_machine
 from mtmc.kinematics.topology import is_linear
 
 __all__ = [
+    "SAMPLED_OUTPUTS",
     "ArtefactResult",
     "ArtefactStudy",
+    "GumOutput",
     "gum_outputs",
     "load_artefact_study",
     "loads_artefact_study",
@@ -67,6 +69,10 @@ __all__ = [
 
 _F = NDArray[np.float64]
 UM = 1e-3  # mm per um
+
+#: The outputs whose Monte Carlo values :func:`simulate` keeps (the rest keep moments):
+#: the setup errors and Table 2's ``r_max`` and ``r_avg`` per pose, a few numbers a trial.
+SAMPLED_OUTPUTS = ("setup", "r_max_measured", "r_avg_measured", "r_max_model", "r_avg_model")
 URAD = 1e-6  # rad per urad
 
 
@@ -348,14 +354,43 @@ def gum_outputs(study: ArtefactStudy, pr: _Prepared | None = None) -> dict[str, 
         return np.concatenate([out[k] for k in ANALYSIS_OUTPUTS], axis=1)
 
     g = gum(model, inputs)
-    est, u = g.estimate_vector, g.u_vector
     res: dict[str, Any] = {}
     start = 0
     for name in ANALYSIS_OUTPUTS:
         d = sizes[name]
-        res[name] = (est[start : start + d], u[start : start + d])
+        res[name] = _gum_slice(g, start, start + d)
         start += d
     return res
+
+
+@dataclass(frozen=True, eq=False)
+class GumOutput:
+    """The GUM of one output of :data:`~mtmc.artefact.analysis.ANALYSIS_OUTPUTS`.
+
+    Unpacks as ``(estimate, u)``. Attributes: ``estimate``, ``u``, ``dof``, shapes ``(d,)``
+    (mm, mm, effective degrees of freedom), cut from the
+    :class:`~mtmc.uncertainty.gum.GumResult` ``result`` of all outputs at ``start``.
+    """
+
+    estimate: _F
+    u: _F
+    dof: _F
+    result: Any
+    start: int
+
+    def __iter__(self) -> Any:
+        return iter((self.estimate, self.u))
+
+    def __getitem__(self, i: int) -> _F:
+        return (self.estimate, self.u)[i]
+
+    def component(self, i: int) -> Any:
+        """Component ``i`` as a scalar :class:`~mtmc.uncertainty.gum.GumResult`."""
+        return self.result.component(self.start + i)
+
+
+def _gum_slice(g: Any, a: int, b: int) -> GumOutput:
+    return GumOutput(g.estimate_vector[a:b], g.u_vector[a:b], g.dof_vector[a:b], g, a)
 
 
 # ----------------------------------------------------------------------------------------
@@ -383,6 +418,12 @@ class ArtefactResult:
         GUM standard uncertainties of the same outputs, mm.
     trials : int
     seed : int or None
+    gum : dict of str to GumOutput
+        The GUM of each output (estimate, ``u``, ``k``, degrees of freedom), empty without
+        the GUM.
+    samples : dict of str to ndarray
+        The Monte Carlo values of the outputs of :data:`SAMPLED_OUTPUTS`, ``(M, d)`` mm,
+        in trial order (for histograms and coverage intervals).
     """
 
     study: ArtefactStudy
@@ -394,6 +435,8 @@ class ArtefactResult:
     gum_u: Mapping[str, _F]
     trials: int
     seed: int | None
+    gum: Mapping[str, GumOutput] = field(default_factory=dict)
+    samples: Mapping[str, _F] = field(default_factory=dict)
 
     def pose_labels(self) -> list[dict[str, float]]:
         """Each pose's rotary positions in degrees, keyed ``b_deg``, ``c_deg`` ..."""
@@ -501,13 +544,24 @@ def simulate(
     nominal = analyse(pr.meas.centres[None, None].repeat(R, axis=1), pr.cal, pr.pinv, pr.Jp)
     n = trials if trials is not None else study.trials
     s = seed if seed is not None else study.seed
-    res = monte_carlo(model, inputs, trials=n, seed=s, keep=False, **engine)
+    kept = [f"{k}/{p}" for k in SAMPLED_OUTPUTS if k != "setup" for p in range(P)]
+    res = monte_carlo(model, inputs, trials=n, seed=s, keep=["setup", *kept], **engine)
     mean = _joined(res, "estimate_vector", P)
     u = _joined(res, "u_vector", P)
+    samples = {
+        k: np.stack([np.asarray(res[f"{k}/{p}"].samples, np.float64) for p in range(P)], axis=1)
+        for k in SAMPLED_OUTPUTS
+        if k != "setup"
+    }
+    samples["setup"] = np.asarray(res["setup"].samples, np.float64)
+    for v in samples.values():
+        v.setflags(write=False)
     gum_u: dict[str, _F] = {}
+    gum_all: dict[str, GumOutput] = {}
     Vm = _centre_covariance(study, pr)
     if gum_too:
-        gum_u = {k: v[1] for k, v in gum_outputs(study, pr).items()}
+        gum_all = gum_outputs(study, pr)
+        gum_u = {k: v.u for k, v in gum_all.items()}
     dF = (pr.cal[None, None] - pr.meas.centres[None]).repeat(R, axis=0).reshape(-1)
     VF = Vm
     if study.cmm:  # dF = calibrated - measured: the calibration's covariance, every row
@@ -517,7 +571,9 @@ def simulate(
         T = np.tile(np.eye(3 * N), (R * P, 1))
         VF = Vm + T @ Vc @ T.T
     ident = identify(np.tile(pr.J, (R, 1)), dF, study.names, VF)
-    return ArtefactResult(study, pr.meas, nominal, ident, mean, u, gum_u, res.trials, res.seed)
+    return ArtefactResult(
+        study, pr.meas, nominal, ident, mean, u, gum_u, res.trials, res.seed, gum_all, samples
+    )
 
 
 # ----------------------------------------------------------------------------------------

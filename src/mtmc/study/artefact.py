@@ -16,8 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table
+from mtmc.study.base import PointField, ProgressFn, Quantity, Study, StudyResult, Table, quantity
 from mtmc.study.spec import Fields, RunSettings, register_kind
+from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = ["ArtefactKindStudy"]
 
@@ -109,7 +110,35 @@ class ArtefactKindStudy(Study):
             magnification=10_000.0,
         )
         extra = {"artefact": {"volumetric_mean_um": j["volumetric_mean_um"], "units": "um"}}
-        return self._result(settings, tables=tables, fields=(field,), extra=extra)
+        return self._result(
+            settings,
+            quantities=_quantities(res, settings),
+            tables=tables,
+            fields=(field,),
+            extra=extra,
+        )
+
+
+def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
+    """Table 2's ``r_max``, ``r_avg`` per pose and the setup errors as quantities.
+
+    Their Monte Carlo values (the measured centres, ①) with the GUM beside them.
+
+    Names: ``r_max.b5_c-5`` (the pose's rotary positions in degrees), ``setup.dpx``.
+    """
+    out = []
+    labels = ["_".join(f"{k[0]}{v:g}" for k, v in lab.items()) for lab in res.pose_labels()]
+    items: list[tuple[str, str, int]] = [
+        (f"{short}.{lab}", key, p)
+        for short, key in (("r_max", "r_max_measured"), ("r_avg", "r_avg_measured"))
+        for p, lab in enumerate(labels)
+    ]
+    items += [(f"setup.{name}", "setup", i) for i, name in enumerate(res.study.names)]
+    for name, key, i in items:
+        mc = MonteCarloResult.from_samples(res.samples[key][:, i], seed=res.seed)
+        g = res.gum[key].component(i) if key in res.gum else None
+        out.append(quantity(name, "mm", mc, g, settings))
+    return tuple(out)
 
 
 @register_kind("artefact", "a fiducial artefact probed at rotary poses (Wang, Cheung and Kong)")
