@@ -3,14 +3,19 @@
 How uncertain is a measurement on a machine tool? mtmc answers by Monte Carlo simulation
 (JCGM 101) with the GUM law of propagation (JCGM 100) beside it, over measurement graphs
 (touch-probe measurements, rotary-axis location), kinematic machine models with ISO 230
-geometric errors, and, later, laser-tracker verification and fiducial artefacts.
+geometric errors, laser-tracker verification and fiducial artefacts.
 
-The public API is re-exported here; everything else may change between versions.
+This namespace holds what a user calls: the studies, the Monte Carlo engine and the GUM,
+the distributions, the measurement graph's reader and runners, the machine library, and
+the errors. Everything else is in the subpackages (:mod:`mtmc.uncertainty`,
+:mod:`mtmc.geometry`, :mod:`mtmc.graph`, :mod:`mtmc.kinematics`, :mod:`mtmc.study`,
+:mod:`mtmc.instruments`, :mod:`mtmc.verification`, :mod:`mtmc.artefact`, ...);
+``docs/api.md`` lists the public API by subpackage. Names not listed there may change
+between versions.
 
-``import mtmc`` is cheap: the subpackages (:mod:`mtmc.uncertainty`, :mod:`mtmc.geometry`,
-:mod:`mtmc.graph`, :mod:`mtmc.kinematics`) are imported on the first access to one of
-their names (``mtmc.run_graph``, ``from mtmc import Machine``, ``mtmc.__all__``), and
-SymPy, Matplotlib and SciPy's statistics only inside the functions that use them.
+``import mtmc`` is cheap: a subpackage is imported on the first access to one of its
+names (``mtmc.run_graph``, ``from mtmc import Machine``), and SymPy, Matplotlib and SciPy's
+statistics only inside the functions that use them.
 """
 
 from __future__ import annotations
@@ -29,86 +34,149 @@ __version__ = "0.1.0"
 # bound here, before any later import of the module could bind the name to the module.
 from mtmc.report import report as report
 
-#: Names of other modules re-exported first, then those of the subpackages, in the order
-#: of ``__all__``.
-_NAMES = {
-    "StudyResult": "mtmc.study",
+#: The names resolved on first access, and the subpackage each comes from.
+_NAMES: dict[str, str] = {
     "load_study": "mtmc.study",
     "loads_study": "mtmc.study",
-    "register_kind": "mtmc.study",
-    "study_kinds": "mtmc.study",
     "write_result": "mtmc.study",
+    "StudyResult": "mtmc.study",
+    "monte_carlo": "mtmc.uncertainty",
+    "gum": "mtmc.uncertainty",
+    "validate": "mtmc.uncertainty",
+    "expression": "mtmc.uncertainty",
+    "parse_distribution": "mtmc.uncertainty",
+    "MonteCarloResult": "mtmc.uncertainty",
+    "MonteCarloResults": "mtmc.uncertainty",
+    "GumResult": "mtmc.uncertainty",
+    "Arcsine": "mtmc.uncertainty",
+    "Constant": "mtmc.uncertainty",
+    "CurvilinearTrapezoid": "mtmc.uncertainty",
+    "Exponential": "mtmc.uncertainty",
+    "Gamma": "mtmc.uncertainty",
+    "IID": "mtmc.uncertainty",
+    "MultivariateNormal": "mtmc.uncertainty",
+    "Normal": "mtmc.uncertainty",
+    "StudentT": "mtmc.uncertainty",
+    "Trapezoidal": "mtmc.uncertainty",
+    "Triangular": "mtmc.uncertainty",
+    "Uniform": "mtmc.uncertainty",
+    "load_graph": "mtmc.graph",
+    "loads_graph": "mtmc.graph",
+    "check_graph": "mtmc.graph",
+    "run_graph": "mtmc.graph",
+    "sweep_graph": "mtmc.graph",
+    "graph_model": "mtmc.graph",
+    "draw_graph": "mtmc.graph",
+    "library_machine": "mtmc.kinematics",
+    "library_names": "mtmc.kinematics",
+    "Machine": "mtmc.kinematics",
+    "parse_topology": "mtmc.kinematics",
+    "draw_chain": "mtmc.kinematics",
 }
-_SUBPACKAGES = ("errors", "uncertainty", "geometry", "graph", "kinematics")
+
+__all__: list[str] = [
+    "__version__",
+    "errors",
+    "report",
+    *errors.__all__,
+    "load_study",
+    "loads_study",
+    "write_result",
+    "StudyResult",
+    "monte_carlo",
+    "gum",
+    "validate",
+    "expression",
+    "parse_distribution",
+    "MonteCarloResult",
+    "MonteCarloResults",
+    "GumResult",
+    "Arcsine",
+    "Constant",
+    "CurvilinearTrapezoid",
+    "Exponential",
+    "Gamma",
+    "IID",
+    "MultivariateNormal",
+    "Normal",
+    "StudentT",
+    "Trapezoidal",
+    "Triangular",
+    "Uniform",
+    "load_graph",
+    "loads_graph",
+    "check_graph",
+    "run_graph",
+    "sweep_graph",
+    "graph_model",
+    "draw_graph",
+    "library_machine",
+    "library_names",
+    "Machine",
+    "parse_topology",
+    "draw_chain",
+]
 
 if TYPE_CHECKING:
-    # The type checker sees every name. It cannot follow the computed ``__all__`` of a
-    # subpackage, so the names come from the modules, whose ``__all__`` are literal.
+    from mtmc import artefact as artefact
     from mtmc import geometry as geometry
     from mtmc import graph as graph
+    from mtmc import instruments as instruments
     from mtmc import kinematics as kinematics
+    from mtmc import study as study
     from mtmc import uncertainty as uncertainty
-    from mtmc.geometry.constructions import *  # noqa: F403
-    from mtmc.geometry.fits import *  # noqa: F403
-    from mtmc.geometry.primitives import *  # noqa: F403
-    from mtmc.geometry.transforms import *  # noqa: F403
-    from mtmc.graph import *  # noqa: F403
-    from mtmc.kinematics.aguado import *  # noqa: F403
-    from mtmc.kinematics.draw import *  # noqa: F403
-    from mtmc.kinematics.error_terms import *  # noqa: F403
-    from mtmc.kinematics.functions import *  # noqa: F403
-    from mtmc.kinematics.library import *  # noqa: F403
-    from mtmc.kinematics.machine import *  # noqa: F403
-    from mtmc.kinematics.parameters import *  # noqa: F403
-    from mtmc.kinematics.symbolic import *  # noqa: F403
-    from mtmc.kinematics.topology import *  # noqa: F403
-    from mtmc.study import StudyResult as StudyResult
-    from mtmc.study import load_study as load_study
-    from mtmc.study import loads_study as loads_study
-    from mtmc.study import register_kind as register_kind
-    from mtmc.study import study_kinds as study_kinds
-    from mtmc.study import write_result as write_result
-    from mtmc.uncertainty.distributions import *  # noqa: F403
-    from mtmc.uncertainty.expression import *  # noqa: F403
-    from mtmc.uncertainty.gum import *  # noqa: F403
-    from mtmc.uncertainty.montecarlo import *  # noqa: F403
-    from mtmc.uncertainty.results import *  # noqa: F403
-    from mtmc.uncertainty.sampling import *  # noqa: F403
-    from mtmc.uncertainty.tolerance import *  # noqa: F403
-
-_exports: dict[str, str] | None = None
-
-
-def _load_exports() -> dict[str, str]:
-    """Import the subpackages and map each public name to the subpackage exporting it."""
-    global _exports
-    if _exports is None:
-        table: dict[str, str] = dict(_NAMES)
-        for sub in _SUBPACKAGES:
-            mod = importlib.import_module(f"mtmc.{sub}")
-            for name in mod.__all__:
-                table.setdefault(name, mod.__name__)
-        _exports = table
-    return _exports
+    from mtmc import verification as verification
+    from mtmc.graph import check_graph as check_graph
+    from mtmc.graph import draw_graph as draw_graph
+    from mtmc.graph import loads_graph as loads_graph
+    from mtmc.graph import sweep_graph as sweep_graph
+    from mtmc.graph.files import load_graph as load_graph
+    from mtmc.graph.run import graph_model as graph_model
+    from mtmc.graph.run import run_graph as run_graph
+    from mtmc.kinematics.draw import draw_chain as draw_chain
+    from mtmc.kinematics.library import library_machine as library_machine
+    from mtmc.kinematics.library import library_names as library_names
+    from mtmc.kinematics.machine import Machine as Machine
+    from mtmc.kinematics.topology import parse_topology as parse_topology
+    from mtmc.study.base import StudyResult as StudyResult
+    from mtmc.study.spec import load_study as load_study
+    from mtmc.study.spec import loads_study as loads_study
+    from mtmc.study.write import write_result as write_result
+    from mtmc.uncertainty.distributions import IID as IID
+    from mtmc.uncertainty.distributions import Arcsine as Arcsine
+    from mtmc.uncertainty.distributions import Constant as Constant
+    from mtmc.uncertainty.distributions import CurvilinearTrapezoid as CurvilinearTrapezoid
+    from mtmc.uncertainty.distributions import Exponential as Exponential
+    from mtmc.uncertainty.distributions import Gamma as Gamma
+    from mtmc.uncertainty.distributions import MultivariateNormal as MultivariateNormal
+    from mtmc.uncertainty.distributions import Normal as Normal
+    from mtmc.uncertainty.distributions import StudentT as StudentT
+    from mtmc.uncertainty.distributions import Trapezoidal as Trapezoidal
+    from mtmc.uncertainty.distributions import Triangular as Triangular
+    from mtmc.uncertainty.distributions import Uniform as Uniform
+    from mtmc.uncertainty.distributions import parse_distribution as parse_distribution
+    from mtmc.uncertainty.expression import expression as expression
+    from mtmc.uncertainty.gum import GumResult as GumResult
+    from mtmc.uncertainty.gum import gum as gum
+    from mtmc.uncertainty.gum import validate as validate
+    from mtmc.uncertainty.montecarlo import monte_carlo as monte_carlo
+    from mtmc.uncertainty.results import MonteCarloResult as MonteCarloResult
+    from mtmc.uncertainty.results import MonteCarloResults as MonteCarloResults
 
 
 def __getattr__(name: str) -> Any:
-    """Resolve a public name (or ``__all__``) on first access (PEP 562)."""
-    if name == "__all__":
-        names = ["__version__", "errors", "report", *_load_exports()]
-        globals()["__all__"] = names
-        return names
+    """Resolve a public name or a subpackage on first access (PEP 562)."""
     if name.startswith("_"):
         raise AttributeError(f"module 'mtmc' has no attribute {name!r}")
+    owner = _NAMES.get(name)
+    if owner is not None:
+        value = getattr(importlib.import_module(owner), name)
+        globals()[name] = value
+        return value
     if importlib.util.find_spec(f"mtmc.{name}") is not None:  # a module: mtmc.graph
         return importlib.import_module(f"mtmc.{name}")
-    owner = _load_exports().get(name)
-    if owner is None:
-        raise AttributeError(f"module 'mtmc' has no attribute {name!r}")
-    value = getattr(importlib.import_module(owner), name)
-    globals()[name] = value
-    return value
+    raise AttributeError(f"module 'mtmc' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted({*globals(), *_load_exports()})
+    return sorted({*globals(), *_NAMES})
