@@ -89,3 +89,26 @@ def test_type_checker_block_covers_every_name():
         elif isinstance(node, ast.ImportFrom) and node.module != "mtmc":
             seen |= {a.asname or a.name for a in node.names}
     assert seen == set(mtmc.__all__) - {"__version__"}
+
+
+def test_cli_help_imports_no_numpy_nor_the_library():
+    # `mtmc --help` builds the command tree only: the library (and NumPy) is imported
+    # inside the commands, when one runs
+    code = (
+        "import contextlib, io, json, sys\n"
+        "from mtmc.cli.main import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit):\n"
+        "    main(['--help'])\n"
+        "names = ('numpy', 'mtmc.uncertainty', 'mtmc.graph', 'mtmc.kinematics', 'mtmc.study')\n"
+        "print(json.dumps([m for m in names if m in sys.modules]))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], check=True, capture_output=True, text=True
+    ).stdout
+    assert json.loads(out.strip().splitlines()[-1]) == []
+    # the probe sees NumPy once a command that needs it runs
+    code2 = code.replace("['--help']", "['graph', 'check', '/nonexistent.toml']")
+    out2 = subprocess.run(
+        [sys.executable, "-c", code2], check=True, capture_output=True, text=True
+    ).stdout
+    assert "mtmc.graph" in json.loads(out2.strip().splitlines()[-1])

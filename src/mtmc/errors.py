@@ -144,3 +144,12 @@ class IdentifiabilityError(InputError):
     def __init__(self, message: str, *, combinations: tuple[str, ...] = (), **where: Any) -> None:
         self.combinations = combinations
         super().__init__(message, **where)
+
+
+class ConditioningWarning(UserWarning):
+    """A construction of the graph is badly conditioned at its nominal configuration.
+
+    Raised as a warning by :func:`mtmc.graph.nominal.check_nominal` (and known there by
+    that name); defined here, with the errors, so that the command line can silence it
+    without importing the graph package.
+    """

@@ -13,22 +13,17 @@ import json
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import typer
-from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 
 from mtmc.errors import MtmcError
 from mtmc.io import to_jsonable, write_bytes_atomic, write_text_atomic
-from mtmc.uncertainty.montecarlo import ProgressFn
+
+if TYPE_CHECKING:  # the library and Rich's progress bar are imported where they are used
+    from rich.console import Console
+
+    from mtmc.uncertainty.montecarlo import ProgressFn
 
 #: The ``--progress/--no-progress`` option of the long-running subcommands.
 PROGRESS_OPTION: Any = typer.Option(
@@ -224,6 +219,16 @@ def progress_bar(
     if not progress_wanted(enabled):
         yield None
         return
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
     con = console if console is not None else Console(stderr=True)
     bar = Progress(
         TextColumn("{task.description}"),
@@ -251,7 +256,6 @@ __all__ = [
     "nan_policy",
     "quiet_numpy",
     "MtmcError",
-    "ProgressFn",
     "fail",
     "print_json",
     "progress_bar",

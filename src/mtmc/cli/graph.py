@@ -8,9 +8,8 @@ written atomically (:mod:`mtmc.io`); ``run`` and ``sweep`` show a progress bar o
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
@@ -32,8 +31,9 @@ from mtmc.cli.common import (
     write_output,
 )
 from mtmc.errors import MtmcError
-from mtmc.graph.model import Graph
-from mtmc.graph.units import place_dimension
+
+if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
+    from mtmc.graph.model import Graph
 
 app = typer.Typer(
     help="Measurement graphs (Stryczek): check, draw, run, sweep.", no_args_is_help=True
@@ -143,8 +143,11 @@ def run_cmd(
     The table gives lengths in the graph's units (``units`` of the file), angles in rad;
     ``--json`` gives the library's result as it is (mm, rad).
     """
+    import numpy as np
+
     from mtmc.graph.model import check
     from mtmc.graph.run import run_graph
+    from mtmc.graph.units import place_dimension
 
     try:
         plan = check(_read(file))
@@ -206,6 +209,8 @@ def _unit_label(length_unit: str, length_power: int, angle_power: int) -> str:
 
 
 def _fmt(v: Any) -> str:
+    import numpy as np
+
     a = np.asarray(v, dtype=float)
     if a.ndim == 0:
         return f"{float(a):.6g}"

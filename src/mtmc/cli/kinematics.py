@@ -8,12 +8,15 @@ the drawing is written atomically (:mod:`mtmc.io`).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from mtmc.cli.common import fail, print_json, write_output
 from mtmc.errors import MtmcError, TopologyError
-from mtmc.kinematics.machine import Machine
+
+if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
+    from mtmc.kinematics.machine import Machine
 
 app = typer.Typer(
     help="Machine kinematics with ISO 230 errors: library, chains, equations of motion.",
@@ -28,6 +31,7 @@ SPEC = typer.Argument(
 def _machine(spec: str) -> Machine:
     from mtmc.kinematics import library_names
     from mtmc.kinematics.library import library_machine
+    from mtmc.kinematics.machine import Machine
 
     if spec.strip().lower() in library_names():
         return library_machine(spec)

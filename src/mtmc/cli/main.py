@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
         args = sys.argv[1:] if argv is None else list(argv)
         with warnings.catch_warnings():
             # printed as one line by the subcommands (Plan.warnings), not with source lines
-            from mtmc.graph.nominal import ConditioningWarning
+            from mtmc.errors import ConditioningWarning
 
             warnings.simplefilter("ignore", ConditioningWarning)
             rv = app(

@@ -7,7 +7,7 @@ Parses the expression and the ``-i NAME=DIST`` options, calls
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.console import Console
@@ -28,9 +28,10 @@ from mtmc.cli.common import (
     quiet_numpy,
 )
 from mtmc.errors import InputError, MtmcError
-from mtmc.uncertainty.distributions import Distribution, parse_distribution
-from mtmc.uncertainty.expression import Expression, expression
-from mtmc.uncertainty.gum import gum, validate
+
+if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
+    from mtmc.uncertainty.distributions import Distribution
+    from mtmc.uncertainty.expression import Expression
 
 
 def parse_inputs(expr: Expression, specs: list[str]) -> dict[str, Distribution]:
@@ -56,6 +57,8 @@ def parse_inputs(expr: Expression, specs: list[str]) -> dict[str, Distribution]:
     DistributionError
         On a distribution that does not parse (the message names the input).
     """
+    from mtmc.uncertainty.distributions import parse_distribution
+
     dists: dict[str, Distribution] = {}
     for spec in specs:
         name, sep, text = spec.partition("=")
@@ -105,6 +108,8 @@ def propagate(
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Propagate input distributions through EXPR by Monte Carlo (JCGM 101)."""
+    from mtmc.uncertainty.expression import expression
+    from mtmc.uncertainty.gum import gum, validate
     from mtmc.uncertainty.montecarlo import monte_carlo
 
     try:

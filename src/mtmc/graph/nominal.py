@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.errors import DegenerateGeometryError, GraphError, MtmcError
+from mtmc.errors import ConditioningWarning, DegenerateGeometryError, GraphError, MtmcError
 from mtmc.graph.model import Plan, Step
 
 __all__ = [
@@ -64,10 +64,6 @@ ANGLE_RTOL: float = 0.02
 
 #: Relative step of the central differences (of the size of the construction).
 _STEP: float = 1e-6
-
-
-class ConditioningWarning(UserWarning):
-    """A construction of the graph is badly conditioned at its nominal configuration."""
 
 
 @dataclass(frozen=True)
