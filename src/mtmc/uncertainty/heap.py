@@ -16,10 +16,13 @@ s of computation.
 up to 256 MiB of free heap is kept, so the blocks of a run reuse the same memory. It is
 called by :func:`~mtmc.uncertainty.monte_carlo` before a run, once per process. It does
 nothing where the C library is not glibc, where either threshold was set in the
-environment (``MALLOC_MMAP_THRESHOLD_``, ``MALLOC_TRIM_THRESHOLD_``, ``MALLOC_TOP_PAD_``),
-or where ``MTMC_HEAP=system`` asks to leave the allocator as it is. The cost: a process
-that has run a Monte Carlo keeps up to 256 MiB of freed memory for its next arrays
-instead of returning it to the system. No number of a run depends on it.
+environment the process started with (``MALLOC_MMAP_THRESHOLD_``,
+``MALLOC_TRIM_THRESHOLD_``, ``MALLOC_TOP_PAD_``; glibc reads them once, at start, so a
+variable put into ``os.environ`` later, as Dask's nanny does in the process that starts a
+``LocalCluster``, has set nothing and does not count), or where ``MTMC_HEAP=system``
+asks to leave the allocator as it is. The cost: a process that has run a Monte Carlo
+keeps up to 256 MiB of freed memory for its next arrays instead of returning it to the
+system. No number of a run depends on it.
 """
 
 from __future__ import annotations
@@ -41,6 +44,19 @@ _ENV = ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_")
 _done: list[bool] = []
 
 
+def _start_environment() -> set[str]:
+    """The names of the variables the process started with, as glibc saw them.
+
+    ``/proc/self/environ`` where there is one (Linux), else ``os.environ``.
+    """
+    try:
+        with open("/proc/self/environ", "rb") as f:
+            raw = f.read()
+    except OSError:  # pragma: no cover - not Linux
+        return set(os.environ)
+    return {item.split(b"=", 1)[0].decode(errors="replace") for item in raw.split(b"\0") if item}
+
+
 def keep_heap() -> bool:
     """Keep freed heap memory for the next block of a run (once per process, glibc only).
 
@@ -55,7 +71,7 @@ def keep_heap() -> bool:
     ok = False
     if (
         os.environ.get("MTMC_HEAP", "") != "system"
-        and not any(k in os.environ for k in _ENV)
+        and not any(k in _start_environment() for k in _ENV)
         and platform.libc_ver()[0] == "glibc"
     ):
         try:
