@@ -60,6 +60,10 @@ def test_mass_calibration_is_monte_carlo_and_gum_of_the_model(results):
     assert q.mc["u"] == mc.u
     assert q.mc["shortest"] == list(mc.coverage_interval(0.95, "shortest"))
     assert q.mc["symmetric"] == list(mc.coverage_interval(0.95, "symmetric"))
+    # the study file asks for the shortest interval: U is its half-length
+    assert q.mc["interval"] == "shortest"
+    lo, hi = mc.coverage_interval(0.95, "shortest")
+    assert q.mc["U"] == 0.5 * (hi - lo) != mc.expanded_uncertainty(0.95, "symmetric")
     g = gum(model, inputs)
     assert q.gum["u"] == g.u
     assert q.gum["k"] == g.coverage_factor()
@@ -82,6 +86,11 @@ def test_graph_study_is_monte_carlo_of_graph_model_and_equals_run_graph(results)
     q = r.quantity("d_ac")
     assert q.mc["u"] == mc.u
     assert q.mc["estimate"] == mc.estimate
+    # no [run] interval: U is half the probabilistically symmetric interval, as the API's
+    lo, hi = mc.coverage_interval(0.95, "symmetric")
+    assert q.mc["interval"] == "symmetric"
+    assert q.mc["U"] == 0.5 * (hi - lo) == mc.expanded_uncertainty(0.95)
+    assert q.mc["k"] == q.mc["U"] / mc.u
     # a second route: the graph's own batched run draws the same trials
     res = run_graph(g, M, SEED, outputs=["d_ac", "p_o"])
     assert q.mc["u"] == pytest.approx(res.places["d_ac"].u, rel=1e-9)

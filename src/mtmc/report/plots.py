@@ -87,11 +87,13 @@ def histogram_svg(q: dict[str, Any]) -> str:
     fig = _figure(5.2, 3.1, left=0.13, right=0.98, bottom=0.15, top=0.97)
     ax = fig.add_subplot(1, 1, 1)
     ax.stairs(density, edges, fill=True, alpha=0.45, color="C0", label="Monte Carlo")
-    lo, hi = ((np.asarray(mc["shortest"]) - ref) * scale).tolist()
-    ax.axvspan(lo, hi, color="C2", alpha=0.12, label=f"shortest {100 * mc['p']:g} % interval")
-    for v in ((np.asarray(mc["symmetric"]) - ref) * scale).tolist():
+    kind = mc["interval"]
+    other = "symmetric" if kind == "shortest" else "shortest"
+    lo, hi = ((np.asarray(mc[kind]) - ref) * scale).tolist()
+    ax.axvspan(lo, hi, color="C2", alpha=0.12, label=f"{kind} {100 * mc['p']:g} % interval")
+    for v in ((np.asarray(mc[other]) - ref) * scale).tolist():
         ax.axvline(v, color="C3", ls="--", lw=1.0)
-    ax.plot([], [], color="C3", ls="--", label="symmetric interval")
+    ax.plot([], [], color="C3", ls="--", label=f"{other} interval")
     g = q.get("gum")
     if g and g["u"] > 0:
         from scipy import stats  # imported here: scipy.stats costs ~0.5 s at import

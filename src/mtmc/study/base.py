@@ -175,8 +175,9 @@ class Quantity:
     unit : str
         Its unit (``mm``, ``rad``, ``1``, or what a study file says).
     mc : dict
-        ``estimate``, ``u``, ``U`` (half-length of the shortest interval), ``k = U/u``,
-        ``p``, ``shortest``, ``symmetric`` (JCGM 101 §7.6–7.7), ``trials``.
+        ``estimate``, ``u``, ``U`` (half the length of the ``interval`` kind of coverage
+        interval, the study's ``[run] interval``), ``k = U/u``, ``p``, ``interval``,
+        ``shortest``, ``symmetric`` (JCGM 101 §7.6–7.7), ``trials``.
     gum : dict or None
         ``estimate``, ``u``, ``k``, ``U``, ``dof``, ``interval``, ``method`` (JCGM 100).
     validation : dict or None
@@ -241,7 +242,8 @@ def quantity(
     gum_result : GumResult or None
         The GUM result of the same model and inputs (scalar), or None.
     settings : RunSettings
-        ``p``, the interval of the §8 comparison and ``ndig``.
+        ``p``, ``interval`` (the kind of Monte Carlo interval that gives ``U`` and that
+        the GUM is compared with, JCGM 101 §8) and ``ndig``.
 
     Returns
     -------
@@ -251,13 +253,15 @@ def quantity(
     lo_s, hi_s = mc.coverage_interval(p, "shortest")
     lo_y, hi_y = mc.coverage_interval(p, "symmetric")
     u = mc.u
-    big_u = 0.5 * (hi_s - lo_s)
+    kind = settings.interval
+    big_u = 0.5 * (hi_s - lo_s) if kind == "shortest" else 0.5 * (hi_y - lo_y)
     mc_d = {
         "estimate": mc.estimate,
         "u": u,
         "U": big_u,
         "k": big_u / u if u > 0 else None,
         "p": p,
+        "interval": kind,
         "shortest": [lo_s, hi_s],
         "symmetric": [lo_y, hi_y],
         "trials": mc.trials,

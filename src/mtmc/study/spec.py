@@ -249,8 +249,9 @@ class RunSettings:
     p : float
         Coverage probability of the intervals.
     interval : str
-        The Monte Carlo interval of the JCGM 101 §8 validation: ``"symmetric"`` or
-        ``"shortest"``.
+        The Monte Carlo coverage interval reported (its half-length is ``U``) and used
+        in the JCGM 101 §8 validation: ``"symmetric"`` (probabilistically symmetric,
+        JCGM 101 §7.7.2, the default of mtmc) or ``"shortest"`` (§7.7.3).
     ndig : int
         Significant digits of ``u(y)`` regarded as meaningful (JCGM 101 §7.9.2).
     samples : bool
