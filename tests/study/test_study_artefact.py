@@ -63,6 +63,14 @@ def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them
     assert rm.mc["u"] == pytest.approx(ref.mc_u["r_max_measured"][i], rel=1e-9)
     assert rm.gum["u"] == pytest.approx(ref.gum_u["r_max_measured"][i], rel=1e-12)
     assert rm.gum["estimate"] == pytest.approx(ref.nominal.r_max_measured[0, i], rel=1e-9)
+    # the budget line of a k-variate input gives its contribution sqrt(c V cᵀ), not the
+    # first component's x, u and c; the contributions add up in quadrature to the GUM u
+    cmm = next(b for b in rm.budget if b["name"] == "cmm")
+    assert cmm["components"] == 15
+    assert cmm["estimate"] is cmm["u"] is cmm["sensitivity"] is None
+    assert cmm["contribution"] > 0
+    total = np.sqrt(sum(b["contribution"] ** 2 for b in rm.budget))
+    assert total == pytest.approx(rm.gum["u"], rel=1e-9)
     j = ref.study.names.index("dw3y")
     s = q["setup.dw3y"]
     assert s.mc["u"] == pytest.approx(ref.mc_u["setup"][j], rel=1e-9)

@@ -186,8 +186,10 @@ class Quantity:
         "not validated", or "not validated within Monte Carlo noise" (a ``d`` above δ by
         less than three endpoint standard errors).
     budget : tuple of dict
-        Per input: ``name``, ``estimate``, ``u``, ``sensitivity``, ``contribution``,
-        ``share`` (the shares sum to 1 for uncorrelated inputs).
+        Per input: ``name``, ``components`` (``k``), ``estimate``, ``u``,
+        ``sensitivity`` (None for a ``k``-variate input, ``k > 1``), ``contribution``
+        (``|c| u(x)``, for a ``k``-variate input ``sqrt(c V cᵀ)``), ``share`` (the shares
+        sum to 1 for uncorrelated inputs).
     histogram : dict
         ``edges`` and ``density`` of the Monte Carlo values.
     convergence : dict
@@ -300,12 +302,16 @@ def quantity(
             "verdict": verdict,
         }
         for e in gum_result.budget:
+            # a k-variate input has k estimates, u and sensitivities: the line gives
+            # its contribution sqrt(c V cᵀ) and share, not the first component's x, u, c
+            k = int(e.u.size)
             budget.append(
                 {
                     "name": e.name,
-                    "estimate": float(e.estimate[0]),
-                    "u": float(e.u[0]),
-                    "sensitivity": float(e.sensitivity[0, 0]),
+                    "components": k,
+                    "estimate": float(e.estimate[0]) if k == 1 else None,
+                    "u": float(e.u[0]) if k == 1 else None,
+                    "sensitivity": float(e.sensitivity[0, 0]) if k == 1 else None,
                     "contribution": float(e.contribution[0]),
                     "share": float(e.share[0]),
                 }
@@ -595,6 +601,7 @@ class StudyResult:
             (
                 q.name,
                 b["name"],
+                b["components"],
                 b["estimate"],
                 b["u"],
                 b["sensitivity"],
@@ -608,7 +615,16 @@ class StudyResult:
             out["budget.csv"] = Table(
                 "budget",
                 "Uncertainty budget",
-                ("quantity", "input", "estimate", "u", "sensitivity", "contribution", "share"),
+                (
+                    "quantity",
+                    "input",
+                    "components",
+                    "estimate",
+                    "u",
+                    "sensitivity",
+                    "contribution",
+                    "share",
+                ),
                 tuple(budget_rows),
             ).to_csv()
         for t in self.tables:
