@@ -106,25 +106,27 @@ def test_values_by_hand():
     r = run_graph(g, 3, seed=1)
     for _op, _ins, o, want in STEPS:
         if want is not None:
-            np.testing.assert_allclose(r.places[o].mean, want, atol=1e-12, err_msg=o)
+            np.testing.assert_allclose(r.places[o].estimate_vector, want, atol=1e-12, err_msg=o)
             np.testing.assert_allclose(r.places[o].cov, 0.0, atol=1e-20, err_msg=o)
-    np.testing.assert_allclose(r.places["mp"].mean, [1, 2, 3])
+    np.testing.assert_allclose(r.places["mp"].estimate_vector, [1, 2, 3])
     assert plan.types["c4"] == "circle"
     assert plan.types["fr"] == "frame"
     pl = r.places
-    np.testing.assert_allclose(pl["pl_z"].part("normal")[0], [0, 0, 1], atol=1e-15)
-    np.testing.assert_allclose(pl["pl_y"].part("normal")[0], [0, -1, 0], atol=1e-15)  # AB x AD
-    np.testing.assert_allclose(pl["pl_lsq"].part("normal")[0], [0, 0, 1], atol=1e-15)
-    np.testing.assert_allclose(pl["pl_lsq"].part("point")[0], [5, 5, 0], atol=1e-12)
-    np.testing.assert_allclose(pl["pl_pn"].part("point")[0], [3, 4, 5], atol=1e-15)
-    d = pl["ln_pp"].part("direction")[0]
+    np.testing.assert_allclose(pl["pl_z"].part("normal").estimate_vector, [0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(
+        pl["pl_y"].part("normal").estimate_vector, [0, -1, 0], atol=1e-15
+    )  # AB x AD
+    np.testing.assert_allclose(pl["pl_lsq"].part("normal").estimate_vector, [0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(pl["pl_lsq"].part("point").estimate_vector, [5, 5, 0], atol=1e-12)
+    np.testing.assert_allclose(pl["pl_pn"].part("point").estimate_vector, [3, 4, 5], atol=1e-15)
+    d = pl["ln_pp"].part("direction").estimate_vector
     np.testing.assert_allclose(abs(d[0]), 1.0, atol=1e-15)  # the x axis, either sense
-    np.testing.assert_allclose(pl["ln_pp"].part("point")[0][1:], [0, 0], atol=1e-12)
+    np.testing.assert_allclose(pl["ln_pp"].part("point").estimate_vector[1:], [0, 0], atol=1e-12)
     # frame (3-2-1): z = plane normal, x = line direction, origin on the line AB (the x
     # axis) level with P = (3, 4, 5): (3, 0, 0)
-    rot, _ = pl["fr"].part("rotation")[:2]
+    rot = pl["fr"].part("rotation").estimate_vector.reshape(3, 3)
     np.testing.assert_allclose(rot, np.eye(3), atol=1e-15)
-    np.testing.assert_allclose(pl["fr"].part("translation")[0], [3, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(pl["fr"].part("translation").estimate_vector, [3, 0, 0], atol=1e-12)
 
 
 def test_degenerate_construction_names_the_transition():

@@ -53,7 +53,7 @@ def test_fig6_gives_the_ball_centre_uncertainty():
     r = run_graph(loads_assertions(FIG6), 100_000, seed=3)
     u_dir = np.sqrt(0.002**2 + 0.001**2 + 0.0005**2)
     np.testing.assert_allclose(
-        r.places["p10"].u, [u_dir / np.sqrt(2)] * 2 + [np.hypot(u_dir, 0.0005)], rtol=0.012
+        r.places["p10"].u_vector, [u_dir / np.sqrt(2)] * 2 + [np.hypot(u_dir, 0.0005)], rtol=0.012
     )
 
 
@@ -71,7 +71,7 @@ def test_export_import_keeps_the_graph_and_its_numbers(name, tmp_path):
     out = list(p1.types)[-1]
     a = run_graph(g, 500, seed=9, outputs=[out], keep=[out])
     b = run_graph(g2, 500, seed=9, outputs=[out], keep=[out])
-    np.testing.assert_array_equal(a.places[out].mean, b.places[out].mean)
+    np.testing.assert_array_equal(a.places[out].estimate_vector, b.places[out].estimate_vector)
 
 
 @pytest.mark.parametrize(

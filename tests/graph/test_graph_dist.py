@@ -49,23 +49,24 @@ def test_place_and_probe_dist_follow_their_law(runs):
     assert a.estimate == pytest.approx(10.0, abs=4 * u_a / math.sqrt(M))
     assert a.u == pytest.approx(u_a, rel=4 / math.sqrt(2 * M))  # a uniform law: narrower
     u_p = 0.002 / math.sqrt(3)  # the probing error along x, nothing else
-    np.testing.assert_allclose(p.estimate, [5, 0, 0], atol=4 * u_p / math.sqrt(M))
-    assert p.u[0] == pytest.approx(u_p, rel=4 / math.sqrt(2 * M))
-    assert p.u[1] == p.u[2] == 0.0
+    np.testing.assert_allclose(p.estimate_vector, [5, 0, 0], atol=4 * u_p / math.sqrt(M))
+    assert p.u_vector[0] == pytest.approx(u_p, rel=4 / math.sqrt(2 * M))
+    assert p.u_vector[1] == p.u_vector[2] == 0.0
 
 
 def test_a_um_file_scales_place_and_probe_dist_to_mm(runs):
     mm, um = runs["mm"], runs["um"]
     for name in ("a", "p", "n"):
-        np.testing.assert_allclose(um.places[name].estimate, mm.places[name].estimate, rtol=1e-12)
-        np.testing.assert_allclose(um.places[name].u, mm.places[name].u, rtol=1e-9)
+        um_p, mm_p = um.places[name], mm.places[name]
+        np.testing.assert_allclose(um_p.estimate_vector, mm_p.estimate_vector, rtol=1e-12)
+        np.testing.assert_allclose(um_p.u_vector, mm_p.u_vector, rtol=1e-9)
     assert um.places["a"].u == pytest.approx(1 / math.sqrt(3), rel=0.05)  # in mm, not µm
 
 
 def test_random_unit_places_are_renormalised(runs):
     n = runs["mm"].places["n"]
     s2 = SIGMA**2
-    assert n.estimate[2] == pytest.approx(1 - s2, abs=4 * s2 / math.sqrt(M) + 2 * s2**2)
+    assert n.estimate_vector[2] == pytest.approx(1 - s2, abs=4 * s2 / math.sqrt(M) + 2 * s2**2)
     # the sample standard deviation of a χ² law (kurtosis 9): relative error √(8/4M)
-    assert n.u[2] == pytest.approx(s2, rel=4 * math.sqrt(2 / M) + 4 * s2)
-    np.testing.assert_allclose(n.u[:2], SIGMA, rtol=4 / math.sqrt(2 * M) + 2 * s2)
+    assert n.u_vector[2] == pytest.approx(s2, rel=4 * math.sqrt(2 / M) + 4 * s2)
+    np.testing.assert_allclose(n.u_vector[:2], SIGMA, rtol=4 / math.sqrt(2 * M) + 2 * s2)

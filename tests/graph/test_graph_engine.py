@@ -32,7 +32,9 @@ def test_summaries_do_not_depend_on_blocks_or_workers(axis_c, block_size, worker
         axis_c, trials=40_000, seed=3, block_size=block_size, workers=workers, executor=executor
     )
     for name, s in ref.places.items():
-        np.testing.assert_array_equal(got.places[name].mean, s.mean, err_msg=name)
+        np.testing.assert_array_equal(
+            got.places[name].estimate_vector, s.estimate_vector, err_msg=name
+        )
         np.testing.assert_array_equal(got.places[name].cov, s.cov, err_msg=name)
 
 
@@ -118,6 +120,6 @@ def test_per_coordinate_u_of_a_marked_point():
         ]
     )
     res = run_graph(loads(text), trials=200_000, seed=4, outputs=["c"])
-    u = res.places["c"].result.u_vector  # mm: half of (2, 0, 6) µm
+    u = res.places["c"].u_vector  # mm: half of (2, 0, 6) µm
     np.testing.assert_allclose(u[[0, 2]], [0.001, 0.003], rtol=0.01)  # se of u: 0.16 %
     assert u[1] < 1e-15  # a constant coordinate (to rounding of its mean)

@@ -28,10 +28,10 @@ def test_ball_centre_closed_form():
     r = run_graph(load_graph(EXAMPLES / "ball_centre.toml"), 100_000, seed=11)
     p = r.places["p"]
     # cx = (x1 + x2)/2 with each coordinate N(., u_dir^2): u = u_dir / sqrt 2
-    np.testing.assert_allclose(p.u[:2], U_DIR / math.sqrt(2), rtol=0.012)
+    np.testing.assert_allclose(p.u_vector[:2], U_DIR / math.sqrt(2), rtol=0.012)
     # cz = z1 - r1: u = sqrt(u_dir^2 + u_r1^2)
-    np.testing.assert_allclose(p.u[2], math.hypot(U_DIR, U_R1), rtol=0.012)
-    np.testing.assert_allclose(p.mean, 0.0, atol=5 * U_DIR / math.sqrt(100_000))
+    np.testing.assert_allclose(p.u_vector[2], math.hypot(U_DIR, U_R1), rtol=0.012)
+    np.testing.assert_allclose(p.estimate_vector, 0.0, atol=5 * U_DIR / math.sqrt(100_000))
     assert abs(p.cov[0, 1]) < 5 * U_DIR**2 / 2 / math.sqrt(100_000)
 
 
@@ -39,9 +39,9 @@ def test_ball_centre_box_muller():
     """The same closed form with normals made by Box-Muller (Stryczek eq. 6)."""
     g = load_graph(EXAMPLES / "ball_centre.toml")
     r = run_graph(g, 100_000, seed=11, normal_method="box-muller", outputs=["p"])
-    np.testing.assert_allclose(r.places["p"].u[:2], U_DIR / math.sqrt(2), rtol=0.012)
+    np.testing.assert_allclose(r.places["p"].u_vector[:2], U_DIR / math.sqrt(2), rtol=0.012)
     d = run_graph(g, 1000, seed=11, outputs=["p"])
-    assert not np.array_equal(r.places["p"].mean, d.places["p"].mean)
+    assert not np.array_equal(r.places["p"].estimate_vector, d.places["p"].estimate_vector)
 
 
 def test_plane_3pt_closed_form():
@@ -49,12 +49,12 @@ def test_plane_3pt_closed_form():
     r = run_graph(load_graph(EXAMPLES / "plane_3pt.toml"), 100_000, seed=12)
     n = r.places["normal"]
     np.testing.assert_allclose(
-        n.u[:2], [math.sqrt(2) * U_DIR / 100, math.sqrt(2) * U_DIR / 80], rtol=0.012
+        n.u_vector[:2], [math.sqrt(2) * U_DIR / 100, math.sqrt(2) * U_DIR / 80], rtol=0.012
     )
-    np.testing.assert_allclose(n.mean, [0, 0, 1], atol=1e-6)
+    np.testing.assert_allclose(n.estimate_vector, [0, 0, 1], atol=1e-6)
     # the plane's point is the first probed point: u1 in x and y, u_dir along z
     pt = r.places["plane"].part("point")
-    np.testing.assert_allclose(pt[1], [U1, U1, U_DIR], rtol=0.012)
+    np.testing.assert_allclose(pt.u_vector, [U1, U1, U_DIR], rtol=0.012)
 
 
 def test_plane_lsq_closed_form():
@@ -66,10 +66,10 @@ def test_plane_lsq_closed_form():
         U_DIR / np.sqrt(((x - x.mean()) ** 2).sum()),
         U_DIR / np.sqrt(((y - y.mean()) ** 2).sum()),
     ]
-    np.testing.assert_allclose(r.places["normal"].u[:2], want, rtol=0.012)
-    est, u, _ = r.places["plane"].part("point")
-    np.testing.assert_allclose(u[2], U_DIR / math.sqrt(8), rtol=0.012)
-    np.testing.assert_allclose(est, [50, 40, 0], atol=1e-4)
+    np.testing.assert_allclose(r.places["normal"].u_vector[:2], want, rtol=0.012)
+    pt = r.places["plane"].part("point")
+    np.testing.assert_allclose(pt.u_vector[2], U_DIR / math.sqrt(8), rtol=0.012)
+    np.testing.assert_allclose(pt.estimate_vector, [50, 40, 0], atol=1e-4)
 
 
 def ball_centres(rng, m, centres, dr):
@@ -136,14 +136,14 @@ def test_axis_c_against_plain_numpy(with_alpha):
     p1, p2, p3 = ball_centres(rng, M, positions("z", (150.0, 0.0, 40.0), alpha), dr)
     centre, n = paper_axis(p1, p2, p3, alpha) if with_alpha else circumcentre(p1, p2, p3)
     line = r.places["axis_c"]
-    est_p, u_p, _ = line.part("point")
-    _, u_d, _ = line.part("direction")
+    est_p, u_p = line.part("point").estimate_vector, line.part("point").u_vector
+    u_d = line.part("direction").u_vector
     np.testing.assert_allclose(u_p, centre.std(0, ddof=1), rtol=0.04)
     np.testing.assert_allclose(u_d[:2], n[:, :2].std(0, ddof=1), rtol=0.04)
     np.testing.assert_allclose(est_p, [0, 0, 40], atol=4 * u_p.max() / math.sqrt(M))
     # P_C on the table: P0 - (40 + e_r2) v_C
     pc = centre + (-40 + rng.normal(0, 0.001, M))[:, None] * n
-    np.testing.assert_allclose(r.places["p_c"].u, pc.std(0, ddof=1), rtol=0.04)
+    np.testing.assert_allclose(r.places["p_c"].u_vector, pc.std(0, ddof=1), rtol=0.04)
 
 
 def bcs_plain(rng, m):
@@ -166,16 +166,16 @@ def test_axis_a_against_plain_numpy():
     pts = ball_centres(rng, M, positions("x", (0.0, 0.0, 120.0), math.radians(30)), dr)
     centre, n = paper_axis(*pts, math.radians(30))
     np.testing.assert_allclose(
-        r.places["axis_a"].part("point")[1], centre.std(0, ddof=1), rtol=0.04
+        r.places["axis_a"].part("point").u_vector, centre.std(0, ddof=1), rtol=0.04
     )
-    np.testing.assert_allclose(r.places["v_a"].u[1:], n[:, 1:].std(0, ddof=1), rtol=0.04)
+    np.testing.assert_allclose(r.places["v_a"].u_vector[1:], n[:, 1:].std(0, ddof=1), rtol=0.04)
 
 
 def test_bcs_origin_against_plain_numpy():
     r = run_graph(load_graph(EXAMPLES / "bcs_origin.toml"), M, seed=23, keep=["d_ac"])
     d, po = bcs_plain(np.random.default_rng(97), M)
     np.testing.assert_allclose(r.places["d_ac"].u, d.std(ddof=1), rtol=0.04)
-    np.testing.assert_allclose(r.places["p_o"].u, po.std(0, ddof=1), rtol=0.04)
+    np.testing.assert_allclose(r.places["p_o"].u_vector, po.std(0, ddof=1), rtol=0.04)
     np.testing.assert_allclose(r.places["d_ac"].estimate, 50.0, atol=4 * d.std() / math.sqrt(M))
     # the kept samples give the same summary as the running sums
     res = r.result("d_ac")
@@ -216,5 +216,7 @@ def test_micrometre_file_gives_the_same_result_in_mm():
     um = um.replace("-12.7", "-12700.0").replace("12.7", "12700.0")
     a = run_graph(g_mm, 2000, seed=5, outputs=["p"])
     b = run_graph(loads_graph(um), 2000, seed=5, outputs=["p"])
-    np.testing.assert_allclose(b.places["p"].mean, a.places["p"].mean, atol=1e-12)
-    np.testing.assert_allclose(b.places["p"].u, a.places["p"].u, rtol=1e-9)
+    np.testing.assert_allclose(
+        b.places["p"].estimate_vector, a.places["p"].estimate_vector, atol=1e-12
+    )
+    np.testing.assert_allclose(b.places["p"].u_vector, a.places["p"].u_vector, rtol=1e-9)

@@ -40,7 +40,9 @@ def test_oblique_direction_covariance():
     # the sample covariance's entries have sd about sqrt((C_ii C_jj + C_ij^2) / M)
     sd = np.sqrt((np.outer(np.diag(want), np.diag(want)) + want**2) / M)
     assert np.all(np.abs(cov - want) < 5 * sd)
-    np.testing.assert_allclose(r.places["q"].mean, [10, 20, 30], atol=5 * 0.004 / math.sqrt(M))
+    np.testing.assert_allclose(
+        r.places["q"].estimate_vector, [10, 20, 30], atol=5 * 0.004 / math.sqrt(M)
+    )
     # along d: u = sqrt(u1^2 + u2^2 + u3^2) (Stryczek eq. 1)
     np.testing.assert_allclose(
         math.sqrt(d @ cov @ d), math.sqrt(0.002**2 + 0.003**2 + 0.001**2), rtol=0.012
@@ -58,7 +60,7 @@ def test_coordinate_output(coord, i):
 
 def test_axis_aligned_point_uses_diagonal_covariance():
     r = run_graph(graph("[0.0, 0.0, -1.0]"), M, seed=3)
-    u = r.places["q"].u
+    u = r.places["q"].u_vector
     np.testing.assert_allclose(
         u, [0.002, 0.002, math.sqrt(0.002**2 + 0.003**2 + 0.001**2)], rtol=0.012
     )
@@ -69,13 +71,13 @@ def test_dist_along_direction():
     r = run_graph(
         graph("[1.0, 0.0, 0.0]", 'dist = "uniform(-0.006, 0.006)"'), M, seed=4, keep=["q"]
     )
-    u = r.places["q"].u
+    u = r.places["q"].u_vector
     np.testing.assert_allclose(u, [math.sqrt(0.002**2 + 0.006**2 / 3), 0.002, 0.002], rtol=0.012)
     # the transition's u_axis overrides [probe]
     r2 = run_graph(
         graph("[1.0, 0.0, 0.0]", "u_axis = 0.0\nu_probe = 0.0\nu_perp = 0.0"), 10, seed=4
     )
-    np.testing.assert_array_equal(r2.places["q"].u, 0.0)
+    np.testing.assert_array_equal(r2.places["q"].u_vector, 0.0)
 
 
 def test_bad_meas_fields():

@@ -95,7 +95,7 @@ def test_graph_study_is_monte_carlo_of_graph_model_and_equals_run_graph(results)
     res = run_graph(g, M, SEED, outputs=["d_ac", "p_o"])
     assert q.mc["u"] == pytest.approx(res.places["d_ac"].u, rel=1e-9)
     np.testing.assert_allclose(
-        [r.quantity(f"p_o.{c}").mc["u"] for c in "xyz"], res.places["p_o"].u, rtol=1e-9
+        [r.quantity(f"p_o.{c}").mc["u"] for c in "xyz"], res.places["p_o"].u_vector, rtol=1e-9
     )
     # the GUM of the component models beside Monte Carlo
     assert q.gum["u"] == pytest.approx(gum(model, inputs).u, rel=1e-12)
@@ -122,8 +122,8 @@ def test_axis_regions_against_the_gaussian_ellipse(results, name):
     r = results[name]
     g = load_graph(GRAPHS / f"{name}.toml")
     res = run_graph(g, M, SEED, outputs=[name], keep=[name])
-    direction = np.asarray(res.places[name].part("direction")[0])
-    _, _, cov = res.places[name].part("point")
+    direction = res.places[name].part("direction").estimate_vector
+    cov = res.places[name].part("point").cov
     reg = r.regions[0]
     assert reg.name.startswith(f"{name}: point")
     # the plane of the region is normal to the axis: its covariance is the projection

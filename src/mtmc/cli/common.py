@@ -13,7 +13,7 @@ import json
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any, Literal, NoReturn
 
 import typer
 
@@ -43,7 +43,7 @@ NAN_POLICY_OPTION: Any = typer.Option(
 )
 
 
-def nan_policy(value: str) -> str:
+def nan_policy(value: str) -> Literal["raise", "omit"]:
     """``--nan-policy`` checked: ``raise`` or ``omit``.
 
     Raises
@@ -55,7 +55,7 @@ def nan_policy(value: str) -> str:
 
     if value not in ("raise", "omit"):
         raise InputError(f"expected raise or omit, got {value!r}", field="--nan-policy")
-    return value
+    return "raise" if value == "raise" else "omit"
 
 
 @contextlib.contextmanager

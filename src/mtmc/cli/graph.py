@@ -8,7 +8,7 @@ written atomically (:mod:`mtmc.io`); ``run`` and ``sweep`` show a progress bar o
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
@@ -33,6 +33,9 @@ from mtmc.cli.common import (
 from mtmc.errors import MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
+    import numpy as np
+    from numpy.typing import NDArray
+
     from mtmc.graph.model import Graph
 
 app = typer.Typer(
@@ -143,8 +146,6 @@ def run_cmd(
     The table gives lengths in the graph's units (``units`` of the file), angles in rad;
     ``--json`` gives the library's result as it is (mm, rad).
     """
-    import numpy as np
-
     from mtmc.graph.model import check
     from mtmc.graph.run import run_graph
     from mtmc.graph.units import place_dimension
@@ -159,7 +160,7 @@ def run_cmd(
                 seed,
                 outputs=place or None,
                 progress=bar,
-                nan_policy=nan_policy(nan),  # type: ignore[arg-type]
+                nan_policy=nan_policy(nan),
                 **parallel_options(workers, executor, scheduler),
             )
     except MtmcError as exc:
@@ -176,27 +177,21 @@ def run_cmd(
     table.add_column("unit")
     for name, s in res.places.items():
         first = True
-        for part, _size in _parts(s.type):
-            est, u, _cov = s.part(part)
+        for part in s.parts:
+            r = s.part(part)
             power, angle = place_dimension(plan, name, part)
             scale = g.factor**power
             table.add_row(
                 name if first else "",
                 s.type if first else "",
                 "" if part == "value" else part,
-                _fmt(np.asarray(est) / scale),
-                _fmt(np.asarray(u) / scale),
+                _fmt(r.estimate if r.dim == 0 else r.estimate_vector, scale),
+                _fmt(r.u if r.dim == 0 else r.u_vector, scale),
                 _unit_label(g.units, power, angle),
             )
             first = False
     Console().print(table)
     typer.echo(f"trials {res.trials}  seed {res.seed}")
-
-
-def _parts(type_: str) -> tuple[tuple[str, int], ...]:
-    from mtmc.graph.run import PARTS
-
-    return PARTS[type_]
 
 
 def _unit_label(length_unit: str, length_power: int, angle_power: int) -> str:
@@ -208,13 +203,11 @@ def _unit_label(length_unit: str, length_power: int, angle_power: int) -> str:
     return "·".join(names) or "1"
 
 
-def _fmt(v: Any) -> str:
-    import numpy as np
-
-    a = np.asarray(v, dtype=float)
-    if a.ndim == 0:
-        return f"{float(a):.6g}"
-    return "[" + ", ".join(f"{x:.6g}" for x in a.ravel()) + "]"
+def _fmt(v: float | NDArray[np.float64], scale: float) -> str:
+    """A number, or the components of an array, in the file's unit (divided by ``scale``)."""
+    if isinstance(v, float):
+        return f"{v / scale:.6g}"
+    return "[" + ", ".join(f"{x / scale:.6g}" for x in v.ravel()) + "]"
 
 
 @app.command("sweep")

@@ -124,7 +124,7 @@ def propagate(
                 adaptive=adaptive,
                 p=p,
                 progress=bar,
-                nan_policy=nan_policy(nan),  # type: ignore[arg-type]
+                nan_policy=nan_policy(nan),
                 **parallel_options(workers, executor, scheduler),
             )
         if mc.dim != 0:

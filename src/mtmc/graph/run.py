@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Any
 
@@ -39,7 +39,7 @@ from mtmc.uncertainty.distributions import (
     parse_distribution,
 )
 from mtmc.uncertainty.montecarlo import NanPolicy, monte_carlo
-from mtmc.uncertainty.results import MonteCarloResult
+from mtmc.uncertainty.results import Moments, MonteCarloResult
 from mtmc.uncertainty.sampling import Sampling
 
 __all__ = [
@@ -137,7 +137,16 @@ def _rows(cols: list[Any], m: int) -> NDArray[np.float64]:
 
 @dataclass(frozen=True)
 class PlaceSummary:
-    """Estimate and covariance of one place over a run, by the place's named parts.
+    """The Monte Carlo result of one place over a run, whole and by its named parts.
+
+    Each attribute has one type whatever the place type, as for
+    :class:`~mtmc.uncertainty.results.MonteCarloResult`: the arrays ``estimate_vector``,
+    ``u_vector`` ``(k,)`` and ``cov`` ``(k, k)`` hold the ``k`` components of the place
+    in the layout of :func:`flatten` (``k`` = 1 for x, y, z, real; 3 for point, vector,
+    unit; 6 for line and plane; 7 for circle; 4 for sphere; 12 for frame), read-only;
+    ``estimate`` and ``u`` are the floats of a scalar place (x, y, z, real) and raise an
+    :class:`~mtmc.errors.InputError` for any other; :meth:`part` gives one named part
+    as its own :class:`~mtmc.uncertainty.results.MonteCarloResult`.
 
     Parameters
     ----------
@@ -147,7 +156,27 @@ class PlaceSummary:
         Its type.
     result : MonteCarloResult
         The engine's result for the place's components, flattened in the layout of
-        :data:`PARTS` (:func:`flatten`): ``(M, k)`` values or their moments.
+        :func:`flatten`: ``(M,)`` values for a scalar place, ``(M, k)`` otherwise (or
+        their moments, when the samples were not kept).
+
+    Examples
+    --------
+    >>> from mtmc.graph.places import Place, Transition
+    >>> g = Graph(
+    ...     places=(Place("a", "point", [0, 0, 0], u=0.01), Place("b", "point", [2, 0, 0]),),
+    ...     transitions=(
+    ...         Transition("t1", "middle", ("a", "b"), "c"),
+    ...         Transition("t2", "distance", ("a", "b"), "d"),
+    ...         Transition("t3", "line", ("a", "b"), "l"),
+    ...     ),
+    ... )
+    >>> r = run_graph(g, trials=20000, seed=1)
+    >>> r.places["c"].estimate_vector.shape, r.places["c"].cov.shape
+    ((3,), (3, 3))
+    >>> round(r.places["d"].estimate, 2), round(float(r.places["c"].u_vector[1]), 4)
+    (2.0, 0.005)
+    >>> r.places["l"].parts, r.places["l"].part("direction").estimate_vector.shape
+    (('point', 'direction'), (3,))
     """
 
     name: str
@@ -155,80 +184,150 @@ class PlaceSummary:
     result: MonteCarloResult = field(repr=False)
 
     @property
-    def mean(self) -> NDArray[np.float64]:
-        """Mean of the components (layout of :func:`flatten`), ``(k,)``, mm / rad."""
+    def parts(self) -> tuple[str, ...]:
+        """The names of the place's parts, in the layout of :func:`flatten`.
+
+        ``("value",)`` for x, y, z, real, point, vector and unit places; ``("point",
+        "direction")`` for a line, ``("point", "normal")`` for a plane, ``("centre",
+        "normal", "radius")`` for a circle, ``("centre", "radius")`` for a sphere,
+        ``("rotation", "translation")`` for a frame.
+        """
+        return tuple(p for p, _ in PARTS[self.type])
+
+    @property
+    def estimate_vector(self) -> NDArray[np.float64]:
+        """The estimate (mean) of every component, read-only, ``(k,)``, mm / rad."""
         return self.result.estimate_vector
 
     @property
+    def u_vector(self) -> NDArray[np.float64]:
+        """The standard uncertainty of every component (divisor ``M - 1``), read-only, ``(k,)``."""
+        return self.result.u_vector
+
+    @property
     def cov(self) -> NDArray[np.float64]:
-        """Their covariance (divisor ``M - 1``, Stryczek eq. 5), ``(k, k)``."""
+        """The covariance of the components (divisor ``M - 1``, Stryczek eq. 5), ``(k, k)``.
+
+        Read-only; ``(1, 1)`` for a scalar place.
+        """
         return self.result.cov
 
-    def part(self, part: str) -> tuple[Any, Any, NDArray[np.float64]]:
-        """Estimate, standard uncertainty and covariance of one part (e.g. ``"direction"``).
+    @property
+    def estimate(self) -> float:
+        """The estimate of a scalar place (x, y, z, real), a float, mm / rad.
+
+        Raises
+        ------
+        InputError
+            For any other place: its estimate is :attr:`estimate_vector` (or
+            ``part(name).estimate_vector``).
+        """
+        self._require_scalar("estimate")
+        return float(self.result.estimate_vector[0])
+
+    @property
+    def u(self) -> float:
+        """The standard uncertainty of a scalar place (x, y, z, real), a float, mm / rad.
+
+        Raises
+        ------
+        InputError
+            For any other place: its standard uncertainties are :attr:`u_vector`.
+        """
+        self._require_scalar("u")
+        return float(self.result.u_vector[0])
+
+    def _require_scalar(self, name: str) -> None:
+        if self.type not in _SCALAR_TYPES:
+            k = sum(n for _, n in PARTS[self.type])
+            raise InputError(
+                f"{name} is the float of a scalar place (x, y, z, real); place {self.name} "
+                f"is a {self.type} of {k} components: use {name}_vector (shape ({k},)) or "
+                f"part(name) for one of {', '.join(self.parts)}",
+                field=name,
+            )
+
+    def part(self, name: str) -> MonteCarloResult:
+        """One named part of the place as its own Monte Carlo result.
 
         Parameters
         ----------
-        part : str
-            A part name of :data:`PARTS` for this type (``"value"`` for scalars/vectors).
+        name : str
+            One of :attr:`parts` (``"value"`` for x, y, z, real, point, vector, unit).
 
         Returns
         -------
-        estimate : float or ndarray
-            A float for a 1-component part, else an array (3×3 for a rotation).
-        u : float or ndarray
-            The standard uncertainties, same shape.
-        cov : ndarray, shape (k, k)
-            The covariance of the part's components.
+        MonteCarloResult
+            For a part of one component (``"value"`` of a scalar place, ``"radius"``) a
+            scalar result: ``estimate`` and ``u`` floats. For the others a vector result
+            of ``j`` components: ``estimate_vector`` and ``u_vector`` ``(j,)``, ``cov``
+            ``(j, j)`` (``j`` = 3; 9 for ``"rotation"``, the matrix row by row:
+            ``estimate_vector.reshape(3, 3)``). Its samples are kept if the place's were
+            (``keep`` of :func:`run_graph`), with the same trials, seed and run information.
+
+        Raises
+        ------
+        InputError
+            If the place type has no such part.
         """
         i = 0
-        for name, k in PARTS[self.type]:
-            if name == part:
-                est = self.mean[i : i + k]
-                cov = self.cov[i : i + k, i : i + k]
-                u = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-                if k == 1:
-                    return float(est[0]), float(u[0]), cov
-                if k == 9:
-                    return est.reshape(3, 3), u.reshape(3, 3), cov
-                return est, u, cov
+        for part, k in PARTS[self.type]:
+            if part == name:
+                return _part_result(self.result, i, k, whole=k == len(self.estimate_vector))
             i += k
-        raise InputError(f"a {self.type} has no part {part!r}", field=part)
-
-    @property
-    def estimate(self) -> Any:
-        """The estimate: a float (scalars), ``(3,)`` (points, vectors), or a dict of parts."""
-        if len(PARTS[self.type]) == 1:
-            return self.part("value")[0]
-        return {p: self.part(p)[0] for p, _ in PARTS[self.type]}
-
-    @property
-    def u(self) -> Any:
-        """The standard uncertainty, shaped like :attr:`estimate`."""
-        if len(PARTS[self.type]) == 1:
-            return self.part("value")[1]
-        return {p: self.part(p)[1] for p, _ in PARTS[self.type]}
+        raise InputError(
+            f"a {self.type} has no part {name!r}; its parts: {', '.join(self.parts)}",
+            field=name,
+        )
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready summary of the place.
+        """A JSON-ready summary of the place (the layout of ``mtmc graph run --json``).
 
         Returns
         -------
         dict
-            ``type``, ``estimate``, ``u`` (and ``cov`` for 3-vectors); for line, plane,
-            circle, sphere and frame one ``{estimate, u}`` object per part.
+            ``type``, ``estimate``, ``u`` (a number for a scalar place; ``(3,)`` lists and
+            the ``(3, 3)`` ``cov`` for point, vector and unit places); for line, plane,
+            circle, sphere and frame one ``{estimate, u}`` object per part (a number for
+            ``radius``, ``(3, 3)`` for ``rotation``, ``(3,)`` otherwise).
         """
         out: dict[str, Any] = {"type": self.type}
-        if len(PARTS[self.type]) == 1:
-            est, u, cov = self.part("value")
-            out["estimate"], out["u"] = est, u
-            if self.type in ("point", "vector", "unit"):
-                out["cov"] = cov
+        if self.parts == ("value",):
+            res = self.result
+            if self.type in _SCALAR_TYPES:
+                out["estimate"], out["u"] = self.estimate, self.u
+            else:
+                out["estimate"], out["u"] = res.estimate_vector, res.u_vector
+                out["cov"] = res.cov
             return out
-        for p, _ in PARTS[self.type]:
-            est, u, _cov = self.part(p)
-            out[p] = {"estimate": est, "u": u}
+        for p in self.parts:
+            r = self.part(p)
+            shape = (3, 3) if p == "rotation" else (-1,)
+            if r.dim == 0:
+                out[p] = {"estimate": r.estimate, "u": r.u}
+            else:
+                out[p] = {
+                    "estimate": r.estimate_vector.reshape(shape),
+                    "u": r.u_vector.reshape(shape),
+                }
         return out
+
+
+def _part_result(res: MonteCarloResult, start: int, k: int, *, whole: bool) -> MonteCarloResult:
+    """Components ``start .. start + k - 1`` of ``res`` as a result (a scalar one if ``k == 1``)."""
+    if whole:
+        return res
+    stop = start + k
+    samples = moments = None
+    if res.samples is not None:
+        x = res.samples.reshape(res.samples.shape[0], -1)
+        samples = x[:, start] if k == 1 else x[:, start:stop]
+    else:
+        assert res.moments is not None
+        mo = res.moments
+        m2 = mo.m2[start:stop, start:stop] if mo.m2.ndim == 2 else mo.m2[start:stop]
+        moments = Moments(mo.n, mo.mean[start:stop], m2)
+    return replace(res, samples=samples, moments=moments, scalar=k == 1, sketch=None)
 
 
 @dataclass(frozen=True)
@@ -255,7 +354,7 @@ class GraphResult:
     samples: dict[str, Any] = field(default_factory=dict)
     types: dict[str, str] = field(default_factory=dict)
 
-    def result(self, name: str) -> Any:
+    def result(self, name: str) -> MonteCarloResult:
         """The JCGM 101 result of a kept place (its samples, flattened as :func:`flatten`).
 
         Parameters
@@ -701,6 +800,7 @@ def run_graph(
         raise InputError(msg, file=plan.graph.file, field="place") from None
     places = {n: PlaceSummary(n, plan.types[n], res[n]) for n in summ}
     samples_out = {n: unflatten(plan.types[n], res[n].values) for n in keep_s}
+    assert res.seed is not None  # monte_carlo records the seed it drew
     return GraphResult(res.trials, res.seed, places, samples_out, dict(plan.types))
 
 

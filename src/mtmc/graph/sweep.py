@@ -335,7 +335,7 @@ class _SweepPoint:
     ) -> tuple[float, float]:
         res = run_graph(graph, self.trials, self.seed, outputs=[self.output], progress=progress)
         summary = res.places[self.output]
-        return float(summary.u), float(summary.estimate)
+        return summary.u, summary.estimate
 
 
 def sweep(
