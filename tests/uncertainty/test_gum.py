@@ -19,6 +19,8 @@ from mtmc import (
     StudentT,
     Uniform,
     expression,
+    monte_carlo,
+    validate,
 )
 from mtmc.uncertainty.gum import GumResult, coverage_factor, gum, welch_satterthwaite
 
@@ -415,3 +417,17 @@ def test_complex_step_is_kept_while_it_agrees_with_central_differences(a, method
     assert res.method == method
     c = 1.0 if method == "complex-step" else 1.0 + a * 1e-6
     assert res.sensitivities["x"] == pytest.approx(c, rel=1e-12)
+
+
+def test_options_are_keyword_only():
+    inputs = {"a": Normal(1.0, 0.1)}
+    model = expression("2 * a")
+    with pytest.raises(TypeError):
+        gum(model, inputs, 0.99)  # options are keyword-only
+    g = gum(model, inputs, p=0.99)
+    assert g.p == 0.99
+    mc = monte_carlo(model, inputs, trials=20_000, seed=1)
+    with pytest.raises(TypeError):
+        validate(g, mc, 0.99)  # options are keyword-only
+    v = validate(g, mc, p=0.99, ndig=1)
+    assert (v.p, v.ndig, v.passed) == (0.99, 1, True)

@@ -14,7 +14,7 @@ import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, overload
 
 from mtmc.errors import InputError
 from mtmc.io import write_text_atomic
@@ -149,7 +149,27 @@ def render(folder: str | Path) -> Path:
     return write_text_atomic(d / "report.html", html(result, prov))
 
 
-def report(source: Any, path: str | Path | None = None) -> Any:
+class _HasToDict(Protocol):
+    """A result that gives the content of its ``result.json``."""
+
+    def to_dict(self) -> Mapping[str, Any]: ...
+
+
+@overload
+def report(source: str | Path, path: None = None) -> Path: ...
+
+
+@overload
+def report(source: Mapping[str, Any] | _HasToDict, path: None = None) -> str: ...
+
+
+@overload
+def report(source: Mapping[str, Any] | _HasToDict, path: str | Path) -> Path: ...
+
+
+def report(
+    source: str | Path | Mapping[str, Any] | _HasToDict, path: str | Path | None = None
+) -> Path | str:
     """Render a result: a result folder, or a result object (anything with ``to_dict()``).
 
     Parameters
@@ -163,11 +183,11 @@ def report(source: Any, path: str | Path | None = None) -> Any:
     Returns
     -------
     pathlib.Path or str
-        The file written, or the HTML text.
+        The file written (for a folder, or with ``path``), else the HTML text.
     """
     if isinstance(source, str | Path):
         return render(source)
-    doc = source.to_dict() if hasattr(source, "to_dict") else source
+    doc = source if isinstance(source, Mapping) else source.to_dict()
     text = html(doc)
     if path is None:
         return text

@@ -193,9 +193,9 @@ class GraphStudy(Study):
                 progress=step,
                 **settings.parallel,
             )
-            vals = np.asarray(mc.samples).reshape(mc.m, -1)
+            vals = mc.values.reshape(mc.m, -1)
             if settings.samples:
-                samples[out] = mc.samples
+                samples[out] = mc.values
             for j, (name, part) in enumerate(component_names(out, plan.types[out])):
                 comp = _component(model, vals.shape[1], j)
                 g = gum(comp, inputs, p=settings.p)

@@ -39,6 +39,7 @@ from mtmc.uncertainty import distributions as _distributions
 from mtmc.uncertainty import tolerance as _tolerance
 from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.expression import check_variables
+from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = [
     "BudgetEntry",
@@ -490,6 +491,7 @@ def _evaluate(
 def gum(
     model: Callable[..., Any],
     inputs: Mapping[str, Any],
+    *,
     p: float = 0.95,
 ) -> GumResult:
     """Propagate standard uncertainties through ``model`` by the GUM (first order).
@@ -526,7 +528,7 @@ def gum(
         accepts). Estimate = the PDF's expectation; standard uncertainty = its standard
         deviation, except for a scaled-and-shifted t (a Type A evaluation, JCGM 101
         §6.4.9), where the GUM's ``u = s/√n`` (the ``scale``) is used with ``ν = df``.
-    p : float, default 0.95
+    p : float, default 0.95, keyword-only
         Coverage probability.
 
     Returns
@@ -675,7 +677,8 @@ def _component_name(items: list[_Input], offsets: list[int], j: int) -> str:
 
 def validate(
     gum_result: GumResult,
-    mc_result: Any,
+    mc_result: MonteCarloResult,
+    *,
     p: float = 0.95,
     ndig: int = 2,
     kind: Literal["symmetric", "shortest"] = "symmetric",
@@ -696,12 +699,12 @@ def validate(
         From :func:`gum`, scalar output.
     mc_result : MonteCarloResult
         From :func:`mtmc.monte_carlo` for the same model and inputs.
-    p : float, default 0.95
+    p : float, default 0.95, keyword-only
         Coverage probability; ``k_p`` is recomputed from ``gum_result.dof`` when it
         differs from ``gum_result.p``.
-    ndig : int, default 2
+    ndig : int, default 2, keyword-only
         Significant digits of ``u(y)`` regarded as meaningful.
-    kind : {"symmetric", "shortest"}, default "symmetric"
+    kind : {"symmetric", "shortest"}, default "symmetric", keyword-only
         Monte Carlo interval compared: probabilistically symmetric (the default), or
         shortest (as JCGM 101 Table 8 does for the mass calibration of §9.3).
 

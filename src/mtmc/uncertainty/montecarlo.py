@@ -23,9 +23,10 @@ import math
 import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, overload
 
 import numpy as np
+import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
@@ -504,6 +505,58 @@ def _check_names(value: Any, field: str, allowed: tuple[Any, ...]) -> Any:
     return names
 
 
+@overload
+def monte_carlo(
+    model: Callable[..., Mapping[str, npt.ArrayLike]],
+    inputs: Mapping[str, Any],
+    trials: int | None = None,
+    seed: int | np.random.SeedSequence | None = None,
+    *,
+    adaptive: bool = False,
+    tolerance: float | None = None,
+    ndig: int = 2,
+    p: float = 0.95,
+    block_size: int = DEFAULT_BLOCK_SIZE,
+    workers: int = 1,
+    normal_method: NormalMethod = "default",
+    nan_policy: NanPolicy = "raise",
+    kind: Literal["symmetric", "shortest"] = "symmetric",
+    max_trials: int = 10**8,
+    executor: ExecutorKind | Any = "thread",
+    scheduler: Any = None,
+    progress: ProgressFn | None = None,
+    keep: bool | Literal["auto"] | Iterable[str] = "auto",
+    sketch: bool | Iterable[str] | None = None,
+    sampling: Sampling = "random",
+) -> MonteCarloResults: ...
+
+
+@overload
+def monte_carlo(
+    model: Callable[..., npt.ArrayLike],
+    inputs: Mapping[str, Any],
+    trials: int | None = None,
+    seed: int | np.random.SeedSequence | None = None,
+    *,
+    adaptive: bool = False,
+    tolerance: float | None = None,
+    ndig: int = 2,
+    p: float = 0.95,
+    block_size: int = DEFAULT_BLOCK_SIZE,
+    workers: int = 1,
+    normal_method: NormalMethod = "default",
+    nan_policy: NanPolicy = "raise",
+    kind: Literal["symmetric", "shortest"] = "symmetric",
+    max_trials: int = 10**8,
+    executor: ExecutorKind | Any = "thread",
+    scheduler: Any = None,
+    progress: ProgressFn | None = None,
+    keep: bool | Literal["auto"] | Iterable[str] = "auto",
+    sketch: bool | Iterable[str] | None = None,
+    sampling: Sampling = "random",
+) -> MonteCarloResult: ...
+
+
 def monte_carlo(
     model: Callable[..., Any],
     inputs: Mapping[str, Any],
@@ -526,7 +579,7 @@ def monte_carlo(
     keep: bool | Literal["auto"] | Iterable[str] = "auto",
     sketch: bool | Iterable[str] | None = None,
     sampling: Sampling = "random",
-) -> Any:
+) -> MonteCarloResult | MonteCarloResults:
     """Propagate the input distributions through a vectorised model (JCGM 101 §7).
 
     The one Monte Carlo engine of mtmc: an expression, a measurement graph, a
@@ -624,6 +677,11 @@ def monte_carlo(
         in trial order, with the seed, number of trials and, for an adaptive run, the
         number of blocks and the tolerance met). For named outputs: a
         :class:`MonteCarloResults` mapping each name to its :class:`MonteCarloResult`.
+        The type follows from what the model returns, and so does the static type: a
+        model annotated to return a ``Mapping`` gives ``MonteCarloResults``, one
+        annotated to return an array ``MonteCarloResult``; for a model whose return type
+        is not known (an unannotated function or ``lambda``) a type checker cannot tell
+        which, and the call is of either type.
 
     Raises
     ------
