@@ -161,6 +161,31 @@ def test_sweep_is_the_library_sweep_with_its_surrogate(results):
     assert len(results["bcs_origin"].tables[0].rows) == 25
 
 
+def test_convergence_movement_over_the_last_half_against_direct_std(results):
+    r = results["mass_calibration"]
+    q = r.quantity("dm")
+    cv = q.convergence
+    # an independent recomputation: the standard deviation of the first m values for
+    # every m of the curve in the last half, from the model values of the same run
+    model = expression("(m_rc + dm_rc) * (1 + (rho_a - 1.2) * (1 / rho_w - 1 / rho_r)) - 100000")
+    inputs = {
+        "m_rc": "normal(100000.000, 0.050)",
+        "dm_rc": "normal(1.234, 0.020)",
+        "rho_a": "uniform(1.10, 1.30)",
+        "rho_w": "uniform(7000, 9000)",
+        "rho_r": "uniform(7950, 8050)",
+    }
+    y = np.asarray(monte_carlo(model, inputs, trials=M, seed=SEED).samples)
+    ms = [m for m in cv["m"] if m >= M / 2]
+    u = [y[:m].std(ddof=1) for m in ms]
+    e = [y[:m].mean() for m in ms]
+    assert cv["last_half"]["u"] == pytest.approx(max(u) - min(u), rel=1e-6, abs=1e-12)
+    assert cv["last_half"]["estimate"] == pytest.approx(max(e) - min(e), rel=1e-6, abs=1e-12)
+    # u = 0.075 mg: two significant digits give δ = 0.0005 mg (JCGM 101 §7.9.2)
+    assert cv["delta"] == 0.0005
+    assert cv["ndig"] == 2
+
+
 def test_convergence_against_direct_means():
     x = np.random.default_rng(1).normal(3.0, 0.1, 5000)
     m, est, u = convergence(x, points=7)

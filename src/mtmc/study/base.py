@@ -28,7 +28,7 @@ from mtmc.study.spec import RunSettings, Source
 from mtmc.uncertainty.gum import GumResult, validate
 from mtmc.uncertainty.results import MonteCarloResult
 from mtmc.uncertainty.sampling import resolve_seed
-from mtmc.uncertainty.tolerance import round_to_uncertainty
+from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
 
 __all__ = [
     "RESULT_FORMAT",
@@ -193,7 +193,10 @@ class Quantity:
     histogram : dict
         ``edges`` and ``density`` of the Monte Carlo values.
     convergence : dict
-        ``m``, ``estimate``, ``u`` from the first ``m`` trials.
+        ``m``, ``estimate``, ``u`` from the first ``m`` trials; ``last_half``: how far
+        the estimate and ``u`` move (max - min) over ``m >= M/2``; ``delta``: the
+        numerical tolerance of ``u`` to ``ndig`` significant digits (JCGM 101 §7.9.2;
+        None where ``u = 0``), the scale to read those moves against.
     reported : dict
         ``estimate`` and ``U`` as text, rounded as JCGM 100 §7.2.6 says (two significant
         digits on ``U``, the estimate to the same decimal place).
@@ -318,6 +321,7 @@ def quantity(
             )
     hist = mc.histogram(bins=HISTOGRAM_BINS)
     m, est, us = convergence(np.asarray(mc.samples))
+    late = m >= m[-1] / 2  # the curves over the last half of the trials
     if big_u > 0:
         y_txt, u_txt = round_to_uncertainty(mc.estimate, big_u, settings.ndig)
     else:
@@ -330,7 +334,14 @@ def quantity(
         validation=val_d,
         budget=tuple(budget),
         histogram={"edges": hist.edges, "density": hist.density},
-        convergence={"m": m, "estimate": est, "u": us},
+        convergence={
+            "m": m,
+            "estimate": est,
+            "u": us,
+            "last_half": {"estimate": float(np.ptp(est[late])), "u": float(np.ptp(us[late]))},
+            "delta": numerical_tolerance(u, settings.ndig) if 0 < u < math.inf else None,
+            "ndig": settings.ndig,
+        },
         reported={"estimate": y_txt, "U": u_txt},
     )
 
