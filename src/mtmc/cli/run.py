@@ -135,7 +135,7 @@ def demo_cmd(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
 ) -> None:
-    """Run the shipped studies into OUT and write OUT/index.html linking their reports."""
+    """Run the shipped studies into OUTDIR and write OUTDIR/index.html linking their reports."""
     from mtmc.demo import run_demo
 
     if trials is not None and trials < 2:
