@@ -116,6 +116,27 @@ def test_frozen_graph_plan() -> None:
         plan.producer["zz"] = "t"  # type: ignore[index]
 
 
+def test_frozen_graph_result_and_place_summaries() -> None:
+    from pathlib import Path
+
+    from mtmc.graph import load_graph, run_graph
+
+    graph = Path(__file__).resolve().parents[1] / "examples" / "graphs" / "axis_c.toml"
+    r = run_graph(load_graph(graph), 50, seed=1, outputs=["axis_c", "p_c"], keep=["p_c", "axis_c"])
+    with pytest.raises(TypeError):
+        r.places["x"] = r.places["p_c"]  # type: ignore[index]
+    with pytest.raises(TypeError):
+        r.samples["x"] = np.zeros(3)  # type: ignore[index]
+    with pytest.raises(TypeError):
+        r.types["x"] = "point"  # type: ignore[index]
+    _writes_refused(r.samples["p_c"], r.samples["axis_c"].direction)
+    for s in r.places.values():
+        _writes_refused(s.estimate_vector, s.u_vector, s.cov)
+        for part in s.parts:
+            pr = s.part(part)
+            _writes_refused(pr.estimate_vector, pr.u_vector, pr.cov, pr.values)
+
+
 def test_frozen_objects_pickle_and_stay_frozen() -> None:
     import pickle
 

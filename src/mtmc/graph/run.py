@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.errors import GraphError, InputError, MtmcError
+from mtmc.frozen import frozen_array, frozen_mapping
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 from mtmc.graph import probe as _probe
 from mtmc.graph.model import Graph, Plan, check
@@ -340,19 +341,31 @@ class GraphResult:
         Number of trials M.
     seed : int
         The seed that reproduces the run.
-    places : dict of str to PlaceSummary
+    places : mapping of str to PlaceSummary
         Estimate and covariance of each summarised place.
-    samples : dict of str to value
+    samples : mapping of str to value
         All M samples of each kept place (``(M,)``, ``(M, 3)``, a primitive or ``(M, 4, 4)``).
-    types : dict of str to str
+    types : mapping of str to str
         The type of every place of the graph.
+
+    The mappings are read-only, and so are the arrays of the samples (copied when given
+    writable).
     """
 
     trials: int
     seed: int
-    places: dict[str, PlaceSummary]
-    samples: dict[str, Any] = field(default_factory=dict)
-    types: dict[str, str] = field(default_factory=dict)
+    places: Mapping[str, PlaceSummary]
+    samples: Mapping[str, Any] = field(default_factory=dict)
+    types: Mapping[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        samples = {
+            k: frozen_array(v) if isinstance(v, np.ndarray) and v.flags.writeable else v
+            for k, v in self.samples.items()
+        }
+        object.__setattr__(self, "places", frozen_mapping(dict(self.places)))
+        object.__setattr__(self, "samples", frozen_mapping(samples))
+        object.__setattr__(self, "types", frozen_mapping(dict(self.types)))
 
     def result(self, name: str) -> MonteCarloResult:
         """The JCGM 101 result of a kept place (its samples, flattened as :func:`flatten`).
@@ -799,9 +812,16 @@ def run_graph(
         msg = exc.message.replace("output '", "place '")
         raise InputError(msg, file=plan.graph.file, field="place") from None
     places = {n: PlaceSummary(n, plan.types[n], res[n]) for n in summ}
-    samples_out = {n: unflatten(plan.types[n], res[n].values) for n in keep_s}
+    samples_out = {n: _read_only(unflatten(plan.types[n], res[n].values)) for n in keep_s}
     assert res.seed is not None  # monte_carlo records the seed it drew
     return GraphResult(res.trials, res.seed, places, samples_out, dict(plan.types))
+
+
+def _read_only(value: Any) -> Any:
+    """A new array made read-only in place (no copy); a primitive (read-only already) as is."""
+    if isinstance(value, np.ndarray):
+        value.setflags(write=False)
+    return value
 
 
 def unflatten(type_: str, flat: NDArray[np.float64]) -> Any:
