@@ -35,9 +35,12 @@ from __future__ import annotations
 import concurrent.futures as cf
 import pickle
 from collections.abc import Callable, Iterable, Iterator
-from typing import Any, Literal, TypeVar
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 from mtmc.errors import InputError
+
+if TYPE_CHECKING:  # Dask is optional: imported by the functions that use it
+    from distributed import LocalCluster
 
 __all__ = ["WORKER_MALLOC_ENV", "ExecutorKind", "local_cluster", "map_blocks"]
 
@@ -72,7 +75,7 @@ def _import_distributed() -> Any:
     return distributed
 
 
-def local_cluster(workers: int = 2, **kwargs: Any) -> Any:
+def local_cluster(workers: int = 2, **kwargs: Any) -> LocalCluster:
     """Start a Dask ``LocalCluster`` of worker processes set up for Monte Carlo blocks.
 
     One single-threaded worker process per core, on the loopback interface, dashboard
@@ -114,7 +117,8 @@ def local_cluster(workers: int = 2, **kwargs: Any) -> Any:
     options.update(kwargs)
     env = {f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in WORKER_MALLOC_ENV.items()}
     with dask.config.set(env):
-        return distributed.LocalCluster(**options)
+        cluster: LocalCluster = distributed.LocalCluster(**options)
+    return cluster
 
 
 def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:
