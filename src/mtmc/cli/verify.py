@@ -207,6 +207,13 @@ def identify_cmd(
     as_json: bool = JSON_OPTION,
     export: str | None = typer.Option(None, "--export", help="isg, etalon or csv."),
     out: Path | None = typer.Option(None, "-o", "--output", help="The compensation file."),
+    self_cal: bool = typer.Option(
+        False,
+        "--self-calibrate",
+        help="Lengths per station: find the four or more stations' positions from the "
+        "lengths too (the study's positions only start the iteration); the tracker pose "
+        "is then identified.",
+    ),
 ) -> None:
     """Identify the error functions (and the tracker pose) from measured data."""
     import numpy as np
@@ -226,8 +233,10 @@ def identify_cmd(
 
         d = read_identification_csv(data, st.machine.axes, st.trackers)
         q = d.q
-        meas, lt = measured_points(d, st.machine, st.trackers, ver.tracker)
-        r = identify(st.model, q, meas, lt, pose=st.pose, fixed=st.fixed)
+        meas, lt = measured_points(
+            d, st.machine, st.trackers, ver.tracker, self_calibrated=self_cal
+        )
+        r = identify(st.model, q, meas, lt, pose=st.pose or self_cal, fixed=st.fixed)
         if export is not None and out is not None:
             grid = {ax: np.unique(q[:, i]) for i, ax in enumerate(st.machine.axes)}
             used = {st.machine.error_term(n).axis for n in st.model.error_names}
@@ -248,6 +257,7 @@ def identify_cmd(
         "points": int(q.shape[0]),
         "data": d.kind,
         "stations": list(d.stations),
+        "self_calibrated": self_cal,
         "status": r.messages()[0],
         "converged": bool(r.converged[0]),
         "iterations": int(r.iterations[0]),

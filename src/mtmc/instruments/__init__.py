@@ -14,6 +14,7 @@ from mtmc.instruments.laser_tracker import (
 from mtmc.instruments.multilateration import (
     Multilateration,
     datum_frame,
+    datum_pose,
     self_calibrate,
     trilaterate,
     trilateration_covariance,
@@ -31,6 +32,7 @@ __all__ = [
     "visibility",
     "Multilateration",
     "datum_frame",
+    "datum_pose",
     "self_calibrate",
     "trilaterate",
     "trilateration_covariance",

@@ -45,6 +45,7 @@ __all__ = [
     "trilaterate",
     "self_calibrate",
     "datum_frame",
+    "datum_pose",
     "trilateration_covariance",
 ]
 
@@ -94,6 +95,40 @@ def _lengths(d: npt.ArrayLike, S: int | None = None) -> _F:
     return a
 
 
+def datum_pose(stations: npt.ArrayLike) -> tuple[_F, _F]:
+    """The pose of the station datum frame of :func:`self_calibrate` in the stations' frame.
+
+    Parameters
+    ----------
+    stations : array_like, shape (S, 3), S >= 3
+        Station positions in some frame, mm.
+
+    Returns
+    -------
+    rotation : ndarray, shape (3, 3)
+        Columns: the datum axes in the given frame (``C_1 − C_0`` along x, ``C_2`` in
+        the xy plane with ``y > 0``).
+    origin : ndarray, shape (3,)
+        ``C_0``: a datum-frame point ``p`` is ``rotation @ p + origin`` in the given frame.
+
+    Raises
+    ------
+    InputError
+        If stations 0 and 1 coincide or the first three are collinear.
+    """
+    C = np.asarray(stations, dtype=np.float64)
+    ex = C[1] - C[0]
+    if np.linalg.norm(ex) == 0:
+        raise InputError("stations 0 and 1 coincide", field="stations")
+    ex = ex / np.linalg.norm(ex)
+    v = C[2] - C[0]
+    ez = np.cross(ex, v)
+    if np.linalg.norm(ez) < 1e-9 * np.linalg.norm(v):
+        raise InputError("the first three stations are collinear", field="stations")
+    ez /= np.linalg.norm(ez)
+    return np.stack([ex, np.cross(ez, ex), ez], axis=1), C[0].copy()
+
+
 def datum_frame(
     stations: npt.ArrayLike, points: npt.ArrayLike | None = None
 ) -> tuple[_F, _F | None]:
@@ -115,18 +150,9 @@ def datum_frame(
         If the first three stations are collinear.
     """
     C = np.asarray(stations, dtype=np.float64)
-    ex = C[1] - C[0]
-    if np.linalg.norm(ex) == 0:
-        raise InputError("stations 0 and 1 coincide", field="stations")
-    ex = ex / np.linalg.norm(ex)
-    v = C[2] - C[0]
-    ez = np.cross(ex, v)
-    if np.linalg.norm(ez) < 1e-9 * np.linalg.norm(v):
-        raise InputError("the first three stations are collinear", field="stations")
-    ez /= np.linalg.norm(ez)
-    R = np.stack([ex, np.cross(ez, ex), ez])  # rows: datum axes in the given frame
-    Cd = (C - C[0]) @ R.T
-    Pd = None if points is None else (np.asarray(points, dtype=np.float64) - C[0]) @ R.T
+    R, origin = datum_pose(C)  # columns: datum axes in the given frame
+    Cd = (C - origin) @ R
+    Pd = None if points is None else (np.asarray(points, dtype=np.float64) - origin) @ R
     return Cd, Pd
 
 

@@ -10,6 +10,10 @@ Two layouts, told apart by the header (``#`` lines and blank lines are skipped):
   follow from the lengths and the stations' positions by
   :func:`~mtmc.instruments.trilaterate` (started from the nominal tool positions, which
   settles the mirror ambiguity of three stations), in the machine's base frame.
+  With four or more stations the stations' positions can come from the same lengths
+  (``self_calibrate=True``, :func:`~mtmc.instruments.self_calibrate`): the study's
+  positions then only start the iteration, and the points are in the station datum frame,
+  whose nominal pose (from the study's positions) starts the identification's pose.
 
 Examples
 --------
@@ -31,7 +35,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import InputError
 from mtmc.instruments.laser_tracker import LaserTracker
-from mtmc.instruments.multilateration import trilaterate
+from mtmc.instruments.multilateration import datum_pose, self_calibrate, trilaterate
 from mtmc.kinematics.machine import Machine
 
 __all__ = [
@@ -173,27 +177,45 @@ def measured_points(
     machine: Machine,
     stations: Mapping[str, LaserTracker],
     tracker: LaserTracker,
+    *,
+    self_calibrated: bool = False,
 ) -> tuple[_F, LaserTracker]:
     """The measured points ``(N, 3)`` and the nominal frame they are in.
 
     Coordinates are returned as read, with ``tracker`` (their tracker's nominal pose). From
     lengths, the points are multilaterated from the stations' positions (base frame) and
     returned with the identity pose: the identification's pose then absorbs the small
-    rigid motion between the stations' frame and the machine's.
+    rigid motion between the stations' frame and the machine's. With
+    ``self_calibrated``, the stations' positions are found from the lengths too (four or
+    more stations): the points come in the station datum frame, returned with that
+    frame's nominal pose, which the identification's pose corrects.
 
     Raises
     ------
     InputError
-        If the multilateration does not converge.
+        If the multilateration does not converge, or ``self_calibrated`` is asked of
+        coordinates or of fewer than four stations.
     """
     if data.kind == "coordinates":
+        if self_calibrated:
+            raise InputError(
+                "self-calibration needs lengths per station (L_NAME columns), "
+                "the data are tracker coordinates",
+                field="self_calibrate",
+            )
         return data.readings, tracker
     C = np.array([stations[n].position for n in data.stations])
     start = machine.tool_position(data.q)
-    r = trilaterate(C, data.readings.T[None], points0=start)
+    if self_calibrated:
+        r = self_calibrate(data.readings.T[None], C, points0=start)
+        R, origin = datum_pose(C)
+        frame = LaserTracker(R, origin, name="station datum (self-calibrated)")
+    else:
+        r = trilaterate(C, data.readings.T[None], points0=start)
+        frame = LaserTracker(np.eye(3), np.zeros(3), name="stations")
     if not bool(r.converged[0]):
         raise InputError(
             f"the multilateration from {len(data.stations)} stations did not converge",
             field="lengths",
         )
-    return np.array(r.points[0]), LaserTracker(np.eye(3), np.zeros(3), name="stations")
+    return np.array(r.points[0]), frame
