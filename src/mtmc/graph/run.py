@@ -7,9 +7,11 @@ transition once, in the firing order of :func:`mtmc.graph.check`, on the whole b
 There is no loop over trials: a block of ``m`` trials is a handful of array operations
 per transition. The numbers depend only on the seed, not on the block size.
 
-Per place the run keeps running sums (of the deviations from the first block's mean and
-of their outer products), so a run of 10^6 trials needs the memory of one block; the
-samples of the places named in ``keep`` are kept whole.
+The graph is compiled once into a :class:`GraphModel` that the engine,
+:func:`mtmc.uncertainty.monte_carlo`, evaluates block by block like any model. Per place
+it keeps the moments of fixed seed blocks of trials merged in trial order, so a run of
+10^6 trials needs the memory of one block; the samples of the places named in ``keep``
+are kept whole. Each place's result is a :class:`PlaceSummary`.
 
 Units: lengths in mm (a graph in µm is converted on reading its numbers), angles in rad.
 """
