@@ -59,6 +59,18 @@ def test_numbers_do_not_depend_on_blocks_workers_or_input_order():
     np.testing.assert_array_equal(r.samples, x["x1"] + x["x2"])
 
 
+def test_short_run_maps_a_prefix_of_the_point_set_with_the_same_numbers():
+    # a run of fewer trials than a seed block maps only the first 2^j points of it; the
+    # numbers are those of the whole block, whatever the evaluation blocks
+    whole = sample_inputs(INPUTS, SEED_BLOCK_SIZE, 9, sampling="sobol")
+    u = sobol_points(9, 0, 2, SEED_BLOCK_SIZE)
+    np.testing.assert_array_equal(whole["x1"], INPUTS["x1"].ppf(u[:, 0]))
+    for m in (2, 16, 100, 3000):
+        r = monte_carlo(SUM, INPUTS, m, seed=9, sampling="sobol", block_size=37)
+        np.testing.assert_array_equal(r.samples, (whole["x1"] + whole["x2"])[:m])
+        np.testing.assert_array_equal(sobol_points(9, 0, 2, 64), u[:64])
+
+
 def test_error_of_u_far_below_pseudo_random():
     # u = sqrt(1.25): over 8 seeds of one seed block each, the RQMC error of u stays
     # below 1/20 of the pseudo-random standard error u / sqrt(2M)

@@ -405,28 +405,40 @@ class _BlockSource:
             self.block_trials = n
             self.sizes = {name: n for name in dists}
             self.caching = True  # the inputs of a seed block come from one point set
+            # scalar inputs are mapped value by value: the first 2^j points of a block give
+            # the first 2^j numbers of every input, so a short run makes only those
+            self.prefix = all(d.dim == 0 for d in dists.values())
         else:
             self.sizes = {n: seed_block_trials(d.dim) for n, d in dists.items()}
             width = {n: max(1, d.dim) for n, d in dists.items()}
             self.caching = sum(self.sizes[n] * width[n] for n in dists) * 8 <= CACHE_BYTES
         self.cached: dict[str, tuple[int, NDArray[np.float64]]] = {}
 
-    def _sobol_block(self, k: int) -> None:
-        """Map the points of seed block ``k`` to every input (cached)."""
-        n = next(iter(self.sizes.values()))
+    def _sobol_block(self, k: int, need: int) -> None:
+        """Map the points of seed block ``k`` to every input (cached).
+
+        Only the first ``2^j >= need`` points where the inputs are scalars (the same
+        numbers as those of the whole block: a Sobol point set's first ``2^j`` points do
+        not depend on how many follow, and the inverse CDFs act value by value), so that
+        a run of a few hundred trials does not scramble and map 2¹⁴ points.
+        """
+        n = self.block_trials
+        if self.prefix:
+            n = min(n, 1 << max(0, need - 1).bit_length())
         u = sobol_points(self.seed, k, self.dims, n)
         for name, (first, count) in self.layout.items():
             arr = self.dists[name].from_uniform(u[:, first : first + count])
             arr.setflags(write=False)
             self.cached[name] = (k, arr)
 
-    def block(self, name: str, k: int) -> NDArray[np.float64]:
-        """Seed block ``k`` of input ``name`` (read-only)."""
+    def block(self, name: str, k: int, need: int | None = None) -> NDArray[np.float64]:
+        """Seed block ``k`` of input ``name`` (read-only), or at least its first ``need`` trials."""
+        want = self.sizes[name] if need is None else need
         hit = self.cached.get(name)
-        if hit is not None and hit[0] == k:
+        if hit is not None and hit[0] == k and hit[1].shape[0] >= want:
             return hit[1]
         if self.sampling == "sobol":
-            self._sobol_block(k)
+            self._sobol_block(k, want)
             return self.cached[name][1]
         arr = self.dists[name].sample(
             input_generator(self.seed, k, name), self.sizes[name], normal_method=self.method
@@ -455,7 +467,7 @@ class _BlockSource:
             s = self.sizes[name]
             k0, k1 = start // s, (stop - 1) // s
             if k0 == k1 and self.caching:  # inside one seed block: a view, no copy
-                out[name] = self.block(name, k0)[start - k0 * s : stop - k0 * s]
+                out[name] = self.block(name, k0, stop - k0 * s)[start - k0 * s : stop - k0 * s]
                 continue
             arr = np.empty((stop - start, *((d.dim,) if d.dim else ())))
             self.fill_one(name, arr, start, stop, offset=start)
@@ -469,7 +481,9 @@ class _BlockSource:
         s = self.sizes[name]
         for k in range(start // s, (stop - 1) // s + 1):
             lo, hi = max(start, k * s), min(stop, (k + 1) * s)
-            out[lo - offset : hi - offset] = self.block(name, k)[lo - k * s : hi - k * s]
+            out[lo - offset : hi - offset] = self.block(name, k, hi - k * s)[
+                lo - k * s : hi - k * s
+            ]
 
     def fill(self, out: dict[str, NDArray[np.float64]], start: int, stop: int, offset: int) -> None:
         if self.sampling == "sobol":  # seed block by seed block: one point set each
