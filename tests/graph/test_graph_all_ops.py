@@ -77,7 +77,7 @@ def build() -> str:
     pts = dict(POINTS, E=(10, 10, 0))
     for name, v in pts.items():
         out.append(f'[[place]]\nname = "{name}"\ntype = "point"\nvalue = {list(map(float, v))}\n')
-    out.append('[[place]]\nname = "ez"\ntype = "unit"\nvalue = [0.0, 0.0, 1.0]\n')
+    out.append('[[place]]\nname = "ez"\ntype = "direction"\nvalue = [0.0, 0.0, 1.0]\n')
     out.append('[[place]]\nname = "two"\ntype = "real"\nvalue = 2.0\nunit = "1"\n')
     out.append('[[place]]\nname = "three"\ntype = "real"\nvalue = 3.0\n')
     for i, (op, ins, o, _) in enumerate(STEPS):

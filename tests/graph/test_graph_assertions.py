@@ -105,6 +105,12 @@ def test_export_import_keeps_the_graph_and_its_numbers(name, tmp_path):
             1,
             "unknown type 'q'",
         ),
+        (
+            "p(1, 0, 0, „v”, 0, 0, 1). p(2, 0, 0, „unit”, 0, 0, 1).\nm(1). m(2).",
+            GraphError,
+            1,
+            'the place type "unit" is now called "direction"',
+        ),
     ],
 )
 def test_errors(text, error, line, message):
@@ -117,3 +123,15 @@ def test_errors(text, error, line, message):
 def test_missing_file(tmp_path):
     with pytest.raises(GraphError, match="cannot read"):
         load_assertions(tmp_path / "none.pl")
+
+
+def test_type_code_v_is_a_direction_and_exports_as_v():
+    text = (
+        "p(1, 0, 0, „v”, 0, 0, 1). p(2, 0, 0, „p”, 1, 2, 3). p(3, 0, 0, „line”, 0, 0, 0).\n"
+        "t(1, 0, 0, aline). pt(2, 1). pt(1, 1). tp(1, 3). m(1). m(2)."
+    )
+    g = loads_assertions(text)
+    assert g.places[0].type == "direction"
+    assert check_graph(g).types["p3"] == "line"
+    again = loads_assertions(dumps_assertions(g))
+    assert again.places == g.places

@@ -1,10 +1,12 @@
-"""``dist`` on places and probings: the law, its scaling from the file's units, unit places.
+"""``dist`` on places and probings: the law, its scaling from the file's units, direction
+places.
 
 References: the standard deviation of a uniform law, ``a/√3`` for ``uniform(-a, a)``; the
 same graph written in mm and in µm (``units = "um"``, every length ×1000) gives the same
-numbers in mm to rounding; a ``unit`` place drawn as ``(e1, e2, 1 + e3)`` with
-``e ~ N(0, σ²)`` and renormalised has ``E[z] = 1 - σ² + O(σ⁴)`` and ``u(z) = σ² + O(σ⁴)``
-(to second order ``z = 1 - σ²(z1² + z2²)/2``, half a χ² with 2 degrees of freedom).
+numbers in mm to rounding; a ``direction`` place (a unit vector) drawn as
+``(e1, e2, 1 + e3)`` with ``e ~ N(0, σ²)`` and renormalised has ``E[z] = 1 - σ² + O(σ⁴)``
+and ``u(z) = σ² + O(σ⁴)`` (to second order ``z = 1 - σ²(z1² + z2²)/2``, half a χ² with 2
+degrees of freedom).
 """
 
 from __future__ import annotations
@@ -21,14 +23,14 @@ SIGMA = 0.05
 
 
 def _graph(units: str, s: float) -> str:
-    """A place with a ``dist``, a probing with a ``dist``, a random unit vector; lengths ×s."""
+    """A place with a ``dist``, a probing with a ``dist``, a random direction; lengths ×s."""
     text = f'units = "{units}"\n[probe]\nu_axis = 0.0\nu_probe = 0.0\nu_perp = 0.0\n'
     text += (
         f'[[place]]\nname = "a"\ntype = "real"\nvalue = {10 * s}\n'
         f'dist = "uniform({-1 * s}, {1 * s})"\n'
     )
     text += (
-        '[[place]]\nname = "n"\ntype = "unit"\nvalue = [0.0, 0.0, 1.0]\n'
+        '[[place]]\nname = "n"\ntype = "direction"\nvalue = [0.0, 0.0, 1.0]\n'
         f'dist = "normal(0, {SIGMA})"\n'
     )
     return text + (
@@ -63,7 +65,7 @@ def test_a_um_file_scales_place_and_probe_dist_to_mm(runs):
     assert um.places["a"].u == pytest.approx(1 / math.sqrt(3), rel=0.05)  # in mm, not µm
 
 
-def test_random_unit_places_are_renormalised(runs):
+def test_random_direction_places_are_renormalised(runs):
     n = runs["mm"].places["n"]
     s2 = SIGMA**2
     assert n.estimate_vector[2] == pytest.approx(1 - s2, abs=4 * s2 / math.sqrt(M) + 2 * s2**2)

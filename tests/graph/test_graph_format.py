@@ -205,3 +205,39 @@ def test_not_toml():
 def test_missing_file(tmp_path):
     with pytest.raises(GraphError, match="cannot read"):
         load_graph(tmp_path / "nope.toml")
+
+
+def test_the_former_place_type_unit_is_refused_with_its_new_name(tmp_path):
+    """``type = "unit"`` (the former name of ``direction``): file, line, field, the new name."""
+    path = tmp_path / "old.toml"
+    path.write_text(
+        HEAD
+        + '\n[[place]]\nname = "n"\ntype = "unit"\nvalue = [0.0, 0.0, 1.0]\n'
+        + meas("m1", "a"),
+        encoding="utf-8",
+    )
+    with pytest.raises(GraphError) as exc:
+        load_graph(path)
+    assert exc.value.file == "old.toml"
+    assert exc.value.line == 7  # the line of the type key
+    assert exc.value.field == "type"
+    message = str(exc.value)
+    assert message.startswith("old.toml:7:")
+    assert 'the place type "unit" is now called "direction" (a unit vector)' in message
+    assert 'write type = "direction"' in message
+    with pytest.raises(GraphError, match='now called "direction"'):
+        Place("n", "unit", (0.0, 0.0, 1.0))
+
+
+def test_a_direction_place_and_unit_v_output_are_directions():
+    g = loads_graph(
+        HEAD
+        + '\n[[place]]\nname = "n"\ntype = "direction"\nvalue = [0.0, 0.0, 2.0]\n'
+        + '\n[[place]]\nname = "v"\ntype = "vector"\nvalue = [3.0, 0.0, 4.0]\n'
+        + '\n[[transition]]\nname = "t1"\nop = "unit_v"\nin = ["v"]\nout = "d"\n'
+        + '\n[[transition]]\nname = "t2"\nop = "angle"\nin = ["n", "d"]\nout = "a"\n'
+    )
+    plan = check_graph(g)
+    assert plan.types["n"] == plan.types["d"] == "direction"
+    assert plan.types["a"] == "real"
+    assert dumps_graph(g).count('type = "direction"') == 1

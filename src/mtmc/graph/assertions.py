@@ -15,7 +15,7 @@ assertion                           reading here
 ``m(p)``                            marker: ``p`` is marked from the start (M0)
 ==================================  ==================================================
 
-Type codes: ``"p"`` point, ``"v"`` unit (a directional versor ``I, J, K``), ``"d"``
+Type codes: ``"p"`` point, ``"v"`` direction (a directional versor ``I, J, K``), ``"d"``
 vector (the components of a section, ``d2``... of Stryczek, Fig. 10), ``"x"``, ``"y"``,
 ``"z"`` one coordinate, ``"r"`` real (``R_x, R_y, R_z``: ``R, 0, 0`` is the real ``R``;
 with ``R_y`` or ``R_z`` non-zero it is read as a vector, a displacement per coordinate).
@@ -64,7 +64,7 @@ __all__ = ["loads_assertions", "load_assertions", "dumps_assertions", "TYPE_CODE
 TYPE_CODES: Mapping[str, str] = MappingProxyType(
     {
         "p": "point",
-        "v": "unit",
+        "v": "direction",
         "d": "vector",
         "x": "x",
         "y": "y",

@@ -46,6 +46,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import ConditioningWarning, DegenerateGeometryError, GraphError, MtmcError
 from mtmc.graph.model import Plan, Step
+from mtmc.graph.places import VECTOR_TYPES
 
 __all__ = [
     "ANGLE_RTOL",
@@ -97,7 +98,7 @@ def _nominal_samples(plan: Plan) -> dict[str, Any]:
             continue
         mean = np.asarray(parse_distribution(p.dist).mean, dtype=np.float64)
         mean = np.where(np.isfinite(mean), mean, 0.0)
-        vec = p.type in ("point", "vector", "unit")
+        vec = p.type in VECTOR_TYPES
         flat = mean.reshape(-1)
         if vec and flat.size == 1:  # one scalar law, drawn for each coordinate
             flat = np.repeat(flat, 3)

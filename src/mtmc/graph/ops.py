@@ -326,19 +326,19 @@ def _vector(a: Any, b: Any) -> Any:
     return gc.vector(a, b)
 
 
-@variant("unit_v", ("vector",), "unit")
+@variant("unit_v", ("vector",), "direction")
 def _unit_v(v: Any) -> Any:
     """The unit vector of a vector."""
     return gc.unit_vector(v)
 
 
-@variant("unit_v", ("line",), "unit")
+@variant("unit_v", ("line",), "direction")
 def _unit_line(line: Line) -> Any:
     """The direction of a line (of an ``axis``: V_A, V_C of Stryczek, Fig. 13)."""
     return line.direction
 
 
-@variant("unit_v", ("plane",), "unit")
+@variant("unit_v", ("plane",), "direction")
 def _unit_plane(plane: Plane) -> Any:
     """The normal of a plane."""
     return plane.normal
@@ -350,10 +350,10 @@ def _displace_pv(p: Any, v: Any) -> Any:
     return gc.displace(p, v)
 
 
-@variant("displace", ("point", "unit", "real"), "point")
+@variant("displace", ("point", "direction", "real"), "point")
 def _displace_pur(p: Any, d: Any, r: Any) -> Any:
     """The point displaced by r along a unit vector, p + r d."""
-    return gc.displace(p, np.atleast_1d(r)[:, None] * d)  # d is a unit place: no rescaling
+    return gc.displace(p, np.atleast_1d(r)[:, None] * d)  # d is a direction place: no rescaling
 
 
 def _scalar_sum(a: Any, b: Any) -> Any:
@@ -402,8 +402,8 @@ def _angle(u: Any, v: Any) -> Any:
     return gc.angle_between(u, v)
 
 
-for _a in ("vector", "unit"):
-    for _b in ("vector", "unit"):
+for _a in ("vector", "direction"):
+    for _b in ("vector", "direction"):
         register(
             Variant("angle", (_a, _b), "real", _angle, doc="the angle between two directions, rad")
         )
@@ -424,13 +424,13 @@ def _line_planes(p1: Plane, p2: Plane) -> Any:
     return gc.line_from_planes(p1, p2)
 
 
-@variant("line", ("point", "unit"), "line")
+@variant("line", ("point", "direction"), "line")
 def _line_pu(p: Any, d: Any) -> Any:
     """The line through a point along a unit vector."""
     return gc.line_from_point_direction(p, d)
 
 
-@variant("aline", ("point", "unit"), "line")
+@variant("aline", ("point", "direction"), "line")
 def _aline(p: Any, d: Any) -> Any:
     """The line through a point along a unit vector (an axis)."""
     return gc.line_from_point_direction(p, d)
@@ -442,7 +442,7 @@ def _plane_3(a: Any, b: Any, c: Any) -> Any:
     return gc.plane_from_points(a, b, c)
 
 
-@variant("plane", ("point", "unit"), "plane")
+@variant("plane", ("point", "direction"), "plane")
 def _plane_pn(p: Any, n: Any) -> Any:
     """The plane through a point with a unit normal."""
     return gc.plane_from_point_normal(p, n)

@@ -23,6 +23,7 @@ __all__ = [
     "PLACE_TYPES",
     "COORDINATE_TYPES",
     "VALUE_TYPES",
+    "VECTOR_TYPES",
     "PLACE_UNITS",
     "MAX_MAGNITUDE",
     "finite_number",
@@ -32,8 +33,9 @@ __all__ = [
 ]
 
 #: The typed places of the graph. ``x``, ``y``, ``z``: one measured coordinate;
-#: ``real``: a scalar; ``point``, ``vector``, ``unit``: 3-vectors; ``line``, ``plane``,
-#: ``circle``, ``sphere``: derived features; ``frame``: a 4×4 homogeneous transform.
+#: ``real``: a scalar; ``point``, ``vector``: 3-vectors; ``direction``: a unit vector (a
+#: directional versor ``I, J, K`` of Stryczek); ``line``, ``plane``, ``circle``, ``sphere``:
+#: derived features; ``frame``: a 4×4 homogeneous transform.
 PLACE_TYPES: tuple[str, ...] = (
     "x",
     "y",
@@ -41,7 +43,7 @@ PLACE_TYPES: tuple[str, ...] = (
     "real",
     "point",
     "vector",
-    "unit",
+    "direction",
     "line",
     "plane",
     "circle",
@@ -51,7 +53,9 @@ PLACE_TYPES: tuple[str, ...] = (
 #: The coordinate types, whose value is one coordinate of a probed point.
 COORDINATE_TYPES: tuple[str, ...] = ("x", "y", "z")
 #: The types a place may carry a value for (the others are built by transitions).
-VALUE_TYPES: tuple[str, ...] = ("x", "y", "z", "real", "point", "vector", "unit")
+VALUE_TYPES: tuple[str, ...] = ("x", "y", "z", "real", "point", "vector", "direction")
+#: The types whose value is a 3-vector ``(x, y, z)``.
+VECTOR_TYPES: tuple[str, ...] = ("point", "vector", "direction")
 #: Units a place may declare: ``None`` (a length in the file's units), ``"1"``
 #: (dimensionless), or an angle (``"rad"``, ``"deg"``).
 PLACE_UNITS: tuple[str, ...] = ("1", "rad", "deg")
@@ -139,12 +143,13 @@ class Place:
         One of :data:`PLACE_TYPES`.
     value : float or tuple of 3 floats, optional
         Nominal value (scalar for ``x``/``y``/``z``/``real``, 3 numbers for ``point``,
-        ``vector``, ``unit``). In the file's length unit, or in ``unit``.
+        ``vector``, ``direction``). In the file's length unit, or in ``unit``.
     u : float or tuple of 3 floats, optional
         Standard uncertainty: the place is ``value + N(0, u²)`` (each coordinate
-        independently for 3-vectors). A ``point``, ``vector`` or ``unit`` place may give
-        one per coordinate, ``(u_x, u_y, u_z)``, as Stryczek's point place does (Table 1);
-        :meth:`coordinate_u` gives the three in either case. Requires ``value``.
+        independently for 3-vectors; a ``direction`` is renormalised). A ``point``,
+        ``vector`` or ``direction`` place may give one per coordinate, ``(u_x, u_y, u_z)``,
+        as Stryczek's point place does (Table 1); :meth:`coordinate_u` gives the three in
+        either case. Requires ``value``.
     dist : str, optional
         A distribution (``"uniform(-1e-3, 1e-3)"``) of the deviation added to ``value``
         (``value`` defaults to 0, so without it ``dist`` is the quantity itself).
@@ -159,7 +164,9 @@ class Place:
     Raises
     ------
     GraphError
-        On an unknown type, a malformed value, a negative ``u``, or ``u`` with ``dist``.
+        On an unknown type (``"unit"``, the former name of ``direction``, is refused
+        with a message saying so), a malformed value, a negative ``u``, or ``u`` with
+        ``dist``.
     """
 
     name: str
@@ -175,6 +182,13 @@ class Place:
     def __post_init__(self) -> None:
         _check_name(self.name, "place", self.line)
         what = f"place {self.name}"
+        if self.type == "unit":
+            raise GraphError(
+                f'{what}: the place type "unit" is now called "direction" (a unit vector); '
+                'write type = "direction"',
+                line=self.line,
+                field="type",
+            )
         if self.type not in PLACE_TYPES:
             raise GraphError(
                 f"{what}: unknown type {self.type!r}; expected one of {', '.join(PLACE_TYPES)}",
@@ -195,11 +209,13 @@ class Place:
 
     def _check_value(self, what: str) -> None:
         if self.value is not None:
-            if self.type in ("point", "vector", "unit"):
+            if self.type in VECTOR_TYPES:
                 vec = _vector3(self.value, what, "value", self.line)
-                if self.type == "unit" and math.hypot(*vec) == 0.0:
+                if self.type == "direction" and math.hypot(*vec) == 0.0:
                     raise GraphError(
-                        f"{what}: a unit vector cannot be zero", line=self.line, field="value"
+                        f"{what}: a direction (a unit vector) cannot be zero",
+                        line=self.line,
+                        field="value",
                     )
                 object.__setattr__(self, "value", vec)
             else:
@@ -209,9 +225,9 @@ class Place:
         if self.u is not None:
             u: float | tuple[float, ...]
             if isinstance(self.u, list | tuple):
-                if self.type not in ("point", "vector", "unit"):
+                if self.type not in VECTOR_TYPES:
                     raise GraphError(
-                        f"{what}: one u per coordinate needs a point, vector or unit place; "
+                        f"{what}: one u per coordinate needs a point, vector or direction place; "
                         f"a {self.type} place takes one number",
                         line=self.line,
                         field="u",

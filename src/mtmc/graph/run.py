@@ -32,7 +32,7 @@ from mtmc.frozen import frozen_array, frozen_mapping
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 from mtmc.graph import probe as _probe
 from mtmc.graph.model import Graph, Plan, check
-from mtmc.graph.places import Place
+from mtmc.graph.places import VECTOR_TYPES, Place
 from mtmc.parallel import ExecutorKind
 from mtmc.uncertainty.distributions import (
     Constant,
@@ -73,7 +73,7 @@ PARTS: dict[str, tuple[tuple[str, int], ...]] = {
     "real": (("value", 1),),
     "point": (("value", 3),),
     "vector": (("value", 3),),
-    "unit": (("value", 3),),
+    "direction": (("value", 3),),
     "line": (("point", 3), ("direction", 3)),
     "plane": (("point", 3), ("normal", 3)),
     "circle": (("centre", 3), ("normal", 3), ("radius", 1)),
@@ -99,7 +99,7 @@ def flatten(type_: str, value: Any, m: int) -> NDArray[np.float64]:
     ndarray, shape (m, k)
         A new array (never a view of ``value``; stored component by component, so it
         is the transpose of a C-contiguous ``(k, m)`` array). ``k`` = 1 (scalar), 3
-        (point, vector, unit), 6 (line: point, direction; plane: point, normal), 7
+        (point, vector, direction), 6 (line: point, direction; plane: point, normal), 7
         (circle: centre, normal, radius), 4 (sphere: centre, radius), 12 (frame:
         rotation row by row, translation).
     """
@@ -110,7 +110,7 @@ def _cols(type_: str, value: Any, m: int) -> list[Any]:
     """The parts of a place value as ``(m, j)`` arrays (or batches of one)."""
     if type_ in ("x", "y", "z", "real"):
         cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1), (m,))[:, None]]
-    elif type_ in ("point", "vector", "unit"):
+    elif type_ in VECTOR_TYPES:
         cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1, 3), (m, 3))]
     elif isinstance(value, Line):
         cols = [value.point, value.direction]
@@ -146,7 +146,7 @@ class PlaceSummary:
     :class:`~mtmc.uncertainty.results.MonteCarloResult`: the arrays ``estimate_vector``,
     ``u_vector`` ``(k,)`` and ``cov`` ``(k, k)`` hold the ``k`` components of the place
     in the layout of :func:`flatten` (``k`` = 1 for x, y, z, real; 3 for point, vector,
-    unit; 6 for line and plane; 7 for circle; 4 for sphere; 12 for frame), read-only;
+    direction; 6 for line and plane; 7 for circle; 4 for sphere; 12 for frame), read-only;
     ``estimate`` and ``u`` are the floats of a scalar place (x, y, z, real) and raise an
     :class:`~mtmc.errors.InputError` for any other; :meth:`part` gives one named part
     as its own :class:`~mtmc.uncertainty.results.MonteCarloResult`.
@@ -190,7 +190,7 @@ class PlaceSummary:
     def parts(self) -> tuple[str, ...]:
         """The names of the place's parts, in the layout of :func:`flatten`.
 
-        ``("value",)`` for x, y, z, real, point, vector and unit places; ``("point",
+        ``("value",)`` for x, y, z, real, point, vector and direction places; ``("point",
         "direction")`` for a line, ``("point", "normal")`` for a plane, ``("centre",
         "normal", "radius")`` for a circle, ``("centre", "radius")`` for a sphere,
         ``("rotation", "translation")`` for a frame.
@@ -256,7 +256,7 @@ class PlaceSummary:
         Parameters
         ----------
         name : str
-            One of :attr:`parts` (``"value"`` for x, y, z, real, point, vector, unit).
+            One of :attr:`parts` (``"value"`` for x, y, z, real, point, vector, direction).
 
         Returns
         -------
@@ -290,7 +290,7 @@ class PlaceSummary:
         -------
         dict
             ``type``, ``estimate``, ``u`` (a number for a scalar place; ``(3,)`` lists and
-            the ``(3, 3)`` ``cov`` for point, vector and unit places); for line, plane,
+            the ``(3, 3)`` ``cov`` for point, vector and direction places); for line, plane,
             circle, sphere and frame one ``{estimate, u}`` object per part (a number for
             ``radius``, ``(3, 3)`` for ``rotation``, ``(3,)`` otherwise).
         """
@@ -407,7 +407,7 @@ class GraphResult:
 
 
 def _place_factor(p: Place, factor: float) -> float:
-    if p.type == "unit" or p.unit == "1" or p.unit == "rad":
+    if p.type == "direction" or p.unit == "1" or p.unit == "rad":
         return 1.0
     if p.unit == "deg":
         return math.pi / 180.0
@@ -450,7 +450,7 @@ def random_inputs(plan: Plan) -> dict[str, Distribution]:
     out: dict[str, Distribution] = {}
     for p in g.places:
         f = _place_factor(p, g.factor)
-        vec = p.type in ("point", "vector", "unit")
+        vec = p.type in VECTOR_TYPES
         us = p.coordinate_u(f)
         if p.u is not None and np.any(us > 0):
             assert p.value is not None
@@ -477,7 +477,7 @@ def random_inputs(plan: Plan) -> dict[str, Distribution]:
 def _marked_value(p: Place, factor: float, samples: Mapping[str, Any]) -> Any:
     """The value of a marked place: ``(m,)``/``(m, 3)`` if random, a batch of one if constant."""
     f = _place_factor(p, factor)
-    vec = p.type in ("point", "vector", "unit")
+    vec = p.type in VECTOR_TYPES
     if vec:
         base = np.asarray(p.value if p.value is not None else (0.0, 0.0, 0.0)) * f
         if p.name + ".x" not in samples:
@@ -486,7 +486,7 @@ def _marked_value(p: Place, factor: float, samples: Mapping[str, Any]) -> Any:
         val = np.stack(cols, axis=1)
         if p.dist is not None:
             val = base + f * val
-        if p.type == "unit":
+        if p.type == "direction":
             val = val / np.linalg.norm(val, axis=1)[:, None]
         return val
     base_s = (p.value if isinstance(p.value, float) else 0.0) * f
@@ -839,14 +839,14 @@ def unflatten(type_: str, flat: NDArray[np.float64]) -> Any:
     Returns
     -------
     ndarray or primitive
-        ``(M,)`` for scalars, ``(M, 3)`` for points, vectors and unit vectors, a
+        ``(M,)`` for scalars, ``(M, 3)`` for points, vectors and directions, a
         Line/Plane/Circle/Sphere, or ``(M, 4, 4)`` frames.
     """
     x = np.asarray(flat, dtype=np.float64)
     x = x.reshape(x.shape[0], -1)
     if type_ in ("x", "y", "z", "real"):
         return x[:, 0].copy()
-    if type_ in ("point", "vector", "unit"):
+    if type_ in VECTOR_TYPES:
         return x.copy()
     if type_ == "line":
         return Line(x[:, 0:3], x[:, 3:6])

@@ -28,7 +28,7 @@ def _scalar_dimension(plan: Plan, name: str, seen: frozenset[str] = frozenset())
     type_ = plan.types[name]
     if type_ in ("x", "y", "z", "point"):
         return (1, 0)
-    if type_ == "unit":
+    if type_ == "direction":
         return (0, 0)
     place = plan.graph.place(name)
     if name not in plan.producer or name in seen:
@@ -63,14 +63,14 @@ def place_dimension(plan: Plan, name: str, part: str = "value") -> tuple[int, in
     name : str
         The place.
     part : str
-        ``"value"`` for x/y/z/real/vector/unit places, else a part of a compound place
+        ``"value"`` for x/y/z/real/point/vector/direction places, else a part of a compound place
         (``"point"``, ``"direction"``, ``"normal"``, ``"centre"``, ``"radius"``,
         ``"rotation"``, ``"translation"``).
 
     Returns
     -------
     tuple of int
-        ``(1, 0)`` a length, ``(0, 1)`` an angle, ``(0, 0)`` a number (a unit vector's
+        ``(1, 0)`` a length, ``(0, 1)`` an angle, ``(0, 0)`` a number (a direction's
         components), ``(2, 0)`` an area (a ratio of two lengths' product), and so on.
 
     Examples
