@@ -134,6 +134,9 @@ def test_self_calibrated_stations_give_the_coordinates_identification(
         assert a["residual_ve_um"][k] == pytest.approx(b["residual_ve_um"][k], rel=1e-6, abs=1e-9)
     # the stations' errors bend the lengths' geometry: the plain route leaves a residual
     assert plain["residual_ve_um"]["max"] > 10 * max(b["residual_ve_um"]["max"], 1e-3)
+    args = ["verify", "identify", str(tmp_path / "lengths.csv"), "--study", str(STUDY)]
+    assert main([*args, "--tracker", "pos4", "--self-calibrate"]) == 0
+    assert "lengths of 4 stations, positions self-calibrated" in capsys.readouterr().out
     assert worst_plain > 0
 
 

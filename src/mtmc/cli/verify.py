@@ -271,6 +271,9 @@ def identify_cmd(
         print_json(result)
         return
     typer.echo(f"{q.shape[0]} points: {result['status']} after {result['iterations']} iterations")
+    if d.kind == "lengths":
+        how = "self-calibrated from the lengths" if self_cal else "as the study places them"
+        typer.echo(f"points from the lengths of {len(d.stations)} stations, positions {how}")
     typer.echo(
         f"VE um: initial max {ini[0]:.2f} mean {ini[1]:.2f} min {ini[2]:.2f}; "
         f"residual max {res[0]:.2f} mean {res[1]:.2f} min {res[2]:.2f}"
