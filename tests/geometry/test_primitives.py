@@ -136,3 +136,17 @@ def test_getitem_matches_array_indexing(seed: int, m: int) -> None:
     assert_array_equal(sub.normal, c.normal[idx])
     assert_array_equal(sub.radius, c.radius[idx])
     assert_allclose(np.linalg.norm(c.normal, axis=1), 1.0, rtol=1e-15)
+
+
+def test_unit_rows_normalise_as_a_line_does() -> None:
+    from mtmc.geometry.primitives import unit_rows
+
+    rng = np.random.default_rng(3)
+    v = rng.normal(size=(5000, 3)) * 10.0 ** rng.uniform(-6, 6, size=(5000, 1))
+    v[0] = [0.0, 0.6, 0.8]  # unit already: kept as it is
+    rows = unit_rows(np.ascontiguousarray(v.T), "direction", "line direction")
+    assert_array_equal(rows.T, Line(np.zeros(3), v).direction)
+    line = Line.of_unit(np.zeros((5000, 3)), np.ascontiguousarray(rows.T))
+    assert not line.direction.flags.writeable
+    with pytest.raises(DegenerateGeometryError, match="line direction has zero length"):
+        unit_rows(np.zeros((3, 2)), "direction", "line direction")

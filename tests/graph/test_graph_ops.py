@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mtmc.errors import DegenerateGeometryError, GraphError, InputError
+from mtmc.geometry import Line
 from mtmc.graph import ops
 
 
@@ -76,6 +77,30 @@ def test_rotary_axis_batch_equals_one_at_a_time():
         one = ops.rotary_axis(p[0][i], p[1][i], p[2][i], alpha[i])
         np.testing.assert_array_equal(one.point[0], batch.point[i])
         np.testing.assert_array_equal(one.direction[0], batch.direction[i])
+
+
+def test_rotary_axis_on_rows_is_the_line_of_its_centre_and_normal():
+    """Eqs. 8-27 written on (M, 3) arrays, as a Line normalises: the same bits."""
+    rng = np.random.default_rng(6)
+    m, al = 3000, np.pi / 3
+    p1, p2, p3 = (
+        rng.normal(size=(m, 3)) * 0.002 + q for q in ([150, 0, 40], [75, 130, 40], [75, -130, 40])
+    )
+    w = (p2 + p3) * 0.5 - p1
+    r = np.sqrt(np.einsum("mi,mi->m", p3 - p2, p3 - p2)) * 0.5
+    r = r / (np.sqrt(np.einsum("mi,mi->m", w, w)) * np.sin(al))
+    ab, ac = p2 - p1, p3 - p1
+    normal = np.stack(
+        [
+            ab[:, 1] * ac[:, 2] - ab[:, 2] * ac[:, 1],
+            ab[:, 2] * ac[:, 0] - ab[:, 0] * ac[:, 2],
+            ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0],
+        ],
+        axis=1,
+    )
+    line = ops.rotary_axis(p1, p2, p3, al)
+    np.testing.assert_array_equal(line.direction, Line(p1, normal).direction)
+    np.testing.assert_allclose(line.point, p1 + w * r[:, None], rtol=0, atol=1e-12)
 
 
 def test_rotary_axis_paper_steps():

@@ -220,3 +220,37 @@ def test_vector_summaries_are_read_only():
     )
     assert light.estimate == 2.0
     assert light.u == 1.0
+
+
+def _moments_pair_by_pair(xt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and M2 of the columns of a (d, n) array, one einsum per pair of rows."""
+    mean = np.add.reduce(xt, axis=1) / xt.shape[1]
+    dev = xt - mean[:, None]
+    d = xt.shape[0]
+    m2 = np.empty((d, d))
+    for i in range(d):
+        for j in range(i, d):
+            m2[i, j] = m2[j, i] = np.einsum("m,m->", dev[i], dev[j])
+    return mean, m2
+
+
+@pytest.mark.parametrize("n", [2, 7, 8192, 8193, 16384, 20001])
+@pytest.mark.parametrize("d", [1, 3, 6])
+def test_moments_side_by_side_have_the_bits_of_one_dot_product_per_pair(n: int, d: int) -> None:
+    rng = np.random.default_rng(n + d)
+    xs = [np.ascontiguousarray(rng.normal(size=(d, n)) * 0.01 + 150.0) for _ in range(3)]
+    both = Moments.of_stack(xs)
+    assert both.mean.shape == (3, d)
+    assert both.m2.shape == (3, d, d)
+    ys = [np.ascontiguousarray(rng.normal(size=(d, 99))) for _ in range(3)]
+    merged = both.merge(Moments.of_stack(ys)).unstack()
+    for p, x in enumerate(xs):
+        mean, m2 = _moments_pair_by_pair(x)
+        one = Moments.of_columns(x)
+        for got in (both.mean[p], one.mean):
+            np.testing.assert_array_equal(got, mean)
+        for got in (both.m2[p], one.m2):
+            np.testing.assert_array_equal(got, m2)
+        alone = Moments.of_columns(x).merge(Moments.of_columns(ys[p]))
+        np.testing.assert_array_equal(merged[p].mean, alone.mean)
+        np.testing.assert_array_equal(merged[p].m2, alone.m2)

@@ -57,6 +57,40 @@ def _normalised(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.floa
     return v / np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)[:, None]
 
 
+def unit_rows(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.float64]:
+    """Normalise the columns of a ``(3, M)`` array of coordinate rows, in place.
+
+    The rows counterpart of the normalisation of a primitive's direction, bit for bit:
+    ``|v|² = (x² + z²) + y²`` (the order in which NumPy's ``einsum`` sums the three
+    products of an ``(M, 3)`` row on x86-64; a test compares the two), and vectors
+    already of unit length (to 1e-15) kept as they are.
+
+    Parameters
+    ----------
+    v : ndarray, shape (3, M)
+        The vectors, one row per coordinate (overwritten by the unit vectors).
+    name, what : str
+        The field and the thing, for the error (``"direction"``, ``"line direction"``).
+
+    Returns
+    -------
+    ndarray, shape (3, M)
+        ``v``, now of unit columns.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        If a vector has zero length.
+    """
+    sq = v[0] * v[0]
+    sq += v[2] * v[2]
+    sq += v[1] * v[1]
+    norm = np.sqrt(sq, out=sq)
+    degenerate(norm <= 0.0, f"the {what} has zero length", f"a non-zero {what}", name)
+    v /= np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)
+    return v
+
+
 def _index(arr: NDArray[Any], idx: Any) -> NDArray[Any]:
     if isinstance(idx, int | np.integer):
         m = arr.shape[0]
@@ -128,6 +162,18 @@ class Line:
             point=broadcast_batch(m, p),
             direction=broadcast_batch(m, _normalised(d, "direction", "line direction")),
         )
+
+    @classmethod
+    def of_unit(cls, point: NDArray[np.float64], direction: NDArray[np.float64]) -> Line:
+        """The lines of new ``(M, 3)`` float64 arrays, ``direction`` already of unit length.
+
+        For a construction that made its arrays itself and normalised the directions as
+        the constructor does (:func:`unit_rows`): they are kept as they are (made
+        read-only), with neither checks nor copies.
+        """
+        obj = object.__new__(cls)
+        _set(obj, point=point, direction=direction)
+        return obj
 
     def __len__(self) -> int:
         return int(self.point.shape[0])

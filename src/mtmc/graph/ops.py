@@ -40,7 +40,7 @@ from mtmc.geometry.checks import (
     check_scalars,
     degenerate,
 )
-from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
+from mtmc.geometry.primitives import Circle, Line, Plane, Sphere, unit_rows
 from mtmc.geometry.vec import cross as _cross
 
 __all__ = [
@@ -631,13 +631,18 @@ def rotary_axis(
     # eq. 12: R = |P3 P4| / sin(alpha); eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
     length *= s
     half_chord /= length
+    w *= half_chord
+    w += ra
+    unit_rows(n, "direction", "line direction")  # eqs. 25-27, as Line() normalises
     # back to (M, 3) rows, C-ordered like any other batch (the same bits as one at a time)
-    centre = np.multiply(w.T, half_chord[:, None], order="C")
-    centre += a
-    direction = np.ascontiguousarray(n.T)
-    centre.setflags(write=False)  # the Line keeps them without a copy
-    direction.setflags(write=False)
-    return Line(centre, direction)
+    return Line.of_unit(_columns(w), _columns(n))
+
+
+def _columns(rows: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The ``(3, M)`` coordinate rows as a new C-ordered ``(M, 3)`` array (column by column)."""
+    out = np.empty((rows.shape[1], 3))
+    out[:, 0], out[:, 1], out[:, 2] = rows
+    return out
 
 
 def _check_collinear(

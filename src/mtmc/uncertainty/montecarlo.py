@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Container, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, overload
 
@@ -142,11 +142,13 @@ class _Digest:
     """What one evaluation block hands back, in this process or from a worker.
 
     ``rows``: the finite rows of the kept outputs. ``pieces``: for each seed block the
-    evaluation block touches (in order), ``(k, complete, {output: part})`` where a part
-    is the :class:`Moments` of the whole seed block when the evaluation block holds all
-    of it (``complete``), else the ``(d, rows)`` values of the piece it holds, which the
-    collector joins with the neighbouring pieces. Either way the moments of a seed block
-    come from the same C-ordered array, so they are the same bits wherever computed.
+    evaluation block touches (in order), ``(k, complete, part)``. When the evaluation
+    block holds all of the seed block (``complete``), ``part`` maps each group of outputs
+    (:func:`_groups`) to their :class:`Moments`, side by side, and the sketches of its
+    outputs; else it maps each output to the ``(d, rows)`` values of the piece it holds,
+    which the collector joins with the neighbouring pieces. Either way the moments of a
+    seed block come from the same C-ordered arrays, so they are the same bits wherever
+    computed.
     """
 
     start: int
@@ -156,7 +158,20 @@ class _Digest:
     omitted: int
     first_bad: int | None
     bad_outputs: tuple[str, ...]
-    pieces: list[tuple[int, bool, dict[str, Any]]]
+    pieces: list[tuple[int, bool, dict[Any, Any]]]
+
+
+#: Moments of a group of outputs and the sketches of its outputs (``None`` if no rows).
+_Reduced = tuple[Moments | None, dict[str, QuantileSketch]]
+
+
+def _groups(shapes: Mapping[str, tuple[int, ...]], kept: Container[str]) -> list[tuple[str, ...]]:
+    """The outputs whose moments are formed together: those not kept, by width, in order."""
+    by_width: dict[int, list[str]] = {}
+    for n, shape in shapes.items():
+        if n not in kept:
+            by_width.setdefault(max(1, math.prod(shape)), []).append(n)
+    return [tuple(names) for names in by_width.values()]
 
 
 def _block_array(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
@@ -166,11 +181,17 @@ def _block_array(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
     return np.ascontiguousarray(parts[0])
 
 
-def _reduce(x: NDArray[np.float64], sketch: bool) -> tuple[Moments | None, Any]:
-    """Moments (and sketch) of one seed block's ``(d, rows)`` values."""
-    if not x.shape[1]:
-        return None, None
-    return Moments.of_columns(x), (QuantileSketch.of(x[0]) if sketch else None)
+def _reduce(
+    names: tuple[str, ...],
+    xs: list[NDArray[np.float64]],
+    sketch: frozenset[str],
+    sums: NDArray[np.float64] | None = None,
+) -> _Reduced:
+    """Moments (side by side) and sketches of one seed block's ``(d, rows)`` values."""
+    if not xs[0].shape[1]:
+        return None, {}
+    sk = {n: QuantileSketch.of(x[0]) for n, x in zip(names, xs, strict=True) if n in sketch}
+    return Moments.of_stack(xs, sums), sk
 
 
 def _digest(
@@ -182,36 +203,59 @@ def _digest(
 ) -> _Digest:
     """Reduce the outputs of trials ``start..start+m-1`` of a run of ``total`` trials."""
     m = next(iter(outs.values())).shape[0]
-    ok = np.ones(m, dtype=np.bool_)
-    for arr in outs.values():
-        # the sum of finite values is finite (but for an overflow, which then takes the
-        # row-by-row check): one pass, no temporary, in the common case
-        if not np.isfinite(arr.sum()):
-            fin = np.isfinite(arr)
-            ok &= fin if fin.ndim == 1 else fin.all(axis=1)
-    nbad = m - int(np.count_nonzero(ok))
-    bad: tuple[str, ...] = ()
-    if nbad:
-        bad = tuple(n for n, arr in outs.items() if not np.isfinite(arr).all())
     kept = [n for n in outs if keep is True or (keep is not False and n in keep)]
-    rows = {n: (outs[n][ok] if nbad else outs[n]) for n in kept}
+    groups = _groups({n: arr.shape[1:] for n, arr in outs.items()}, kept)
     s = SEED_BLOCK_SIZE
-    pieces: list[tuple[int, bool, dict[str, Any]]] = []
+    spans: list[tuple[int, int, int, bool]] = []  # seed block, rows lo..hi, complete
     lo = 0
     while lo < m:
         k = (start + lo) // s
         hi = min(m, (k + 1) * s - start)
-        complete = start + lo == k * s and start + hi == min((k + 1) * s, total)
-        sel = ok[lo:hi]
-        part: dict[str, Any] = {}
-        for n, arr in outs.items():
-            if n in rows:
-                continue
-            x = arr[lo:hi].reshape(hi - lo, -1).T  # (d, rows)
-            x = x[:, sel] if nbad else x
-            part[n] = _reduce(_block_array([x]), n in sketch) if complete else x
-        pieces.append((k, complete, part))
+        spans.append((k, lo, hi, start + lo == k * s and start + hi == min((k + 1) * s, total)))
         lo = hi
+    # the reduced outputs as C-ordered (d, rows) arrays per seed block, and their row
+    # sums: the sum of finite values is finite (but for an overflow, which then takes
+    # the row-by-row check), so one pass checks the values and gives the means
+    cols = {n: outs[n].reshape(m, -1).T for g in groups for n in g}
+    width = sum(x.shape[0] for x in cols.values())
+    blocks = [{n: _block_array([x[:, lo:hi]]) for n, x in cols.items()} for _, lo, hi, _ in spans]
+    sums = np.empty((len(spans), width))
+    for xb, row in zip(blocks, sums, strict=True):
+        i = 0
+        for x in xb.values():
+            np.add.reduce(x, axis=1, out=row[i : i + x.shape[0]])
+            i += x.shape[0]
+    finite = math.isfinite(float(sums.sum())) and all(
+        math.isfinite(float(outs[n].sum())) for n in kept
+    )
+    ok = np.ones(m, dtype=np.bool_)
+    nbad = 0
+    if not finite:
+        for arr in outs.values():
+            if not np.isfinite(arr.sum()):
+                fin = np.isfinite(arr)
+                ok &= fin if fin.ndim == 1 else fin.all(axis=1)
+        nbad = m - int(np.count_nonzero(ok))
+    bad: tuple[str, ...] = ()
+    if nbad:
+        bad = tuple(n for n, arr in outs.items() if not np.isfinite(arr).all())
+    rows = {n: (outs[n][ok] if nbad else outs[n]) for n in kept}
+    pieces: list[tuple[int, bool, dict[Any, Any]]] = []
+    for (k, lo, hi, complete), xb, row in zip(spans, blocks, sums, strict=True):
+        if nbad:
+            sel = ok[lo:hi]
+            xb = {n: _block_array([x[:, sel]]) for n, x in xb.items()}
+        part: dict[Any, Any] = {}
+        i = 0
+        for g in groups:
+            xs = [xb[n] for n in g]
+            j = i + sum(x.shape[0] for x in xs)
+            if complete:
+                part[g] = _reduce(g, xs, sketch, None if nbad else row[i:j].reshape(len(g), -1))
+            else:
+                part.update(zip(g, xs, strict=True))
+            i = j
+        pieces.append((k, complete, part))
     return _Digest(
         start=start,
         m=m,
@@ -283,7 +327,8 @@ class _Collector:
         self.first_bad: int | None = None
         self.bad_outputs: set[str] = set()
         self.buffer: dict[str, list[NDArray[np.float64]]] = {}
-        self.moments: dict[str, Moments] = {}
+        self.groups: list[tuple[str, ...]] = []
+        self.moments: dict[tuple[str, ...], Moments] = {}
 
     def setup(self, shapes: dict[str, tuple[int, ...]]) -> None:
         self.shapes = shapes
@@ -327,20 +372,21 @@ class _Collector:
             )
         for n in keep:
             self.kept[n] = np.empty((self.total, *shapes[n]))
-        for n in shapes:
-            if n not in self.kept:
+        self.groups = _groups(shapes, self.kept)
+        for g in self.groups:
+            w = max(1, math.prod(shapes[g[0]]))
+            self.moments[g] = Moments(
+                0, np.zeros((len(g), w)), np.zeros((len(g), w, w) if w <= MAX_COV_DIM else w)
+            )
+            for n in g:
                 self.buffer[n] = []
-                width = max(1, math.prod(shapes[n]))
-                self.moments[n] = Moments(
-                    0, np.zeros(width), np.zeros((width, width) if width <= MAX_COV_DIM else width)
-                )
                 self.sketches[n] = None
 
-    def _merge(self, n: str, reduced: tuple[Moments | None, Any]) -> None:
-        mom, sk = reduced
+    def _merge(self, g: tuple[str, ...], reduced: _Reduced) -> None:
+        mom, sketches = reduced
         if mom is not None:
-            self.moments[n] = self.moments[n].merge(mom)
-        if sk is not None:
+            self.moments[g] = self.moments[g].merge(mom)
+        for n, sk in sketches.items():
             prev = self.sketches[n]
             self.sketches[n] = sk if prev is None else prev.merge(sk)
 
@@ -365,19 +411,22 @@ class _Collector:
         self.filled += good
         s = SEED_BLOCK_SIZE
         for k, complete, part in d.pieces:
+            if complete:
+                for g, reduced in part.items():
+                    self._merge(g, reduced)
+                continue
             for n, value in part.items():
-                if complete:
-                    self._merge(n, value)
-                else:
-                    self.buffer[n].append(value)
-            if not complete and d.start + d.m >= min((k + 1) * s, self.total):
+                self.buffer[n].append(value)
+            if d.start + d.m >= min((k + 1) * s, self.total):
                 self._close()
 
     def _close(self) -> None:
-        for n, buf in self.buffer.items():
-            if buf:
-                self._merge(n, _reduce(_block_array(buf), n in self.sketch))
-                buf.clear()
+        for g in self.groups:
+            if self.buffer[g[0]]:
+                xs = [_block_array(self.buffer[n]) for n in g]
+                self._merge(g, _reduce(g, xs, self.sketch))
+                for n in g:
+                    self.buffer[n].clear()
 
     def check(self) -> None:
         """Raise for the non-finite values seen under ``nan_policy="raise"``."""
@@ -395,6 +444,9 @@ class _Collector:
         assert self.shapes is not None
         self.check()
         self._close()
+        moments = {
+            n: mom for g in self.groups for n, mom in zip(g, self.moments[g].unstack(), strict=True)
+        }
         out: dict[str, MonteCarloResult] = {}
         for n, shape in self.shapes.items():
             if n in self.kept:
@@ -404,7 +456,7 @@ class _Collector:
             else:
                 out[n] = MonteCarloResult(
                     samples=None,
-                    moments=self.moments[n],
+                    moments=moments[n],
                     sketch=self.sketches[n],
                     scalar=len(shape) == 0,
                     omitted=self.omitted,

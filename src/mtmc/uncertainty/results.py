@@ -28,7 +28,7 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
@@ -216,6 +216,43 @@ def _mahalanobis2(
 #: samples are not kept; wider ones keep the variances only.
 MAX_COV_DIM: int = 256
 
+#: Widest output whose second moments are dot products of rows in NumPy's own loops
+#: (wider ones use a matrix product).
+_DOT_DIM = 32
+
+#: NumPy's ``einsum`` sums the dot product of two long rows in chunks of this many
+#: values (its buffered iterator) and adds the chunks' sums in order; :func:`_row_dots`
+#: does the same for many rows in one call.
+_DOT_CHUNK = 8192
+
+
+def _row_dots(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``Σ_m a[..., m] b[..., m]`` of the rows of two ``(..., n)`` arrays, all in one go.
+
+    Each sum has the bits of ``np.einsum("m,m->", a_row, b_row)``: chunks of
+    :data:`_DOT_CHUNK` values, each summed by einsum's kernel, added in order (a test
+    compares the two). The rows must be contiguous (the arrays may be slices of a
+    C-ordered array along the leading axes).
+    """
+    n = a.shape[-1]
+    if n <= _DOT_CHUNK:
+        out: NDArray[np.float64] = np.einsum("...m,...m->...", a, b)
+        return out
+    q = n // _DOT_CHUNK
+    head = q * _DOT_CHUNK
+    lead = a.shape[:-1]
+    part = np.einsum(
+        "...km,...km->...k",
+        a[..., :head].reshape(*lead, q, _DOT_CHUNK),
+        b[..., :head].reshape(*lead, q, _DOT_CHUNK),
+    )
+    acc: NDArray[np.float64] = part[..., 0].copy()
+    for k in range(1, q):
+        acc += part[..., k]
+    if head < n:
+        acc += np.einsum("...m,...m->...", a[..., head:], b[..., head:])
+    return acc
+
 
 @dataclass(frozen=True)
 class Moments:
@@ -238,6 +275,11 @@ class Moments:
     ``M₂ = M₂ₐ + M₂_b + δδᵀ nₐn_b/n``. The Monte Carlo engine forms the moments of fixed
     blocks of trials and merges them in trial order, so the result does not depend on
     how the trials were cut into evaluation blocks or shared between workers.
+
+    The moments of ``P`` outputs of one width over the same trials can be held side by
+    side (:meth:`of_stack`: ``mean`` ``(P, d)``, ``m2`` ``(P, d, d)`` or ``(P, d)``);
+    they merge in one call, with the bits of ``P`` separate merges, and
+    :meth:`unstack` gives the moments of each.
 
     Examples
     --------
@@ -270,20 +312,64 @@ class Moments:
         sums; the same array gives the same bits.
         """
         n = int(xt.shape[1])
+        d = xt.shape[0]
+        if d <= _DOT_DIM:
+            both = cls.of_stack([xt])
+            return cls._new(n, both.mean[0], both.m2[0])
         mean = np.add.reduce(xt, axis=1)  # = xt.mean(axis=1), bit for bit
         mean /= n
         dev = xt - mean[:, None]
-        d = xt.shape[0]
-        if d <= 32:  # dot products of rows in NumPy's own loops: no BLAS threads
-            m2 = np.empty((d, d))
-            for i in range(d):
-                for j in range(i, d):
-                    m2[i, j] = m2[j, i] = np.einsum("m,m->", dev[i], dev[j])
-        elif d <= MAX_COV_DIM:
+        if d <= MAX_COV_DIM:
             m2 = dev @ dev.T
         else:
             m2 = np.einsum("ij,ij->i", dev, dev)
         return cls._new(n, mean, m2)
+
+    @classmethod
+    def of_stack(
+        cls, xts: Sequence[NDArray[np.float64]], sums: NDArray[np.float64] | None = None
+    ) -> Moments:
+        """The moments of ``P`` sets of values of one width over the same trials, side by side.
+
+        Parameters
+        ----------
+        xts : sequence of ndarray, each shape (d, n), C-ordered
+            The values of each set, one row per component (as :meth:`of_columns`).
+        sums : ndarray, shape (P, d), optional
+            ``np.add.reduce(xts[p], axis=1)`` of each set, where already taken.
+
+        Returns
+        -------
+        Moments
+            ``mean`` of shape ``(P, d)``, ``m2`` ``(P, d, d)`` (``(P, d)`` for
+            ``d > MAX_COV_DIM``): row ``p`` is ``of_columns(xts[p])`` bit for bit, the
+            dot products of all sets made in a few calls (per offset ``s`` of the
+            components, the products of components ``i`` and ``i + s`` of every set).
+        """
+        p = len(xts)
+        d, n = xts[0].shape
+        if d > _DOT_DIM:
+            each = [cls.of_columns(x) for x in xts]
+            return cls._new(n, np.stack([e.mean for e in each]), np.stack([e.m2 for e in each]))
+        if sums is None:
+            sums = np.empty((p, d))
+            for i, x in enumerate(xts):
+                np.add.reduce(x, axis=1, out=sums[i])  # = x.mean(axis=1) * n, bit for bit
+        mean = sums / n
+        dev = np.empty((p, d, n))
+        for i, x in enumerate(xts):
+            np.subtract(x, mean[i][:, None], out=dev[i])
+        m2 = np.empty((p, d, d))
+        for s in range(d):  # dot products of rows in NumPy's own loops: no BLAS threads
+            v = _row_dots(dev[:, : d - s], dev[:, s:])
+            j = np.arange(d - s)
+            m2[:, j, j + s] = v
+            m2[:, j + s, j] = v
+        return cls._new(n, mean, m2)
+
+    def unstack(self) -> list[Moments]:
+        """The moments of each set of moments held side by side (:meth:`of_stack`)."""
+        return [Moments._new(self.n, self.mean[i], self.m2[i]) for i in range(len(self.mean))]
 
     @classmethod
     def _new(cls, n: int, mean: NDArray[np.float64], m2: NDArray[np.float64]) -> Moments:
@@ -297,7 +383,7 @@ class Moments:
         return obj
 
     def merge(self, other: Moments) -> Moments:
-        """The moments of the union of both sets."""
+        """The moments of the union of both sets (of each pair, for moments side by side)."""
         if other.n == 0:
             return self
         if self.n == 0:
@@ -306,7 +392,10 @@ class Moments:
         delta = other.mean - self.mean
         mean = self.mean + delta * (other.n / n)
         w = self.n * other.n / n
-        corr = np.multiply.outer(delta, delta) if self.m2.ndim == 2 else delta * delta
+        if self.m2.ndim > self.mean.ndim:  # δδᵀ of each set
+            corr = delta[..., :, None] * delta[..., None, :]
+        else:
+            corr = delta * delta
         corr *= w
         m2 = self.m2 + other.m2
         m2 += corr
