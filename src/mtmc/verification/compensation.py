@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -632,7 +632,11 @@ def _table(
         ) from None
 
 
-def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:  # noqa: C901
+_Curve = tuple[str, list[float], list[float], int]
+_Rows = list[tuple[int, list[str]]]
+
+
+def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:
     """Read a table in the ISG CSV format (see :func:`isg_csv_text`).
 
     Blocks are separated by ``#`` lines; ``//`` starts a comment. A block whose header
@@ -660,88 +664,37 @@ def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:  # noqa: 
     """
     lines = text.splitlines()
     consts: dict[str, tuple[float, int]] = {}
-    curves: list[tuple[str, list[float], list[float], int]] = []
+    curves: list[_Curve] = []
+    # each block is read as soon as it ends, before the lines after it
+    for header, header_line, rows in _isg_blocks(lines, file):
+        if any(len(h) == 1 for h in header):
+            curves += _isg_components(header, header_line, rows, file)
+        else:
+            _isg_positions(header, header_line, rows, file, consts)
+    return _table(consts, curves, _sign_of(lines, "//"), file)
+
+
+def _isg_blocks(lines: list[str], file: str) -> Iterator[tuple[list[str], int, _Rows]]:
+    """The blocks of an ISG CSV text: header, its line, rows ``(line, values)``.
+
+    Checks the names of each header and the number of values of each row.
+    """
     header: list[str] | None = None
     header_line = 0
-    rows: list[tuple[int, list[str]]] = []
-
-    def flush() -> None:
-        if header is None:
-            return
-        args = [h for h in header if len(h) == 1]
-        if not args:
-            if len(rows) != 1:
-                raise ParseError(
-                    f"a block of position errors needs exactly one row of values, got {len(rows)}",
-                    file=file,
-                    line=rows[1][0] if len(rows) > 1 else header_line,
-                    field=header[0],
-                )
-            n, vals = rows[0]
-            for name, v in zip(header, vals, strict=True):
-                term = _term(name, file, header_line)
-                if term.kind == "component":
-                    raise ParseError(
-                        f"{term.name} is a component error: its block needs the axis {term.axis} "
-                        "as the first column",
-                        file=file,
-                        line=header_line,
-                        field=name,
-                    )
-                if term.name in consts:
-                    raise ParseError(
-                        f"error {term.name} given twice", file=file, line=header_line, field=name
-                    )
-                consts[term.name] = (_float(v, file, n, name), header_line)
-            return
-        if len(args) > 1 or header[0] != args[0]:
-            raise ParseError(
-                "expected the axis (argument) as the only and first column of the block; "
-                f"got {' '.join(args)}: dependencies on more than one axis are not supported",
-                file=file,
-                line=header_line,
-                field=args[-1],
-            )
-        axis = args[0]
-        if not rows:
-            raise ParseError(
-                "a block of component errors has no rows", file=file, line=header_line, field=axis
-            )
-        q = [_float(vals[0], file, n, axis) for n, vals in rows]
-        for j, name in enumerate(header[1:], start=1):
-            term = _term(name, file, header_line)
-            if term.kind != "component" or term.axis != axis:
-                raise ParseError(
-                    f"{term.name} is not a component error of axis {axis}",
-                    file=file,
-                    line=header_line,
-                    field=name,
-                )
-            curves.append(
-                (term.name, q, [_float(vals[j], file, n, name) for n, vals in rows], header_line)
-            )
-
+    rows: _Rows = []
     for n, raw in enumerate(lines, start=1):
         s = _strip(raw, "//")
         if not s:
             continue
         if s == "#":
-            flush()
+            if header is not None:
+                yield header, header_line, rows
             header, rows = None, []
             continue
         parts = s.split()
         if header is None:
+            _isg_header(parts, file, n)
             header, header_line = parts, n
-            for h in parts:
-                if len(h) != 1:
-                    _term(h, file, n)
-                elif h not in AXIS_DIRECTION:
-                    raise ParseError(
-                        f"unknown axis {h!r}: expected X Y Z U V W A B C as an argument column",
-                        file=file,
-                        line=n,
-                        field=h,
-                    )
             continue
         if len(parts) != len(header):
             raise ParseError(
@@ -751,15 +704,95 @@ def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:  # noqa: 
                 field=header[min(len(parts), len(header) - 1)],
             )
         rows.append((n, parts))
-    flush()
-    return _table(consts, curves, _sign_of(lines, "//"), file)
+    if header is not None:
+        yield header, header_line, rows
+
+
+def _isg_header(parts: list[str], file: str, n: int) -> None:
+    """Check a block header: error names, and axis letters as argument columns."""
+    for h in parts:
+        if len(h) != 1:
+            _term(h, file, n)
+        elif h not in AXIS_DIRECTION:
+            raise ParseError(
+                f"unknown axis {h!r}: expected X Y Z U V W A B C as an argument column",
+                file=file,
+                line=n,
+                field=h,
+            )
+
+
+def _isg_positions(
+    header: list[str],
+    header_line: int,
+    rows: _Rows,
+    file: str,
+    consts: dict[str, tuple[float, int]],
+) -> None:
+    """A block of position errors (one row of values) into ``consts``."""
+    if len(rows) != 1:
+        raise ParseError(
+            f"a block of position errors needs exactly one row of values, got {len(rows)}",
+            file=file,
+            line=rows[1][0] if len(rows) > 1 else header_line,
+            field=header[0],
+        )
+    n, vals = rows[0]
+    for name, v in zip(header, vals, strict=True):
+        term = _term(name, file, header_line)
+        if term.kind == "component":
+            raise ParseError(
+                f"{term.name} is a component error: its block needs the axis {term.axis} "
+                "as the first column",
+                file=file,
+                line=header_line,
+                field=name,
+            )
+        if term.name in consts:
+            raise ParseError(
+                f"error {term.name} given twice", file=file, line=header_line, field=name
+            )
+        consts[term.name] = (_float(v, file, n, name), header_line)
+
+
+def _isg_components(header: list[str], header_line: int, rows: _Rows, file: str) -> list[_Curve]:
+    """A block of component errors of one axis (its first column), one row per position."""
+    args = [h for h in header if len(h) == 1]
+    if len(args) > 1 or header[0] != args[0]:
+        raise ParseError(
+            "expected the axis (argument) as the only and first column of the block; "
+            f"got {' '.join(args)}: dependencies on more than one axis are not supported",
+            file=file,
+            line=header_line,
+            field=args[-1],
+        )
+    axis = args[0]
+    if not rows:
+        raise ParseError(
+            "a block of component errors has no rows", file=file, line=header_line, field=axis
+        )
+    q = [_float(vals[0], file, n, axis) for n, vals in rows]
+    curves: list[_Curve] = []
+    for j, name in enumerate(header[1:], start=1):
+        term = _term(name, file, header_line)
+        if term.kind != "component" or term.axis != axis:
+            raise ParseError(
+                f"{term.name} is not a component error of axis {axis}",
+                file=file,
+                line=header_line,
+                field=name,
+            )
+        curves.append(
+            (term.name, q, [_float(vals[j], file, n, name) for n, vals in rows], header_line)
+        )
+    return curves
 
 
 _BLOCK = re.compile(r"^\[\s*([A-Za-z0-9]+)\s*\]$")
 _KV = re.compile(r"^([A-Za-z_]+)\s*=\s*(.*)$")
 
 
-def read_etalon(text: str, file: str = "<etalon>") -> CompensationTable:  # noqa: C901
+def read_etalon(text: str, file: str = "<etalon>") -> CompensationTable:
     """Read a table in the Etalon exchange format (see :func:`etalon_text`).
 
     Parameters
@@ -782,100 +815,138 @@ def read_etalon(text: str, file: str = "<etalon>") -> CompensationTable:  # noqa
         value, a constant for a component error or a table for a position error.
     """
     lines = text.splitlines()
-    consts: dict[str, tuple[float, int]] = {}
-    curves: list[tuple[str, list[float], list[float], int]] = []
-    name: str | None = None
-    block_line = 0
-    filled = True
-    in_grid = False
-    grid_q: list[float] = []
-    grid_v: list[float] = []
-    grid_line = 0
+    reader = _EtalonReader(file)
     for n, raw in enumerate(lines, start=1):
         s = _strip(raw, "//")
-        if not s:
-            continue
-        if in_grid:
-            if s.startswith("}"):
-                if not grid_q:
-                    raise ParseError("empty Gridpoints", file=file, line=grid_line, field=name)
-                assert name is not None
-                curves.append((name, grid_q, grid_v, block_line))
-                in_grid, filled = False, True
-                continue
-            parts = s.split()
-            if len(parts) != 2:
-                raise ParseError(
-                    f"expected 'position value' (two numbers), got {s!r}",
-                    file=file,
-                    line=n,
-                    field=name,
-                )
-            grid_q.append(_float(parts[0], file, n, name or "Gridpoints"))
-            grid_v.append(_float(parts[1], file, n, name or "Gridpoints"))
-            continue
+        if s:
+            reader.line(n, s)
+    reader.finish()
+    return _table(reader.consts, reader.curves, _sign_of(lines, "//"), file)
+
+
+class _EtalonReader:
+    """The state of reading an Etalon text line by line: the block open, its grid."""
+
+    def __init__(self, file: str) -> None:
+        self.file = file
+        self.consts: dict[str, tuple[float, int]] = {}
+        self.curves: list[_Curve] = []
+        self.name: str | None = None  # the block open
+        self.block_line = 0
+        self.filled = True  # the block has its VALUE or Gridpoints
+        self.in_grid = False
+        self.grid_q: list[float] = []
+        self.grid_v: list[float] = []
+        self.grid_line = 0
+
+    def line(self, n: int, s: str) -> None:
+        """One line without its comment, not empty."""
+        if self.in_grid:
+            self._grid(n, s)
+            return
         m = _BLOCK.match(s)
         if m:
-            if not filled:
-                raise ParseError(
-                    f"block [{name}] has no VALUE or Gridpoints",
-                    file=file,
-                    line=block_line,
-                    field=name,
-                )
-            term = _term(m.group(1), file, n)
-            name, block_line, filled = term.name, n, False
-            continue
+            self._block(n, m.group(1))
+            return
         kv = _KV.match(s)
-        if kv is None or name is None:
+        if kv is None or self.name is None:
             raise ParseError(
                 f"expected a [NAME] block, 'VALUE = v' or 'Gridpoints = {{', got {s!r}",
-                file=file,
+                file=self.file,
+                line=n,
+                field=self.name,
+            )
+        if self.filled:
+            raise ParseError(
+                f"block [{self.name}] has a second value",
+                file=self.file,
+                line=n,
+                field=kv.group(1),
+            )
+        self._key(n, self.name, kv.group(1), kv.group(2).strip())
+
+    def _grid(self, n: int, s: str) -> None:
+        """A ``position value`` line of a Gridpoints table, or its closing ``}``."""
+        name = self.name
+        if s.startswith("}"):
+            if not self.grid_q:
+                raise ParseError(
+                    "empty Gridpoints", file=self.file, line=self.grid_line, field=name
+                )
+            assert name is not None
+            self.curves.append((name, self.grid_q, self.grid_v, self.block_line))
+            self.in_grid, self.filled = False, True
+            return
+        parts = s.split()
+        if len(parts) != 2:
+            raise ParseError(
+                f"expected 'position value' (two numbers), got {s!r}",
+                file=self.file,
                 line=n,
                 field=name,
             )
-        if filled:
-            raise ParseError(
-                f"block [{name}] has a second value", file=file, line=n, field=kv.group(1)
-            )
-        key, val = kv.group(1), kv.group(2).strip()
+        self.grid_q.append(_float(parts[0], self.file, n, name or "Gridpoints"))
+        self.grid_v.append(_float(parts[1], self.file, n, name or "Gridpoints"))
+
+    def _block(self, n: int, name: str) -> None:
+        """A ``[NAME]`` line: the previous block must have its value."""
+        self._require_filled()
+        term = _term(name, self.file, n)
+        self.name, self.block_line, self.filled = term.name, n, False
+
+    def _key(self, n: int, name: str, key: str, val: str) -> None:
+        """``VALUE = v`` (a position error) or ``Gridpoints = {`` (a component error)."""
         term = parse_error_name(name)
         if key.upper() == "VALUE":
             if term.kind == "component":
                 raise ParseError(
                     f"{name} is a component error: expected Gridpoints along axis {term.axis}",
-                    file=file,
+                    file=self.file,
                     line=n,
                     field=name,
                 )
-            if name in consts:
-                raise ParseError(f"error {name} given twice", file=file, line=n, field=name)
-            consts[name] = (_float(val, file, n, name), n)
-            filled = True
+            if name in self.consts:
+                raise ParseError(f"error {name} given twice", file=self.file, line=n, field=name)
+            self.consts[name] = (_float(val, self.file, n, name), n)
+            self.filled = True
         elif key.lower() == "gridpoints":
             if val != "{":
                 raise ParseError(
-                    "expected 'Gridpoints = {' on its own line", file=file, line=n, field=name
+                    "expected 'Gridpoints = {' on its own line", file=self.file, line=n, field=name
                 )
             if term.kind != "component":
                 raise ParseError(
                     f"{name} is a {term.kind} error: expected VALUE = v",
-                    file=file,
+                    file=self.file,
                     line=n,
                     field=name,
                 )
-            in_grid, grid_q, grid_v, grid_line = True, [], [], n
+            self.in_grid, self.grid_q, self.grid_v, self.grid_line = True, [], [], n
         else:
             raise ParseError(
-                f"unknown key {key!r}; expected VALUE or Gridpoints", file=file, line=n, field=key
+                f"unknown key {key!r}; expected VALUE or Gridpoints",
+                file=self.file,
+                line=n,
+                field=key,
             )
-    if in_grid:
-        raise ParseError("Gridpoints not closed by '}'", file=file, line=grid_line, field=name)
-    if not filled:
-        raise ParseError(
-            f"block [{name}] has no VALUE or Gridpoints", file=file, line=block_line, field=name
-        )
-    return _table(consts, curves, _sign_of(lines, "//"), file)
+
+    def finish(self) -> None:
+        """The end of the text: no Gridpoints open, the last block filled."""
+        if self.in_grid:
+            raise ParseError(
+                "Gridpoints not closed by '}'", file=self.file, line=self.grid_line, field=self.name
+            )
+        self._require_filled()
+
+    def _require_filled(self) -> None:
+        """The block open has its VALUE or Gridpoints."""
+        if not self.filled:
+            raise ParseError(
+                f"block [{self.name}] has no VALUE or Gridpoints",
+                file=self.file,
+                line=self.block_line,
+                field=self.name,
+            )
 
 
 def read_plain_csv(text: str, file: str = "<csv>") -> CompensationTable:

@@ -645,9 +645,7 @@ _WS_KEYS = (
 _AXIS_KEYS = ("start", "end", "step", "count", "overshoot", "approach")
 
 
-def read_workspace(  # noqa: C901
-    ws: Fields, machine_axes: Sequence[str] | None = None
-) -> MeasurementPlan:
+def read_workspace(ws: Fields, machine_axes: Sequence[str] | None = None) -> MeasurementPlan:
     """Read a ``[workspace]`` table of a study file into a :class:`MeasurementPlan`.
 
     The table (``docs/verification-planning.md``)::
@@ -688,107 +686,19 @@ def read_workspace(  # noqa: C901
         Naming the file, the line and the field: an unknown key, a missing or wrong
         value, an axis the machine does not have or an axis of the machine left out.
     """
-    axis_names = [k for k in ws.data if k not in _WS_KEYS]
-    for k in axis_names:
-        if k not in AXIS_DIRECTION or not isinstance(ws.data[k], dict):
-            raise ws.error(
-                f"unknown key {k!r}; expected one of {', '.join(_WS_KEYS)} or an axis table "
-                "such as [workspace.X]",
-                k,
-            )
-    if machine_axes is not None:
-        axes = tuple(machine_axes)
-        for k in axis_names:
-            if k not in axes:
-                raise ws.error(f"axis {k} is not an axis of the machine ({' '.join(axes)})", k)
-        for a in axes:
-            if a not in axis_names:
-                raise ws.error(
-                    f"missing [{'.'.join(map(str, ws.path))}.{a}]: every axis of the machine "
-                    f"needs start and end (start = end for an axis that stays put)"
-                )
-    else:
-        axes = tuple(a for a in AXIS_DIRECTION if a in axis_names)
-        if not axes:
-            raise ws.error("expected at least one axis table such as [workspace.X]")
+    axes = _workspace_axes(ws, machine_axes)
     dist = ws.text("distribution", "mesh", choices=DISTRIBUTIONS)
     d = len(axes)
     start, end = np.zeros(d), np.zeros(d)
     values: list[NDArray[np.float64]] = []
     overshoot, approach = np.zeros(d), [0] * d
     for i, a in enumerate(axes):
-        t = ws.table(a)
-        assert t is not None
-        t.only(_AXIS_KEYS)
-        scale = np.pi / 180.0 if is_rotary(a) else 1.0
-        start[i] = t.number("start") * scale
-        end[i] = t.number("end") * scale
-        if end[i] < start[i]:
-            raise t.error(f"expected end >= start ({t.data['start']!r})", "end")
-        if dist != "diagonals" and end[i] > start[i]:
-            if t.has("step") == t.has("count"):
-                raise t.error("expected either step or count (not both)", "step")
-            key = "step" if t.has("step") else "count"
-            try:
-                if key == "step":
-                    step = t.number("step", low=0.0, open_low=True) * scale
-                    values.append(axis_values(start[i], end[i], step=step))
-                else:
-                    count = t.integer("count", minimum=2)
-                    values.append(axis_values(start[i], end[i], count=count))
-            except InputError as exc:
-                if exc.file is not None:
-                    raise
-                raise t.error(exc.message, key) from None
-        else:
-            values.append(np.array([start[i]]))
-            for key in ("step", "count"):
-                if t.has(key):
-                    why = "a diagonal" if dist == "diagonals" else "a fixed axis (start = end)"
-                    raise t.error(f"{key} has no meaning for {why}", key)
-        overshoot[i] = t.number("overshoot", 0.0, low=0.0) * scale
-        approach[i] = _APPROACH[t.text("approach", "none", choices=tuple(_APPROACH))]
-        if (approach[i] != 0) != (overshoot[i] > 0):
-            key = "approach" if t.has("approach") else "overshoot"
-            raise t.error(
-                "a direction of approach needs an overshoot > 0, and an overshoot needs an "
-                'approach of "+" or "-"',
-                key,
-            )
-    seq_text = ws.text("sequence", "".join(axes[::-1]))
-    seq_letters = [c for c in seq_text.upper() if not c.isspace()]
-    if sorted(seq_letters) != sorted(axes):
-        raise ws.error(
-            f"expected the sequence to name each axis ({' '.join(axes)}) once, got {seq_text!r}",
-            "sequence",
-        )
-    order = [axes.index(c) for c in seq_letters]
+        start[i], end[i], grid, overshoot[i], approach[i] = _read_axis(ws, a, dist)
+        values.append(grid)
+    order = _read_sequence(ws, axes)
     path = ws.text("path", "serpentine", choices=_PATHS)
     offsets = _read_offsets(ws)
-    seed = None
-    if dist == "diagonals":
-        for key in ("seed", "fraction"):
-            if ws.has(key):
-                raise ws.error(f"{key} is for a cloud, not for diagonals", key)
-        which = ws.text("diagonals", "body", choices=("body", "face", "all"))
-        n_points = ws.integer("points", minimum=2)
-        try:
-            pts = diagonals(start, end, n_points, which=which)
-        except InputError as exc:
-            raise ws.error(exc.message, "diagonals") from None
-    else:
-        for key in ("diagonals", "points"):
-            if ws.has(key):
-                raise ws.error(f"{key} is for distribution = 'diagonals'", key)
-        pts, index = _mesh_points(values, order, path)
-        if dist == "cloud":
-            seed = ws.integer("seed", minimum=0)
-            frac = ws.number("fraction", 0.5, low=0.0, high=0.5, open_low=True)
-            rng = np.random.default_rng(np.random.SeedSequence(seed))
-            pts = _perturb(pts, values, index, rng, frac)
-        elif ws.has("seed") or ws.has("fraction"):
-            key = "seed" if ws.has("seed") else "fraction"
-            raise ws.error(f"{key} is for distribution = 'cloud'", key)
+    pts, seed = _workspace_points(ws, dist, start, end, values, order, path)
     return MeasurementPlan(
         axes,
         pts,
@@ -798,6 +708,130 @@ def read_workspace(  # noqa: C901
         kind=dist,
         seed=seed,
     )
+
+
+def _workspace_axes(ws: Fields, machine_axes: Sequence[str] | None) -> tuple[str, ...]:
+    """The axes of the plan: the machine's (each with its table), else the tables given."""
+    axis_names = [k for k in ws.data if k not in _WS_KEYS]
+    for k in axis_names:
+        if k not in AXIS_DIRECTION or not isinstance(ws.data[k], dict):
+            raise ws.error(
+                f"unknown key {k!r}; expected one of {', '.join(_WS_KEYS)} or an axis table "
+                "such as [workspace.X]",
+                k,
+            )
+    if machine_axes is None:
+        axes = tuple(a for a in AXIS_DIRECTION if a in axis_names)
+        if not axes:
+            raise ws.error("expected at least one axis table such as [workspace.X]")
+        return axes
+    axes = tuple(machine_axes)
+    for k in axis_names:
+        if k not in axes:
+            raise ws.error(f"axis {k} is not an axis of the machine ({' '.join(axes)})", k)
+    for a in axes:
+        if a not in axis_names:
+            raise ws.error(
+                f"missing [{'.'.join(map(str, ws.path))}.{a}]: every axis of the machine "
+                f"needs start and end (start = end for an axis that stays put)"
+            )
+    return axes
+
+
+def _read_axis(
+    ws: Fields, a: str, dist: str
+) -> tuple[float, float, NDArray[np.float64], float, int]:
+    """One ``[workspace.A]`` table: start, end, the positions, overshoot, approach (mm/rad)."""
+    t = ws.table(a)
+    assert t is not None
+    t.only(_AXIS_KEYS)
+    scale = np.pi / 180.0 if is_rotary(a) else 1.0
+    lo = t.number("start") * scale
+    hi = t.number("end") * scale
+    if hi < lo:
+        raise t.error(f"expected end >= start ({t.data['start']!r})", "end")
+    if dist != "diagonals" and hi > lo:
+        grid = _axis_grid(t, lo, hi, scale)
+    else:
+        grid = np.array([lo])
+        for key in ("step", "count"):
+            if t.has(key):
+                why = "a diagonal" if dist == "diagonals" else "a fixed axis (start = end)"
+                raise t.error(f"{key} has no meaning for {why}", key)
+    overshoot = t.number("overshoot", 0.0, low=0.0) * scale
+    approach = _APPROACH[t.text("approach", "none", choices=tuple(_APPROACH))]
+    if (approach != 0) != (overshoot > 0):
+        key = "approach" if t.has("approach") else "overshoot"
+        raise t.error(
+            "a direction of approach needs an overshoot > 0, and an overshoot needs an "
+            'approach of "+" or "-"',
+            key,
+        )
+    return lo, hi, grid, overshoot, approach
+
+
+def _axis_grid(t: Fields, lo: float, hi: float, scale: float) -> NDArray[np.float64]:
+    """The positions of a moving axis from its ``step`` or ``count``."""
+    if t.has("step") == t.has("count"):
+        raise t.error("expected either step or count (not both)", "step")
+    key = "step" if t.has("step") else "count"
+    try:
+        if key == "step":
+            step = t.number("step", low=0.0, open_low=True) * scale
+            return axis_values(lo, hi, step=step)
+        count = t.integer("count", minimum=2)
+        return axis_values(lo, hi, count=count)
+    except InputError as exc:
+        if exc.file is not None:
+            raise
+        raise t.error(exc.message, key) from None
+
+
+def _read_sequence(ws: Fields, axes: tuple[str, ...]) -> list[int]:
+    """The order the axes move in (``sequence``), as indices into ``axes``."""
+    seq_text = ws.text("sequence", "".join(axes[::-1]))
+    seq_letters = [c for c in seq_text.upper() if not c.isspace()]
+    if sorted(seq_letters) != sorted(axes):
+        raise ws.error(
+            f"expected the sequence to name each axis ({' '.join(axes)}) once, got {seq_text!r}",
+            "sequence",
+        )
+    return [axes.index(c) for c in seq_letters]
+
+
+def _workspace_points(
+    ws: Fields,
+    dist: str,
+    start: NDArray[np.float64],
+    end: NDArray[np.float64],
+    values: list[NDArray[np.float64]],
+    order: list[int],
+    path: str,
+) -> tuple[NDArray[np.float64], int | None]:
+    """The points of the distribution and the seed of a cloud (keys of the others refused)."""
+    if dist == "diagonals":
+        for key in ("seed", "fraction"):
+            if ws.has(key):
+                raise ws.error(f"{key} is for a cloud, not for diagonals", key)
+        which = ws.text("diagonals", "body", choices=("body", "face", "all"))
+        n_points = ws.integer("points", minimum=2)
+        try:
+            return diagonals(start, end, n_points, which=which), None
+        except InputError as exc:
+            raise ws.error(exc.message, "diagonals") from None
+    for key in ("diagonals", "points"):
+        if ws.has(key):
+            raise ws.error(f"{key} is for distribution = 'diagonals'", key)
+    pts, index = _mesh_points(values, order, path)
+    if dist == "cloud":
+        seed = ws.integer("seed", minimum=0)
+        frac = ws.number("fraction", 0.5, low=0.0, high=0.5, open_low=True)
+        rng = np.random.default_rng(np.random.SeedSequence(seed))
+        return _perturb(pts, values, index, rng, frac), seed
+    if ws.has("seed") or ws.has("fraction"):
+        key = "seed" if ws.has("seed") else "fraction"
+        raise ws.error(f"{key} is for distribution = 'cloud'", key)
+    return pts, None
 
 
 def _read_offsets(ws: Fields) -> NDArray[np.float64]:
