@@ -143,6 +143,73 @@ def test_multilateration_recovers_exact_points_noise_free() -> None:
     assert np.abs(sc.points - Pd).max() < 1e-8
 
 
+def _noisy_lengths() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Stations, points, three trials of lengths with 5 µm noise ``(3, 4, 10)``, a rough start."""
+    C, P = _geometry()
+    d = np.linalg.norm(P[None] - C[:, None], axis=-1)
+    dn = d[None] + np.random.default_rng(np.random.SeedSequence(11)).normal(
+        0.0, 0.005, (3, *d.shape)
+    )
+    start = C + np.random.default_rng(np.random.SeedSequence(4)).normal(0, 3.0, C.shape)
+    return C, P, dn, start
+
+
+def test_multilateration_batch_equals_one_trial_at_a_time() -> None:
+    C, P, dn, start = _noisy_lengths()
+    batch = (
+        trilaterate(C, dn),
+        trilaterate(C[:3], dn[:, :3], points0=P + 5.0),
+        self_calibrate(dn, start),
+        self_calibrate(dn, start, points0=P + 2.0),
+    )
+    for i in range(dn.shape[0]):
+        alone = (
+            trilaterate(C, dn[i]),
+            trilaterate(C[:3], dn[i, :3], points0=P + 5.0),
+            self_calibrate(dn[i], start),
+            self_calibrate(dn[i], start, points0=P + 2.0),
+        )
+        for b, a in zip(batch, alone, strict=True):
+            np.testing.assert_allclose(a.points[0], b.points[i], rtol=1e-12, atol=1e-9)
+            np.testing.assert_allclose(a.stations[0], b.stations[i], rtol=1e-12, atol=1e-9)
+            np.testing.assert_allclose(a.rms[0], b.rms[i], rtol=1e-9, atol=1e-12)
+
+
+def test_multilateration_numbers_are_those_recorded() -> None:
+    """The solvers' results on noisy lengths, as recorded (the starting points and the
+    residuals of trilaterate and self_calibrate share one implementation since)."""
+    C, P, dn, start = _noisy_lengths()
+    r = trilaterate(C, dn)
+    r3 = trilaterate(C[:3], dn[:, :3], points0=P + 5.0)
+    sc = self_calibrate(dn, start)
+    sc0 = self_calibrate(dn, start, points0=P + 2.0)
+    recorded = [
+        (r.points[2, 7], [1777.6564129465762, 2728.013143138636, 930.6968953022441]),
+        (r.rms, [0.0015284656622243204, 0.0025124726541563493, 0.002466551376672751]),
+        (r3.points[1, 4], [1581.5703933048235, 2173.240072467479, 507.35789242042944]),
+        (sc.stations[2, 3], [3821.266908308998, 3575.609961490162, 907.2071887460563]),
+        (sc.points[0, 9], [2236.8162156880794, 765.7328371142886, 91.55191181438717]),
+        (sc.rms, [0.0008689712907278235, 0.0014023060264021505, 0.0018681506047810627]),
+        (sc0.points[1, 0], [1178.1061472401495, 1218.6182697480085, 983.1461880325887]),
+        (sc0.rms, [0.0008689712907319536, 0.0014023060263023417, 0.0018681506047473885]),
+    ]
+    for got, want in recorded:
+        np.testing.assert_allclose(got, want, rtol=1e-9)
+    assert np.all(r3.rms < 1e-9)  # three stations: the lengths are met exactly
+    assert (r.iterations, r3.iterations, sc.iterations, sc0.iterations) == (3, 4, 5, 4)
+
+
+def test_multilateration_starting_points_of_a_wrong_shape() -> None:
+    C, P, dn, start = _noisy_lengths()
+    with pytest.raises(InputError, match=r"starting points of shape \(10, 3\)") as info:
+        trilaterate(C, dn, points0=P[:4])
+    assert info.value.field == "points0"
+    with pytest.raises(InputError, match="mirror ambiguity"):
+        trilaterate(C[:3], dn[:, :3])
+    with pytest.raises(InputError, match="starting points of shape"):
+        self_calibrate(dn, start, points0=P[:, :2])
+
+
 def test_self_calibration_needs_four_stations_and_enough_points() -> None:
     C, P = _geometry()
     d = np.linalg.norm(P[None] - C[:, None], axis=-1)

@@ -179,6 +179,48 @@ def _point_normal(P: _F, C: _F, d: _F) -> tuple[_F, _F, _F, _F]:
     return r, e, H, g
 
 
+def _start_points(C: _F, d: _F, points0: npt.ArrayLike | None) -> _F:
+    """The starting points of the Gauss–Newton iterations, ``(M, N, 3)``.
+
+    Parameters
+    ----------
+    C : ndarray, shape (M, S, 3)
+        Stations (known, or the approximate ones of :func:`self_calibrate`), mm.
+    d : ndarray, shape (M, S, N)
+        Lengths, mm.
+    points0 : array_like, shape (N, 3) or (M, N, 3), optional
+        Given starting points, copied for every trial; without them the linear solution
+        (:func:`_linear_points`, S >= 4).
+
+    Raises
+    ------
+    InputError
+        For three stations without ``points0`` (two mirror-image solutions), or
+        ``points0`` of a shape that is not ``(N, 3)`` or ``(M, N, 3)``.
+    """
+    m, _, n = d.shape
+    if points0 is None:
+        if C.shape[1] < 4:
+            raise InputError(
+                "three stations need starting points (mirror ambiguity)", field="points0"
+            )
+        return _linear_points(C, d)
+    p0 = np.asarray(points0, dtype=np.float64)
+    if p0.shape not in ((n, 3), (m, n, 3)):
+        raise InputError(
+            f"expected starting points of shape ({n}, 3) or ({m}, {n}, 3), got {p0.shape}",
+            field="points0",
+        )
+    return np.broadcast_to(p0, (m, n, 3)).copy()
+
+
+def _result(P: _F, C: _F, d: _F, done: NDArray[np.bool_], iterations: int) -> Multilateration:
+    """The solution with the root mean square of its length residuals."""
+    r = _point_normal(P, C, d)[0]
+    rms = np.sqrt(np.mean(r * r, axis=(1, 2)))
+    return Multilateration(P, C, rms, done, iterations)
+
+
 def trilaterate(
     stations: npt.ArrayLike,
     lengths: npt.ArrayLike,
@@ -209,7 +251,8 @@ def trilaterate(
     Raises
     ------
     InputError
-        On bad shapes, fewer than three stations, or S = 3 without ``points0``.
+        On bad shapes (``points0`` included), fewer than three stations, or S = 3 without
+        ``points0``.
     """
     C = np.asarray(stations, dtype=np.float64)
     if C.ndim == 2:
@@ -221,27 +264,18 @@ def trilaterate(
     d = _lengths(lengths, C.shape[1])
     m = d.shape[0]
     C = np.broadcast_to(C, (m, *C.shape[1:]))
-    if points0 is None:
-        if C.shape[1] < 4:
-            raise InputError(
-                "three stations need starting points (mirror ambiguity)", field="points0"
-            )
-        P = _linear_points(C, d)
-    else:
-        P = np.broadcast_to(np.asarray(points0, dtype=np.float64), (m, d.shape[2], 3)).copy()
+    P = _start_points(C, d, points0)
     scale = float(np.max(d))
     done = np.zeros(m, dtype=bool)
     it = 0
     for it in range(1, max_iter + 1):  # noqa: B007 - iterations, not trials
-        r, _, H, g = _point_normal(P, C, d)
+        _, _, H, g = _point_normal(P, C, d)
         step = -np.linalg.solve(H, g[..., None])[..., 0]
         P = P + step
         done = np.max(np.abs(step), axis=(1, 2)) <= tol * scale
         if np.all(done):
             break
-    r = _point_normal(P, C, d)[0]
-    rms = np.sqrt(np.mean(r * r, axis=(1, 2)))
-    return Multilateration(P, np.array(C), rms, done, it)
+    return _result(P, np.array(C), d, done, it)
 
 
 def self_calibrate(
@@ -276,7 +310,8 @@ def self_calibrate(
     Raises
     ------
     InputError
-        For S < 4, too few points (``S·N < 3N + 3S − 6``) or bad shapes.
+        For S < 4, too few points (``S·N < 3N + 3S − 6``) or bad shapes (``points0``
+        included).
     """
     C0 = np.asarray(stations0, dtype=np.float64)
     if C0.ndim != 2 or C0.shape[1] != 3:
@@ -296,10 +331,7 @@ def self_calibrate(
             f"self-calibrate, got {N}",
             field="lengths",
         )
-    if points0 is None:
-        P0 = _linear_points(C0[None], d[:1])[0]
-    else:
-        P0 = np.asarray(points0, dtype=np.float64)
+    P0 = _start_points(C0[None], d[:1], points0)[0]
     Cd, Pd = datum_frame(C0, P0)
     assert Pd is not None
     # free station coordinates in the datum: C1.x, C2.x, C2.y, then all of C3...
@@ -333,9 +365,7 @@ def self_calibrate(
         done = step <= tol * scale
         if np.all(done):
             break
-    r = _point_normal(P, C, d)[0]
-    rms = np.sqrt(np.mean(r * r, axis=(1, 2)))
-    return Multilateration(P, C, rms, done, it)
+    return _result(P, C, d, done, it)
 
 
 def trilateration_covariance(
