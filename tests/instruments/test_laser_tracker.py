@@ -88,6 +88,12 @@ def test_noise_presets_and_mpe_conversion() -> None:
     assert t.u_spherical(5000.0)[1] * 5000.0 == pytest.approx(0.0225)
     assert "MPE/2" in t.source
     assert "MPE/√3" in r.source
+    # every field is the MPE term over the divisor, the range's and the angles' alike
+    k = math.sqrt(3.0)
+    assert (r.radial_a, r.radial_b) == (0.010 / k, 0.3e-6 / k)
+    assert (r.azimuth, r.elevation, r.transverse_a) == (6e-6 / k, 6e-6 / k, 0.015 / k)
+    assert r.source == "MPE/√3 (rectangular): ADM ±(10 µm + 0.3 µm/m), transverse ±(15 µm + 6 µm/m)"
+    assert t.source == "MPE/2 (typical): ADM ±(10 µm + 0.3 µm/m), transverse ±(15 µm + 6 µm/m)"
     with pytest.raises(InputError, match="conversion"):
         TrackerNoise.from_mpe(adm=(0.01, 0.0), transverse=(0.01, 0.0), conversion="gauss")  # type: ignore[arg-type]
 

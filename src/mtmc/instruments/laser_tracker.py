@@ -159,6 +159,16 @@ def spherical_jacobian(s: npt.ArrayLike) -> _F:
     return J
 
 
+def _mpe_u(mpe: tuple[float, float], k: float) -> tuple[float, float]:
+    """The standard uncertainty ``(A/k, B/k)`` of an MPE ``±(A + B·L)`` (mm, mm/mm)."""
+    return mpe[0] / k, mpe[1] / k
+
+
+def _mpe_text(mpe: tuple[float, float]) -> str:
+    """An MPE ``±(A + B·L)`` (mm, mm/mm) in words, ``±(10 µm + 0.3 µm/m)``."""
+    return f"±({mpe[0] * 1e3:g} µm + {mpe[1] * 1e6:g} µm/m)"
+
+
 @dataclass(frozen=True)
 class TrackerNoise:
     """Standard deviations of the tracker's spherical coordinates (Aguado et al. 2016 eqs. 22–24).
@@ -247,13 +257,10 @@ class TrackerNoise:
             )
         k = MPE_DIVISORS[conversion]
         word = "MPE/2 (typical)" if conversion == "typical" else "MPE/√3 (rectangular)"
-        text = (
-            f"{word}: ADM ±({adm[0] * 1e3:g} µm + {adm[1] * 1e6:g} µm/m), "
-            f"transverse ±({transverse[0] * 1e3:g} µm + {transverse[1] * 1e6:g} µm/m)"
-        )
-        return cls(
-            adm[0] / k, adm[1] / k, transverse[1] / k, transverse[1] / k, transverse[0] / k, text
-        )
+        radial_a, radial_b = _mpe_u(adm, k)  # u_L = a + b·L
+        transverse_a, angle = _mpe_u(transverse, k)  # u_α = u_β = B_t/k + (A_t/k)/L
+        text = f"{word}: ADM {_mpe_text(adm)}, transverse {_mpe_text(transverse)}"
+        return cls(radial_a, radial_b, angle, angle, transverse_a, text)
 
     def u_range(self, L: npt.ArrayLike) -> _F:
         """``u_L = a + b·L``, mm, for ranges ``L`` (mm)."""
