@@ -39,7 +39,7 @@ class LibraryEntry:
     description : str
         One line in words.
     source : str
-        Where the configuration comes from (a seed equation), or ``""``.
+        Where the configuration comes from (a paper and its equation or figure), or ``""``.
     machine : Machine
         The machine built from the entry (travel of rotary axes converted to rad).
     """
