@@ -509,8 +509,9 @@ def _frame(plane: Plane, line: Line, p: Any) -> Any:
 def _sq(v: NDArray[np.float64]) -> NDArray[np.float64]:
     """``|v|²`` column by column of a ``(3, M)`` array of coordinate rows."""
     out: NDArray[np.float64] = v[0] * v[0]
-    out += v[1] * v[1]
-    out += v[2] * v[2]
+    tmp = v[1] * v[1]
+    out += tmp
+    out += np.multiply(v[2], v[2], out=tmp)
     return out
 
 
@@ -600,34 +601,39 @@ def rotary_axis(
         normal = _cross(ab, ac)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
         _check_collinear(_sq(ab.T), _sq(ac.T), _sq(normal.T))
         return Line(gc.circle_from_points(a, b, c).centre, normal)
-    # the coordinates as contiguous rows, (3, M): column arithmetic without strides
-    ra, rb, rc = (np.ascontiguousarray(v.T) for v in (a, b, c))
-    ab, ac = rb - ra, rc - ra
+    # the coordinates as contiguous rows, (3, M): column arithmetic without strides (the
+    # first operation on each point reads its columns, so no transposed copy is made)
+    ra, rb, rc = a.T, b.T, c.T
+    ab, ac = np.subtract(rb, ra, order="C"), np.subtract(rc, ra, order="C")
     n = _cross_rows(ab, ac)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
     sab, sac = _sq(ab), _sq(ac)
     _check_collinear(sab, sac, _sq(n))
     s = np.sin(al)
-    degenerate(
-        ~(np.abs(s) > RTOL),
-        "sin(alpha) is 0: the three positions are not distinct",
-        "0 < alpha < pi",
-        "alpha",
-    )
-    w = rb + rc  # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
+    if not np.all(np.abs(s) > RTOL):
+        degenerate(
+            ~(np.abs(s) > RTOL),
+            "sin(alpha) is 0: the three positions are not distinct",
+            "0 < alpha < pi",
+            "alpha",
+        )
+    # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
+    w = np.add(rb, rc, order="C")
     w *= 0.5
     w -= ra
-    cb = rc - rb  # |P3 P4| = |P3 - P2| / 2, eq. 11 (the rows may be the caller's)
-    half_chord = np.sqrt(_sq(cb))
+    half_chord = _sq(np.subtract(rc, rb, order="C"))  # |P3 P4| = |P3 - P2| / 2, eq. 11
+    np.sqrt(half_chord, out=half_chord)
     half_chord *= 0.5
-    length = np.sqrt(_sq(w))  # |P1 P4|, eq. 13
+    length = _sq(w)  # |P1 P4|, eq. 13
+    np.sqrt(length, out=length)
     np.maximum(sab, sac, out=sab)
     sab *= RTOL**2
-    degenerate(
-        ~(length * length > sab),
-        "P1 coincides with P4, the middle of P2 and P3",
-        "P1 away from the chord P2 P3",
-        "axis",
-    )
+    if not np.all(length * length > sab):
+        degenerate(
+            ~(length * length > sab),
+            "P1 coincides with P4, the middle of P2 and P3",
+            "P1 away from the chord P2 P3",
+            "axis",
+        )
     # eq. 12: R = |P3 P4| / sin(alpha); eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
     length *= s
     half_chord /= length
@@ -649,12 +655,15 @@ def _check_collinear(
     sab: NDArray[np.float64], sac: NDArray[np.float64], sn: NDArray[np.float64]
 ) -> None:
     """Refuse collinear ball centres: ``|n|² <= RTOL² |P2 - P1|² |P3 - P1|²``."""
-    degenerate(
-        ~(sn > RTOL**2 * sab * sac),
-        "the three ball centres are collinear",
-        "three ball centres on a circle",
-        "axis",
-    )
+    bound = RTOL**2 * sab
+    bound *= sac
+    if not np.all(sn > bound):
+        degenerate(
+            ~(sn > bound),
+            "the three ball centres are collinear",
+            "three ball centres on a circle",
+            "axis",
+        )
 
 
 @variant("axis", ("point", "point", "point"), "line")
