@@ -19,7 +19,7 @@ Units: lengths in mm (a graph in µm is converted on reading its numbers), angle
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Container, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Any
@@ -525,13 +525,17 @@ def _full(value: Any, m: int) -> Any:
     return np.broadcast_to(arr, (m, *arr.shape[1:]))
 
 
-def _last_use(plan: Plan) -> dict[str, int]:
-    """For each place read by a transition, the index of the last step that reads it."""
+def _releases(plan: Plan, want: Container[str]) -> tuple[tuple[str, ...], ...]:
+    """For each step, the places it is the last to read and that are not wanted."""
     last: dict[str, int] = {}
     for i, s in enumerate(plan.steps):
         for p in s.transition.inputs:
             last[p] = i
-    return last
+    out: list[list[str]] = [[] for _ in plan.steps]
+    for p, i in last.items():
+        if p not in want:
+            out[i].append(p)
+    return tuple(tuple(ps) for ps in out)
 
 
 def evaluate(
@@ -581,7 +585,7 @@ def evaluate(
             for s in plan.steps
             if s.transition.op == "meas"
         }
-    values = _fire(plan, samples, m, want, specs, _last_use(plan))
+    values = _fire(plan, samples, m, specs, _releases(plan, want))
     return {k: _full(v, m) for k, v in values.items() if k in want}
 
 
@@ -589,21 +593,21 @@ def _fire(
     plan: Plan,
     samples: Mapping[str, Any],
     m: int,
-    want: frozenset[str] | set[str],
     specs: Mapping[str, _probe.MeasSpec],
-    last_use: Mapping[str, int],
+    releases: Sequence[tuple[str, ...]],
 ) -> dict[str, Any]:
     """Fire every transition once on a block of ``m`` trials.
 
-    Returns the values of the places in ``want`` and of those no transition reads
-    (constants as batches of one); the others are released after their last reader.
+    Returns the values of the places no transition reads and of those read but never
+    released (constants as batches of one); ``releases[i]`` are dropped after step ``i``
+    (:func:`_releases`).
     """
     g = plan.graph
     values: dict[str, Any] = {}
     for pl in g.places:
         if pl.marked:
             values[pl.name] = _marked_value(pl, g.factor, samples)
-    for i, s in enumerate(plan.steps):
+    for s, drop in zip(plan.steps, releases, strict=True):
         t = s.transition
         if t.op == "meas":
             val = _probe.meas_value(t.name, specs[t.name], s.variant.output, samples, m)
@@ -619,9 +623,8 @@ def _fire(
                     field="in",
                 ) from None
         values[t.out] = val
-        for p in t.inputs:
-            if last_use.get(p) == i and p not in want:
-                del values[p]
+        for p in drop:
+            del values[p]
     return values
 
 
@@ -664,8 +667,7 @@ class GraphModel:
     outputs: tuple[str, ...]
     inputs: Mapping[str, Distribution] = field(init=False, repr=False)
     specs: Mapping[str, _probe.MeasSpec] = field(init=False, repr=False)
-    _last_use: Mapping[str, int] = field(init=False, repr=False)
-    _want: frozenset[str] = field(init=False, repr=False)
+    _releases: tuple[tuple[str, ...], ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         g = self.plan.graph
@@ -680,17 +682,17 @@ class GraphModel:
         }
         object.__setattr__(self, "inputs", MappingProxyType(inputs))
         object.__setattr__(self, "specs", MappingProxyType(specs))
-        object.__setattr__(self, "_last_use", MappingProxyType(_last_use(self.plan)))
-        object.__setattr__(self, "_want", frozenset(self.outputs))
+        object.__setattr__(self, "_releases", _releases(self.plan, frozenset(self.outputs)))
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (GraphModel, (self.plan, self.outputs))
 
     def __call__(self, **arrays: Any) -> dict[str, NDArray[np.float64]]:
         """The output places of a block of trials, flattened (:func:`flatten`)."""
-        m = max((np.shape(v)[0] for v in arrays.values() if np.ndim(v) > 0), default=1)
+        shapes = (v.shape if isinstance(v, np.ndarray) else np.shape(v) for v in arrays.values())
+        m = max((sh[0] for sh in shapes if sh), default=1)
         arrays.pop(_TRIAL_INPUT, None)
-        vals = _fire(self.plan, arrays, m, self._want, self.specs, self._last_use)
+        vals = _fire(self.plan, arrays, m, self.specs, self._releases)
         types = self.plan.types
         out = {}
         for name in self.outputs:
