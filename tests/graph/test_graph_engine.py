@@ -123,3 +123,40 @@ def test_per_coordinate_u_of_a_marked_point():
     u = res.places["c"].u_vector  # mm: half of (2, 0, 6) µm
     np.testing.assert_allclose(u[[0, 2]], [0.001, 0.003], rtol=0.01)  # se of u: 0.16 %
     assert u[1] < 1e-15  # a constant coordinate (to rounding of its mean)
+
+
+def test_a_part_of_a_summarised_place_has_the_numbers_of_its_own_run(axis_c):
+    """c_p0 and v_c are the point and direction of the line axis_c: summarised with it,
+    they are read from its moments; summarised alone, they are reduced on their own."""
+    both = run_graph(axis_c, trials=40_000, seed=11, outputs=["c_p0", "axis_c", "v_c"])
+    alone = run_graph(axis_c, trials=40_000, seed=11, outputs=["v_c", "c_p0"])
+    assert list(both.places) == ["c_p0", "axis_c", "v_c"]
+    for name in ("c_p0", "v_c"):
+        a, b = both.places[name], alone.places[name]
+        assert a.type == b.type
+        assert a.estimate_vector.tobytes() == b.estimate_vector.tobytes()
+        assert a.cov.tobytes() == b.cov.tobytes()
+        assert (a.result.trials, a.result.seed, a.result.kept) == (40_000, 11, False)
+    kept = run_graph(axis_c, trials=40_000, seed=11, outputs=["axis_c", "v_c"], keep=["v_c"])
+    assert kept.places["v_c"].result.kept
+
+
+def test_part_variants_return_the_part_itself():
+    from mtmc.geometry import Circle, Line, Plane, Sphere
+    from mtmc.graph import ops
+
+    values = {
+        "line": Line([1.0, 2, 3], [0.0, 0, 2]),
+        "plane": Plane([1.0, 2, 3], [0.0, 1, 1]),
+        "circle": Circle([1.0, 2, 3], [0.0, 0, 1], 4.0),
+        "sphere": Sphere([1.0, 2, 3], 4.0),
+    }
+    seen = set()
+    for op in ops.op_names():
+        for v in ops.variants(op):
+            part = ops.PART_OF_INPUT.get(v.func)
+            if part is not None:
+                value = values[v.inputs[0]]
+                assert v.func(value) is getattr(value, part)
+                seen.add(v.func)
+    assert seen == set(ops.PART_OF_INPUT)

@@ -52,6 +52,7 @@ __all__ = [
     "bind",
     "rotary_axis",
     "OP_PARAMS",
+    "PART_OF_INPUT",
 ]
 
 #: Fields (besides ``name``, ``op``, ``in``, ``out``) each op accepts in a graph file.
@@ -676,3 +677,17 @@ def _axis3(a: Any, b: Any, c: Any) -> Any:
 def _axis4(a: Any, b: Any, c: Any, alpha: Any) -> Any:
     """The rotary axis from ball centres at 0, +alpha, -alpha (Stryczek eqs. 8-19)."""
     return rotary_axis(a, b, c, alpha)
+
+
+#: Variants whose value is a part of their one input's value, the very array the input
+#: holds (by the part's name in :data:`mtmc.graph.run.PARTS`): a run that summarises
+#: both places reads the summary of such a place from its input's.
+PART_OF_INPUT: Mapping[Callable[..., Any], str] = MappingProxyType(
+    {
+        _point_line: "point",
+        _point_circle: "centre",
+        _point_sphere: "centre",
+        _unit_line: "direction",
+        _unit_plane: "normal",
+    }
+)

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from mtmc.errors import GraphError, InputError, MtmcError
 from mtmc.frozen import frozen_array, frozen_mapping
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
+from mtmc.graph import ops as _ops
 from mtmc.graph import probe as _probe
 from mtmc.graph.model import Graph, Plan, check
 from mtmc.graph.places import VECTOR_TYPES, Place
@@ -792,7 +793,9 @@ def run_graph(
     plan = _as_plan(graph)
     keep_s = list(dict.fromkeys(keep))
     summ = list(plan.types) if outputs is None else list(dict.fromkeys(outputs))
-    model = GraphModel(plan, tuple(dict.fromkeys([*summ, *keep_s])))
+    derived = _derived_parts(plan, set(summ) - set(keep_s))
+    reduced = [n for n in summ if n not in derived]
+    model = GraphModel(plan, tuple(dict.fromkeys([*reduced, *keep_s])))
     try:
         res = monte_carlo(
             model,
@@ -815,7 +818,14 @@ def run_graph(
         # the engine's outputs are the graph's places: name them, and the file
         msg = exc.message.replace("output '", "place '")
         raise InputError(msg, file=plan.graph.file, field="place") from None
-    places = {n: PlaceSummary(n, plan.types[n], res[n]) for n in summ}
+    places = {}
+    for n in summ:
+        if n in derived:  # a part of another place: the same numbers as its own run
+            whole, part = derived[n]
+            r = PlaceSummary(whole, plan.types[whole], res[whole]).part(part)
+        else:
+            r = res[n]
+        places[n] = PlaceSummary(n, plan.types[n], r)
     samples_out = {n: _read_only(unflatten(plan.types[n], res[n].values)) for n in keep_s}
     assert res.seed is not None  # monte_carlo records the seed it drew
     return GraphResult(res.trials, res.seed, places, samples_out, dict(plan.types))
@@ -826,6 +836,26 @@ def _read_only(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         value.setflags(write=False)
     return value
+
+
+def _derived_parts(plan: Plan, summarised: Container[str]) -> dict[str, tuple[str, str]]:
+    """Places whose value is a part of another summarised place's (:data:`ops.PART_OF_INPUT`).
+
+    Their summaries are read from that place's (its moments hold theirs: the same sums
+    and dot products of the same rows), so the run reduces their values once. Returns
+    ``{place: (whole, part)}`` for those summarised whose whole is summarised and not
+    read from a third place itself.
+    """
+    out: dict[str, tuple[str, str]] = {}
+    for s in plan.steps:
+        t = s.transition
+        part = _ops.PART_OF_INPUT.get(s.variant.func)
+        if part is None or t.out not in summarised:
+            continue
+        whole = t.inputs[0]
+        if whole in summarised and whole not in out:
+            out[t.out] = (whole, part)
+    return out
 
 
 def unflatten(type_: str, flat: NDArray[np.float64]) -> Any:
