@@ -57,7 +57,9 @@ def _normalised(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.floa
     return v / np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)[:, None]
 
 
-def unit_rows(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.float64]:
+def unit_rows(
+    v: NDArray[np.float64], name: str, what: str, sq: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
     """Normalise the columns of a ``(3, M)`` array of coordinate rows, in place.
 
     The rows counterpart of the normalisation of a primitive's direction, bit for bit:
@@ -71,6 +73,9 @@ def unit_rows(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.float6
         The vectors, one row per coordinate (overwritten by the unit vectors).
     name, what : str
         The field and the thing, for the error (``"direction"``, ``"line direction"``).
+    sq : ndarray, shape (M,), optional
+        ``|v|²`` summed in that order (:func:`squared_rows`), where already formed
+        (overwritten).
 
     Returns
     -------
@@ -82,13 +87,20 @@ def unit_rows(v: NDArray[np.float64], name: str, what: str) -> NDArray[np.float6
     DegenerateGeometryError
         If a vector has zero length.
     """
-    sq = v[0] * v[0]
-    sq += v[2] * v[2]
-    sq += v[1] * v[1]
+    sq = squared_rows(v) if sq is None else sq
     norm = np.sqrt(sq, out=sq)
     degenerate(norm <= 0.0, f"the {what} has zero length", f"a non-zero {what}", name)
     v /= np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)
     return v
+
+
+def squared_rows(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``|v|² = (x² + z²) + y²`` of each column of a ``(3, M)`` array (as :func:`unit_rows`)."""
+    sq: NDArray[np.float64] = v[0] * v[0]
+    tmp = v[2] * v[2]
+    sq += tmp
+    sq += np.multiply(v[1], v[1], out=tmp)
+    return sq
 
 
 def _index(arr: NDArray[Any], idx: Any) -> NDArray[Any]:

@@ -40,7 +40,7 @@ from mtmc.geometry.checks import (
     check_scalars,
     degenerate,
 )
-from mtmc.geometry.primitives import Circle, Line, Plane, Sphere, unit_rows
+from mtmc.geometry.primitives import Circle, Line, Plane, Sphere, squared_rows, unit_rows
 from mtmc.geometry.vec import cross as _cross
 
 __all__ = [
@@ -607,8 +607,8 @@ def rotary_axis(
     ra, rb, rc = a.T, b.T, c.T
     ab, ac = np.subtract(rb, ra, order="C"), np.subtract(rc, ra, order="C")
     n = _cross_rows(ab, ac)  # eqs. 20-24; Line() normalises it (eqs. 25-27)
-    sab, sac = _sq(ab), _sq(ac)
-    _check_collinear(sab, sac, _sq(n))
+    sab, sac, sn = _sq(ab), _sq(ac), squared_rows(n)
+    _check_collinear(sab, sac, sn)
     s = np.sin(al)
     if not np.all(np.abs(s) > RTOL):
         degenerate(
@@ -640,7 +640,7 @@ def rotary_axis(
     half_chord /= length
     w *= half_chord
     w += ra
-    unit_rows(n, "direction", "line direction")  # eqs. 25-27, as Line() normalises
+    unit_rows(n, "direction", "line direction", sn)  # eqs. 25-27, as Line() normalises
     # back to (M, 3) rows, C-ordered like any other batch (the same bits as one at a time)
     return Line.of_unit(_columns(w), _columns(n))
 
