@@ -90,7 +90,11 @@ def unit_rows(
     sq = squared_rows(v) if sq is None else sq
     norm = np.sqrt(sq, out=sq)
     degenerate(norm <= 0.0, f"the {what} has zero length", f"a non-zero {what}", name)
-    v /= np.where(np.abs(norm - 1.0) <= 1e-15, 1.0, norm)
+    unit = np.subtract(norm, 1.0)
+    unit = np.abs(unit, out=unit) <= 1e-15
+    if unit.any():  # kept as they are
+        norm[unit] = 1.0
+    v /= norm
     return v
 
 

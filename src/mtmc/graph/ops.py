@@ -354,7 +354,12 @@ def _displace_pv(p: Any, v: Any) -> Any:
 @variant("displace", ("point", "direction", "real"), "point")
 def _displace_pur(p: Any, d: Any, r: Any) -> Any:
     """The point displaced by r along a unit vector, p + r d."""
-    return gc.displace(p, np.atleast_1d(r)[:, None] * d)  # d is a direction place: no rescaling
+    v = np.multiply(np.atleast_1d(r)[:, None], d)  # d is a direction place: no rescaling
+    pp = np.asarray(p)
+    if pp.dtype == np.float64 and pp.shape == v.shape and v.ndim == 2 and v.shape[1] == 3:
+        v += pp  # = p + v, in place
+        return v
+    return gc.displace(pp, v)
 
 
 def _scalar_sum(a: Any, b: Any) -> Any:

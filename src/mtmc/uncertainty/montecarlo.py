@@ -19,6 +19,7 @@ Stryczek (Fig. 4): the sum of N(0, 1) and N(0.5, 0.5) has u = √1.25 ≈ 1.118.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from collections.abc import Callable, Container, Iterable, Mapping
@@ -174,6 +175,14 @@ def _groups(shapes: Mapping[str, tuple[int, ...]], kept: Container[str]) -> list
     return [tuple(names) for names in by_width.values()]
 
 
+@functools.lru_cache(maxsize=64)
+def _groups_of(
+    shapes: tuple[tuple[str, tuple[int, ...]], ...], kept: tuple[str, ...]
+) -> tuple[tuple[str, ...], ...]:
+    """:func:`_groups` of the outputs of a block, resolved once per set of shapes."""
+    return tuple(_groups(dict(shapes), kept))
+
+
 def _block_array(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
     """One C-ordered ``(d, rows)`` array of the pieces of a seed block (a view if it is one)."""
     if len(parts) > 1:
@@ -204,7 +213,7 @@ def _digest(
     """Reduce the outputs of trials ``start..start+m-1`` of a run of ``total`` trials."""
     m = next(iter(outs.values())).shape[0]
     kept = [n for n in outs if keep is True or (keep is not False and n in keep)]
-    groups = _groups({n: arr.shape[1:] for n, arr in outs.items()}, kept)
+    groups = _groups_of(tuple((n, arr.shape[1:]) for n, arr in outs.items()), tuple(kept))
     s = SEED_BLOCK_SIZE
     spans: list[tuple[int, int, int, bool]] = []  # seed block, rows lo..hi, complete
     lo = 0

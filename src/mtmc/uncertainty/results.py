@@ -360,11 +360,12 @@ class Moments:
         for i, x in enumerate(xts):
             np.subtract(x, mean[i][:, None], out=dev[i])
         m2 = np.empty((p, d, d))
+        flat = m2.reshape(p, d * d)
         for s in range(d):  # dot products of rows in NumPy's own loops: no BLAS threads
             v = _row_dots(dev[:, : d - s], dev[:, s:])
-            j = np.arange(d - s)
-            m2[:, j, j + s] = v
-            m2[:, j + s, j] = v
+            # the s-th diagonals above and below: (i, i + s) and (i + s, i), i < d - s
+            flat[:, s : s + (d - s) * (d + 1) : d + 1] = v
+            flat[:, s * d : s * d + (d - s) * (d + 1) : d + 1] = v
         return cls._new(n, mean, m2)
 
     def unstack(self) -> list[Moments]:
