@@ -98,12 +98,18 @@ def unit_rows(
     return v
 
 
-def squared_rows(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``|v|² = (x² + z²) + y²`` of each column of a ``(3, M)`` array (as :func:`unit_rows`)."""
-    sq: NDArray[np.float64] = v[0] * v[0]
-    tmp = v[2] * v[2]
+def squared_rows(
+    v: NDArray[np.float64], order: tuple[int, int, int] = (0, 2, 1)
+) -> NDArray[np.float64]:
+    """``|v|²`` of each column of a ``(3, M)`` array, the squares added in ``order``.
+
+    The default, ``(x² + z²) + y²``, is the order of :func:`unit_rows`.
+    """
+    i, j, k = order
+    sq: NDArray[np.float64] = v[i] * v[i]
+    tmp = v[j] * v[j]
     sq += tmp
-    sq += np.multiply(v[1], v[1], out=tmp)
+    sq += np.multiply(v[k], v[k], out=tmp)
     return sq
 
 

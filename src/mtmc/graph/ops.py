@@ -513,12 +513,8 @@ def _frame(plane: Plane, line: Line, p: Any) -> Any:
 
 
 def _sq(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``|v|²`` column by column of a ``(3, M)`` array of coordinate rows."""
-    out: NDArray[np.float64] = v[0] * v[0]
-    tmp = v[1] * v[1]
-    out += tmp
-    out += np.multiply(v[2], v[2], out=tmp)
-    return out
+    """``|v|² = (x² + y²) + z²`` column by column of a ``(3, M)`` array of coordinate rows."""
+    return squared_rows(v, (0, 1, 2))
 
 
 def _cross_rows(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
