@@ -624,10 +624,154 @@ def _vec(f: Any, key: str, default: Any = None, n: int = 3, positive: bool = Fal
     return np.array(v, dtype=np.float64)
 
 
-def loads_artefact_study(  # noqa: C901
+def _artefact(top: Any) -> tuple[Artefact, _F]:
+    """The ``[artefact]`` table: the artefact, mounted, and the direction of its patches."""
+    art_f = top.table("artefact")
+    assert art_f is not None
+    art_f.only(("file", "shipped", "position", "rotation_deg", "patch_axis"))
+    if art_f.has("file") == art_f.has("shipped"):
+        raise art_f.error("expected exactly one of file (a path) or shipped (a name)")
+    if art_f.has("file"):
+        path = top.source.resolve(art_f.text("file"), (*art_f.path, "file"))
+        art: Artefact = load_artefact(path)
+    else:
+        art = shipped_artefact(art_f.text("shipped", choices=SHIPPED))
+    pos = _vec(art_f, "position", np.zeros(3))
+    rot_deg = _vec(art_f, "rotation_deg", np.zeros(3))
+    from mtmc.geometry.transforms import matrix_from_euler
+
+    rot = matrix_from_euler(np.radians(rot_deg), "zyx") if np.any(rot_deg) else np.eye(3)
+    art = art.mounted(pos, np.asarray(rot).reshape(3, 3))
+    axis = _vec(art_f, "patch_axis", np.array([0.0, 0.0, 1.0]))
+    if not np.linalg.norm(axis) > 0:
+        raise art_f.error("expected a non-zero direction", "patch_axis")
+    return art, axis
+
+
+def _machine(mf: Any) -> Machine:
+    """``[machine]`` ``library`` or ``topology``, with the ``probe`` offset."""
+    mf.only(("library", "topology", "probe", "errors"))
+    if mf.has("library") == mf.has("topology"):
+        raise mf.error("expected exactly one of library (a machine name) or topology")
+    probe = _vec(mf, "probe", np.zeros(3))
+    try:
+        if mf.has("library"):
+            base = library_machine(mf.text("library"))
+            return Machine.from_topology(
+                base.topology, tool=probe, pivots=base.pivots, travel=base.travel
+            )
+        return Machine.from_topology(mf.text("topology"), tool=probe)
+    except InputError as exc:
+        key = "library" if mf.has("library") else "topology"
+        raise mf.error(exc.message, key) from None
+
+
+def _machine_errors(mf: Any, machine: Machine) -> dict[str, Any]:
+    """The optional ``[machine.errors]`` table: the chosen geometric errors, mm and rad."""
+    errors: dict[str, Any] = {}
+    ef = mf.table("errors", required=False)
+    if ef is None:
+        return errors
+    for key in ef.data:
+        try:
+            name = machine.error_term(key).name
+        except InputError as exc:
+            raise ef.error(exc.message, key) from None
+        if name in ("EXT", "EYT", "EZT"):
+            raise ef.error(f"{name} is the probe's setup error: give it in [setup_errors]", key)
+        errors[name] = _error_value(ef, name, machine, key)
+    return errors
+
+
+def _probing(top: Any, machine: Machine, art: Artefact, axis: _F) -> tuple[FiducialSetup, _F, bool]:
+    """The optional ``[probing]`` table: the setup, the repeatability (um), ``free``."""
+    pf = top.table("probing", required=False)
+    cols, rows, size, rep, free = 6, 5, 6.0, np.array(PAPER_REPEATABILITY_UM), False
+    if pf is not None:
+        pf.only(("columns", "rows", "size_mm", "repeatability_um", "radius"))
+        cols = pf.integer("columns", cols, minimum=1)
+        rows = pf.integer("rows", rows, minimum=1)
+        size = pf.number("size_mm", size, low=0.0, open_low=True)
+        rep = _vec(pf, "repeatability_um", rep, positive=True)
+        free = pf.text("radius", "calibrated", choices=("calibrated", "free")) == "free"
+    if 0.5 * size * math.sqrt(2.0) >= art.radius:
+        raise (pf or top).error(
+            f"expected a patch that fits on the ball (radius {art.radius} mm), got {size} mm",
+            "size_mm" if pf is not None else None,
+        )
+    return FiducialSetup(machine, art, axis, patch_offsets(cols, rows, size)), rep, free
+
+
+def _plan(top: Any, rotary: tuple[str, ...]) -> tuple[_F, int]:
+    """The ``[plan]`` table: the rotary poses (rad) and the repetitions."""
+    plan = top.table("plan")
+    assert plan is not None
+    plan.only(("poses_deg", "repetitions"))
+    n_rot = len(rotary)
+    raw = plan.data.get("poses_deg")
+    if not (
+        isinstance(raw, list)
+        and raw
+        and all(
+            isinstance(r, list)
+            and len(r) == n_rot
+            and all(isinstance(x, int | float) and not isinstance(x, bool) for x in r)
+            for r in raw
+        )
+    ):
+        raise plan.error(
+            f"expected a list of poses, each [{', '.join(a.lower() for a in rotary)}] in degrees",
+            "poses_deg",
+        )
+    poses = np.radians(np.array(raw, dtype=np.float64).reshape(len(raw), n_rot))
+    return poses, plan.integer("repetitions", 1, minimum=1)
+
+
+def _setup_errors(top: Any, ball_names: tuple[str, ...]) -> _F:
+    """The optional ``[setup_errors]`` table: ``ΔE`` (eq. 18), mm (0 where not given)."""
+    names = setup_error_names(ball_names)
+    E = np.zeros(len(names))
+    sf = top.table("setup_errors", required=False)
+    if sf is not None:
+        sf.only(names)
+        for j, nm in enumerate(names):
+            E[j] = sf.number(nm, 0.0) * UM
+    return E
+
+
+def _uncertainty(top: Any) -> tuple[bool, _F | None, float | None]:
+    """The optional ``[uncertainty]`` table: ``cmm``, machine repeatability, setup ``u`` (mm)."""
+    uf = top.table("uncertainty", required=False)
+    cmm, mrep, su = True, None, None
+    if uf is not None:
+        uf.only(("cmm", "machine_repeatability_um", "setup_errors_um"))
+        cmm = uf.flag("cmm", True)
+        mrep = _vec(uf, "machine_repeatability_um", None, positive=True)
+        if mrep is not None:
+            mrep = mrep * UM
+        if uf.has("setup_errors_um"):
+            su = uf.number("setup_errors_um", low=0.0, open_low=True) * UM
+    return cmm, mrep, su
+
+
+def _run(top: Any) -> tuple[int, int | None]:
+    """The optional ``[run]`` table: the default trials and seed."""
+    trials, seed = 10_000, None
+    rf = top.table("run", required=False)
+    if rf is not None:
+        rf.only(("trials", "seed"))
+        trials = rf.integer("trials", trials, minimum=2)
+        seed = rf.integer("seed", None, minimum=0)
+    return trials, seed
+
+
+def loads_artefact_study(
     text: str, file: str = "<study>", folder: Path | None = None
 ) -> ArtefactStudy:
     """Read an artefact study from TOML text (format: ``docs/artefact.md``).
+
+    One reader per table, in file order: ``[artefact]``, ``[machine]``, ``[probing]``,
+    ``[plan]``, ``[setup_errors]``, ``[uncertainty]``, ``[run]``.
 
     Raises
     ------
@@ -660,119 +804,16 @@ def loads_artefact_study(  # noqa: C901
     )
     top.text("kind", "artefact", choices=("artefact",))  # as ``mtmc run`` reads it
     title = top.text("title", "")
-    art_f = top.table("artefact")
-    assert art_f is not None
-    art_f.only(("file", "shipped", "position", "rotation_deg", "patch_axis"))
-    if art_f.has("file") == art_f.has("shipped"):
-        raise art_f.error("expected exactly one of file (a path) or shipped (a name)")
-    if art_f.has("file"):
-        art: Artefact = load_artefact(src.resolve(art_f.text("file"), (*art_f.path, "file")))
-    else:
-        art = shipped_artefact(art_f.text("shipped", choices=SHIPPED))
-    pos = _vec(art_f, "position", np.zeros(3))
-    rot_deg = _vec(art_f, "rotation_deg", np.zeros(3))
-    from mtmc.geometry.transforms import matrix_from_euler
-
-    rot = matrix_from_euler(np.radians(rot_deg), "zyx") if np.any(rot_deg) else np.eye(3)
-    art = art.mounted(pos, np.asarray(rot).reshape(3, 3))
-    axis = _vec(art_f, "patch_axis", np.array([0.0, 0.0, 1.0]))
-    if not np.linalg.norm(axis) > 0:
-        raise art_f.error("expected a non-zero direction", "patch_axis")
-
+    art, axis = _artefact(top)
     mf = top.table("machine")
     assert mf is not None
-    mf.only(("library", "topology", "probe", "errors"))
-    if mf.has("library") == mf.has("topology"):
-        raise mf.error("expected exactly one of library (a machine name) or topology")
-    probe = _vec(mf, "probe", np.zeros(3))
-    try:
-        if mf.has("library"):
-            base = library_machine(mf.text("library"))
-            machine = Machine.from_topology(
-                base.topology, tool=probe, pivots=base.pivots, travel=base.travel
-            )
-        else:
-            machine = Machine.from_topology(mf.text("topology"), tool=probe)
-    except InputError as exc:
-        key = "library" if mf.has("library") else "topology"
-        raise mf.error(exc.message, key) from None
-    errors: dict[str, Any] = {}
-    ef = mf.table("errors", required=False)
-    if ef is not None:
-        for key in ef.data:
-            try:
-                name = machine.error_term(key).name
-            except InputError as exc:
-                raise ef.error(exc.message, key) from None
-            if name in ("EXT", "EYT", "EZT"):
-                raise ef.error(f"{name} is the probe's setup error: give it in [setup_errors]", key)
-            errors[name] = _error_value(ef, name, machine, key)
-
-    pf = top.table("probing", required=False)
-    cols, rows, size, rep, free = 6, 5, 6.0, np.array(PAPER_REPEATABILITY_UM), False
-    if pf is not None:
-        pf.only(("columns", "rows", "size_mm", "repeatability_um", "radius"))
-        cols = pf.integer("columns", cols, minimum=1)
-        rows = pf.integer("rows", rows, minimum=1)
-        size = pf.number("size_mm", size, low=0.0, open_low=True)
-        rep = _vec(pf, "repeatability_um", rep, positive=True)
-        free = pf.text("radius", "calibrated", choices=("calibrated", "free")) == "free"
-    if 0.5 * size * math.sqrt(2.0) >= art.radius:
-        raise (pf or top).error(
-            f"expected a patch that fits on the ball (radius {art.radius} mm), got {size} mm",
-            "size_mm" if pf is not None else None,
-        )
-    setup = FiducialSetup(machine, art, axis, patch_offsets(cols, rows, size))
-
-    plan = top.table("plan")
-    assert plan is not None
-    plan.only(("poses_deg", "repetitions"))
-    n_rot = len(setup.rotary)
-    raw = plan.data.get("poses_deg")
-    if not (
-        isinstance(raw, list)
-        and raw
-        and all(
-            isinstance(r, list)
-            and len(r) == n_rot
-            and all(isinstance(x, int | float) and not isinstance(x, bool) for x in r)
-            for r in raw
-        )
-    ):
-        raise plan.error(
-            f"expected a list of poses, each [{', '.join(a.lower() for a in setup.rotary)}] "
-            "in degrees",
-            "poses_deg",
-        )
-    poses = np.radians(np.array(raw, dtype=np.float64).reshape(len(raw), n_rot))
-    reps = plan.integer("repetitions", 1, minimum=1)
-
-    names = setup_error_names(art.names)
-    E = np.zeros(len(names))
-    sf = top.table("setup_errors", required=False)
-    if sf is not None:
-        sf.only(names)
-        for j, nm in enumerate(names):
-            E[j] = sf.number(nm, 0.0) * UM
-
-    uf = top.table("uncertainty", required=False)
-    cmm, mrep, su = True, None, None
-    if uf is not None:
-        uf.only(("cmm", "machine_repeatability_um", "setup_errors_um"))
-        cmm = uf.flag("cmm", True)
-        mrep = _vec(uf, "machine_repeatability_um", None, positive=True)
-        if mrep is not None:
-            mrep = mrep * UM
-        if uf.has("setup_errors_um"):
-            su = uf.number("setup_errors_um", low=0.0, open_low=True) * UM
-
-    trials, seed = 10_000, None
-    rf = top.table("run", required=False)
-    if rf is not None:
-        rf.only(("trials", "seed"))
-        trials = rf.integer("trials", trials, minimum=2)
-        seed = rf.integer("seed", None, minimum=0)
-
+    machine = _machine(mf)
+    errors = _machine_errors(mf, machine)
+    setup, rep, free = _probing(top, machine, art, axis)
+    poses, reps = _plan(top, setup.rotary)
+    E = _setup_errors(top, art.names)
+    cmm, mrep, su = _uncertainty(top)
+    trials, seed = _run(top)
     return ArtefactStudy(
         title,
         setup,

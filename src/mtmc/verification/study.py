@@ -310,10 +310,157 @@ def read_trackers(tf: Fields) -> tuple[dict[str, LaserTracker], TrackerLimits | 
     return trackers, limits
 
 
-def loads_verification_study(  # noqa: C901 - one reader per table, in file order
+def _machine(top: Fields, title: str) -> tuple[Machine, dict[str, tuple[float, float]]]:
+    """The ``[machine]`` table: the topology, its travel and the reflector offset."""
+    mf = top.table("machine")
+    assert mf is not None
+    mf.only(("topology", "reflector", "travel"))
+    topo = mf.text("topology")
+    try:
+        bare = Machine.from_topology(topo)
+    except MtmcError as exc:
+        raise mf.error(str(exc), "topology") from exc
+    travel = _travel(mf, bare.axes)
+    reflector = _vector(mf, "reflector") if "reflector" in mf.data else np.zeros(3)
+    return Machine.from_topology(topo, tool=reflector, travel=travel, name=title), travel
+
+
+def _term_name(machine: Machine, f: Fields, key: str) -> str:
+    """The ISO 230 name of the error ``key`` of table ``f``, or an error at that key."""
+    try:
+        return machine.error_term(key).name
+    except MtmcError as exc:
+        raise f.error(str(exc), key) from exc
+
+
+def _templates(
+    ef: Fields, machine: Machine, travel: Mapping[str, tuple[float, float]], kind: str
+) -> dict[str, ErrorFunction | float]:
+    """``[model] errors``: a zero function of the given degree, or a constant, per error."""
+    templates: dict[str, ErrorFunction | float] = {}
+    for key, v in ef.data.items():
+        name = _term_name(machine, ef, key)
+        if v == "constant":
+            templates[name] = 0.0
+        elif isinstance(v, int) and not isinstance(v, bool) and v >= 1:
+            term = machine.error_term(name)
+            if term.axis not in travel:
+                raise ef.error(f'{name} is not a function of an axis; write "constant"', key)
+            lo, hi = travel[term.axis]
+            templates[name] = _function(kind, [0.0] * (v + 1), lo, hi)
+        else:
+            raise ef.error(f'expected a degree >= 1 or "constant", got {v!r}', key)
+    return templates
+
+
+def _fixed(md: Fields, model: ErrorModel) -> list[str]:
+    """``[model] fixed``: the parameters held at zero (``"default"``: see the module notes)."""
+    fx = md.data.get("fixed", "default")
+    if fx == "default":
+        fixed = [n for n in model.parameter_names if n.endswith("[0]")]
+        fixed += [f"{e}[1]" for e in _STRAIGHTNESS if f"{e}[1]" in model.parameter_names]
+        return fixed
+    fixed = list(md.texts("fixed"))
+    for n in fixed:
+        if n not in model.parameter_names:
+            raise md.error(
+                f"{n} is not a parameter of the model ({', '.join(model.parameter_names)})",
+                "fixed",
+            )
+    return fixed
+
+
+def _model(
+    top: Fields, machine: Machine, travel: Mapping[str, tuple[float, float]]
+) -> tuple[ErrorModel, list[str], bool]:
+    """The ``[model]`` table: the identification model, its fixed parameters, ``pose``."""
+    md = top.table("model")
+    assert md is not None
+    md.only(("functions", "pose", "errors", "fixed"))
+    kind = md.text("functions", "legendre", choices=_FUNCTIONS)
+    pose = md.flag("pose", True)
+    ef = md.table("errors")
+    assert ef is not None
+    templates = _templates(ef, machine, travel, kind)
+    try:
+        model = ErrorModel(machine, templates)
+    except MtmcError as exc:
+        raise ef.error(str(exc)) from exc
+    return model, _fixed(md, model), pose
+
+
+def _truth(
+    top: Fields, machine: Machine, travel: Mapping[str, tuple[float, float]]
+) -> dict[str, Any]:
+    """The ``[truth]`` table: the simulated machine's errors, mm and rad."""
+    tr = top.table("truth")
+    assert tr is not None
+    tkind = tr.text("functions", "legendre", choices=_FUNCTIONS)
+    truth: dict[str, Any] = {}
+    for key, v in tr.data.items():
+        if key == "functions":
+            continue
+        name = _term_name(machine, tr, key)
+        scale = 1e-6 if _is_angle(machine, name) else 1e-3
+        if isinstance(v, list):
+            if not v or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v):
+                raise tr.error(f"expected an array of numbers, got {v!r}", key)
+            term = machine.error_term(name)
+            if term.axis not in travel or term.kind != "component":
+                raise tr.error(f"{name} is not a component error of an axis: give a number", key)
+            lo, hi = travel[term.axis]
+            f0 = _function(tkind, [0.0, *(float(x) * scale for x in v)], lo, hi)
+            c0 = -float(f0(np.array([lo]))[0])  # zero at the start of travel
+            truth[name] = _function(tkind, [c0, *(float(x) * scale for x in v)], lo, hi)
+        else:
+            truth[name] = tr.number(key) * scale
+    return truth
+
+
+def _point_sets(top: Fields, n_axes: int) -> dict[str, PointSet]:
+    """The ``[points.NAME]`` tables: meshes and clouds of commanded positions."""
+    ps = top.table("points")
+    assert ps is not None
+    points: dict[str, PointSet] = {}
+    for name in ps.data:
+        one = ps.table(name)
+        assert one is not None
+        one.only(("kind", "start", "stop", "step", "seed", "description"))
+        q = np.array(_points_of(one, n_axes), dtype=np.float64)
+        q.setflags(write=False)
+        points[name] = PointSet(name, q, one.text("description", ""))
+    if not points:
+        raise ps.error("expected at least one point set")
+    return points
+
+
+def _run(
+    top: Fields, points: Mapping[str, PointSet], trackers: Mapping[str, Any]
+) -> dict[str, Any]:
+    """The optional ``[run]`` table, as keyword arguments of :class:`VerificationStudy`."""
+    rf = top.table("run", required=False) or Fields(top.source, {}, ("run",))
+    rf.only(("trials", "seed", "points", "tracker", "repeatability_um", "reflector_um", "pose_u"))
+    dp = rf.text("points", next(iter(points)), choices=tuple(points))
+    dt = rf.text("tracker", next(iter(trackers)), choices=tuple(trackers))
+    pose_u = tuple(_vector(rf, "pose_u", 6).tolist()) if "pose_u" in rf.data else (0.0,) * 6
+    return {
+        "trials": rf.integer("trials", 1000, minimum=2),
+        "seed": rf.integer("seed", None, minimum=0) if "seed" in rf.data else None,
+        "default_points": dp,
+        "default_tracker": dt,
+        "repeatability": rf.number("repeatability_um", 0.0, low=0.0) * 1e-3,
+        "reflector_u": rf.number("reflector_um", 0.0, low=0.0) * 1e-3,
+        "pose_u": pose_u,
+    }
+
+
+def loads_verification_study(
     text: str, *, file: str = "<study>", folder: Path | None = None
 ) -> VerificationStudy:
     """Read a verification study from TOML text.
+
+    One reader per table, in file order: ``[machine]``, ``[model]``, ``[truth]``,
+    ``[tracker]`` (:func:`read_trackers`), ``[points]``, ``[run]``.
 
     Parameters
     ----------
@@ -333,7 +480,6 @@ def loads_verification_study(  # noqa: C901 - one reader per table, in file orde
         Naming the file, line and field of the first bad entry.
     """
     top = parse_study(text, file, folder)
-    data = top.data
     top.only(
         (
             "title",
@@ -349,112 +495,19 @@ def loads_verification_study(  # noqa: C901 - one reader per table, in file orde
             "nc",  # these two read by mtmc.verification.ncprogram (verify plan)
         )
     )
-    if "kind" in data:
+    if "kind" in top.data:
         top.text("kind", choices=("verification",))
     title = top.text("title", "")
     note = top.text("note", "")
-    mf = top.table("machine")
-    assert mf is not None
-    mf.only(("topology", "reflector", "travel"))
-    topo = mf.text("topology")
-    try:
-        bare = Machine.from_topology(topo)
-    except MtmcError as exc:
-        raise mf.error(str(exc), "topology") from exc
-    travel = _travel(mf, bare.axes)
-    reflector = _vector(mf, "reflector") if "reflector" in mf.data else np.zeros(3)
-    machine = Machine.from_topology(topo, tool=reflector, travel=travel, name=title)
-
-    def term_name(f: Fields, key: str) -> str:
-        try:
-            return machine.error_term(key).name
-        except MtmcError as exc:
-            raise f.error(str(exc), key) from exc
-
-    # identification model
-    md = top.table("model")
-    assert md is not None
-    md.only(("functions", "pose", "errors", "fixed"))
-    kind = md.text("functions", "legendre", choices=_FUNCTIONS)
-    pose = md.flag("pose", True)
-    ef = md.table("errors")
-    assert ef is not None
-    templates: dict[str, ErrorFunction | float] = {}
-    for key, v in ef.data.items():
-        name = term_name(ef, key)
-        if v == "constant":
-            templates[name] = 0.0
-        elif isinstance(v, int) and not isinstance(v, bool) and v >= 1:
-            term = machine.error_term(name)
-            if term.axis not in travel:
-                raise ef.error(f'{name} is not a function of an axis; write "constant"', key)
-            lo, hi = travel[term.axis]
-            templates[name] = _function(kind, [0.0] * (v + 1), lo, hi)
-        else:
-            raise ef.error(f'expected a degree >= 1 or "constant", got {v!r}', key)
-    try:
-        model = ErrorModel(machine, templates)
-    except MtmcError as exc:
-        raise ef.error(str(exc)) from exc
-    fx = md.data.get("fixed", "default")
-    if fx == "default":
-        fixed = [n for n in model.parameter_names if n.endswith("[0]")]
-        fixed += [f"{e}[1]" for e in _STRAIGHTNESS if f"{e}[1]" in model.parameter_names]
-    else:
-        fixed = list(md.texts("fixed"))
-        for n in fixed:
-            if n not in model.parameter_names:
-                raise md.error(
-                    f"{n} is not a parameter of the model ({', '.join(model.parameter_names)})",
-                    "fixed",
-                )
-    # truth
-    tr = top.table("truth")
-    assert tr is not None
-    tkind = tr.text("functions", "legendre", choices=_FUNCTIONS)
-    truth: dict[str, Any] = {}
-    for key, v in tr.data.items():
-        if key == "functions":
-            continue
-        name = term_name(tr, key)
-        scale = 1e-6 if _is_angle(machine, name) else 1e-3
-        if isinstance(v, list):
-            if not v or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v):
-                raise tr.error(f"expected an array of numbers, got {v!r}", key)
-            term = machine.error_term(name)
-            if term.axis not in travel or term.kind != "component":
-                raise tr.error(f"{name} is not a component error of an axis: give a number", key)
-            lo, hi = travel[term.axis]
-            f0 = _function(tkind, [0.0, *(float(x) * scale for x in v)], lo, hi)
-            c0 = -float(f0(np.array([lo]))[0])  # zero at the start of travel
-            truth[name] = _function(tkind, [c0, *(float(x) * scale for x in v)], lo, hi)
-        else:
-            truth[name] = tr.number(key) * scale
-    # tracker
+    machine, travel = _machine(top, title)
+    model, fixed, pose = _model(top, machine, travel)
+    truth = _truth(top, machine, travel)
     tf = top.table("tracker")
     assert tf is not None
     trackers, limits = read_trackers(tf)
     noise = next(iter(trackers.values())).noise
     assert noise is not None
-    # points
-    ps = top.table("points")
-    assert ps is not None
-    points: dict[str, PointSet] = {}
-    for name in ps.data:
-        one = ps.table(name)
-        assert one is not None
-        one.only(("kind", "start", "stop", "step", "seed", "description"))
-        q = np.array(_points_of(one, machine.n_axes), dtype=np.float64)
-        q.setflags(write=False)
-        points[name] = PointSet(name, q, one.text("description", ""))
-    if not points:
-        raise ps.error("expected at least one point set")
-    # run
-    rf = top.table("run", required=False) or Fields(top.source, {}, ("run",))
-    rf.only(("trials", "seed", "points", "tracker", "repeatability_um", "reflector_um", "pose_u"))
-    dp = rf.text("points", next(iter(points)), choices=tuple(points))
-    dt = rf.text("tracker", next(iter(trackers)), choices=tuple(trackers))
-    pose_u = tuple(_vector(rf, "pose_u", 6).tolist()) if "pose_u" in rf.data else (0.0,) * 6
+    points = _point_sets(top, machine.n_axes)
     return VerificationStudy(
         file=file,
         title=title,
@@ -468,13 +521,7 @@ def loads_verification_study(  # noqa: C901 - one reader per table, in file orde
         trackers=trackers,
         limits=limits,
         points=points,
-        trials=rf.integer("trials", 1000, minimum=2),
-        seed=rf.integer("seed", None, minimum=0) if "seed" in rf.data else None,
-        default_points=dp,
-        default_tracker=dt,
-        repeatability=rf.number("repeatability_um", 0.0, low=0.0) * 1e-3,
-        reflector_u=rf.number("reflector_um", 0.0, low=0.0) * 1e-3,
-        pose_u=pose_u,
+        **_run(top, points, trackers),
     )
 
 
