@@ -109,3 +109,24 @@ def test_identify_from_csv_and_export(tmp_path: Path, capsys) -> None:  # type: 
     bad.write_text("X,Y,x_lt,y_lt,z_lt\n0,0,1,2,3\n")
     assert main(["verify", "identify", str(bad), "--study", str(study)]) == 2
     assert "missing columns Z" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("conversion", "k"), [("rectangular", 1.7320508075688772), ("typical", 2.0)]
+)
+def test_study_mpe_noise_is_scaled_once(conversion: str, k: float) -> None:
+    # ADM ±(10 µm + 0.3 µm/m), transverse ±(15 µm + 6 µm/m), u = MPE/k, by hand in mm and rad:
+    # u_L = 10e-3/k + 0.3e-6/k·L, u_α = u_β = 6e-6/k + (15e-3/k)/L
+    text = (STUDIES / "aguado2017.toml").read_text()
+    table = f'{{ adm = [10.0, 0.3], transverse = [15.0, 6.0], conversion = "{conversion}" }}'
+    s = loads_verification_study(text.replace('"aguado2017"\neuler', f"{table}\neuler"))
+    n = s.noise
+    assert n.radial_a == pytest.approx(0.010 / k, rel=1e-15)
+    assert n.radial_b == pytest.approx(0.3e-6 / k, rel=1e-15)
+    assert n.azimuth == n.elevation == pytest.approx(6e-6 / k, rel=1e-15)
+    assert n.transverse_a == pytest.approx(0.015 / k, rel=1e-15)
+    # at L = 2 m: u_L = (10 + 0.6) µm / k, u_α = (6 + 7.5) µrad / k
+    u = n.u_spherical(2000.0)
+    assert u.tolist() == pytest.approx([10.6e-3 / k, 13.5e-6 / k, 13.5e-6 / k], rel=1e-14)
+    assert n.source.endswith("ADM ±(10 µm + 0.3 µm/m), transverse ±(15 µm + 6 µm/m)")
+    assert all(t.noise == n for t in s.trackers.values())

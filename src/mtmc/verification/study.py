@@ -213,6 +213,12 @@ def _travel(mf: Fields, topo_axes: tuple[str, ...]) -> dict[str, tuple[float, fl
     return out
 
 
+def _mpe_mm(nf: Fields, key: str) -> tuple[float, float]:
+    """An MPE ``[A_um, B_um_per_m]`` of the file as ``(A, B)`` in mm and mm/mm."""
+    v = _vector(nf, key, 2)
+    return v[0] * 1e-3, v[1] * 1e-6
+
+
 def _noise(tf: Fields) -> TrackerNoise:
     v = tf.data.get("noise", "aguado2017")
     if v == "aguado2017":
@@ -223,13 +229,9 @@ def _noise(tf: Fields) -> TrackerNoise:
     assert nf is not None
     if "conversion" in nf.data:
         nf.only(("adm", "transverse", "conversion"))
-        adm, tr = _vector(nf, "adm", 2), _vector(nf, "transverse", 2)
+        adm, tr = _mpe_mm(nf, "adm"), _mpe_mm(nf, "transverse")  # the only µm -> mm step
         conv = nf.text("conversion", choices=("typical", "rectangular"))
-        return TrackerNoise.from_mpe(
-            adm=(adm[0] * 1e-3, adm[1] * 1e-6),
-            transverse=(tr[0] * 1e-3, tr[1] * 1e-6),
-            conversion=conv,
-        )
+        return TrackerNoise.from_mpe(adm=adm, transverse=tr, conversion=conv)
     nf.only(("radial_a_um", "radial_b_um_per_m", "azimuth_urad", "elevation_urad"))
     return TrackerNoise(
         nf.number("radial_a_um", low=0.0) * 1e-3,
