@@ -42,6 +42,7 @@ from mtmc.geometry.checks import (
 )
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere, squared_rows, unit_rows
 from mtmc.geometry.vec import cross as _cross
+from mtmc.graph.places import SCALAR_TYPES
 
 __all__ = [
     "Variant",
@@ -311,7 +312,7 @@ def _scalar_middle(a: Any, b: Any) -> Any:
     return out
 
 
-for _t in ("x", "y", "z", "real"):
+for _t in SCALAR_TYPES:
     register(Variant("middle", (_t, _t), _t, _scalar_middle, doc=f"the mean of two {_t}"))
 
 
@@ -366,7 +367,7 @@ def _scalar_sum(a: Any, b: Any) -> Any:
     return np.asarray(a) + np.asarray(b)
 
 
-for _t in ("x", "y", "z", "real"):
+for _t in SCALAR_TYPES:
     register(Variant("displace", (_t, "real"), _t, _scalar_sum, doc=f"the {_t} plus a real"))
 
 

@@ -22,6 +22,7 @@ from mtmc.errors import GraphError
 __all__ = [
     "PLACE_TYPES",
     "COORDINATE_TYPES",
+    "SCALAR_TYPES",
     "VALUE_TYPES",
     "VECTOR_TYPES",
     "PLACE_UNITS",
@@ -52,10 +53,12 @@ PLACE_TYPES: tuple[str, ...] = (
 )
 #: The coordinate types, whose value is one coordinate of a probed point.
 COORDINATE_TYPES: tuple[str, ...] = ("x", "y", "z")
-#: The types a place may carry a value for (the others are built by transitions).
-VALUE_TYPES: tuple[str, ...] = ("x", "y", "z", "real", "point", "vector", "direction")
+#: The types whose value is one number: a coordinate or a real.
+SCALAR_TYPES: tuple[str, ...] = (*COORDINATE_TYPES, "real")
 #: The types whose value is a 3-vector ``(x, y, z)``.
 VECTOR_TYPES: tuple[str, ...] = ("point", "vector", "direction")
+#: The types a place may carry a value for (the others are built by transitions).
+VALUE_TYPES: tuple[str, ...] = (*SCALAR_TYPES, *VECTOR_TYPES)
 #: Units a place may declare: ``None`` (a length in the file's units), ``"1"``
 #: (dimensionless), or an angle (``"rad"``, ``"deg"``).
 PLACE_UNITS: tuple[str, ...] = ("1", "rad", "deg")

@@ -33,7 +33,7 @@ from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 from mtmc.graph import ops as _ops
 from mtmc.graph import probe as _probe
 from mtmc.graph.model import Graph, Plan, check
-from mtmc.graph.places import VECTOR_TYPES, Place
+from mtmc.graph.places import SCALAR_TYPES, VECTOR_TYPES, Place
 from mtmc.parallel import ExecutorKind
 from mtmc.uncertainty.distributions import (
     Constant,
@@ -64,7 +64,6 @@ __all__ = [
 GRAPH_BLOCK_SIZE: int = 16384
 
 #: Place types with one component.
-_SCALAR_TYPES = frozenset(("x", "y", "z", "real"))
 
 #: Parts of each place type in the flat layout used for the running sums: (name, size).
 PARTS: dict[str, tuple[tuple[str, int], ...]] = {
@@ -109,7 +108,7 @@ def flatten(type_: str, value: Any, m: int) -> NDArray[np.float64]:
 
 def _cols(type_: str, value: Any, m: int) -> list[Any]:
     """The parts of a place value as ``(m, j)`` arrays (or batches of one)."""
-    if type_ in ("x", "y", "z", "real"):
+    if type_ in SCALAR_TYPES:
         cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1), (m,))[:, None]]
     elif type_ in VECTOR_TYPES:
         cols = [np.broadcast_to(np.asarray(value, dtype=np.float64).reshape(-1, 3), (m, 3))]
@@ -242,7 +241,7 @@ class PlaceSummary:
         return float(self.result.u_vector[0])
 
     def _require_scalar(self, name: str) -> None:
-        if self.type not in _SCALAR_TYPES:
+        if self.type not in SCALAR_TYPES:
             k = sum(n for _, n in PARTS[self.type])
             raise InputError(
                 f"{name} is the float of a scalar place (x, y, z, real); place {self.name} "
@@ -298,7 +297,7 @@ class PlaceSummary:
         out: dict[str, Any] = {"type": self.type}
         if self.parts == ("value",):
             res = self.result
-            if self.type in _SCALAR_TYPES:
+            if self.type in SCALAR_TYPES:
                 out["estimate"], out["u"] = self.estimate, self.u
             else:
                 out["estimate"], out["u"] = res.estimate_vector, res.u_vector
@@ -697,7 +696,7 @@ class GraphModel:
         types = self.plan.types
         out = {}
         for name in self.outputs:
-            if types[name] in _SCALAR_TYPES:  # the values as they are: no copy
+            if types[name] in SCALAR_TYPES:  # the values as they are: no copy
                 v = np.asarray(vals[name], dtype=np.float64).reshape(-1)
                 out[name] = v if v.shape[0] == m else np.broadcast_to(v, (m,))
             else:
@@ -876,7 +875,7 @@ def unflatten(type_: str, flat: NDArray[np.float64]) -> Any:
     """
     x = np.asarray(flat, dtype=np.float64)
     x = x.reshape(x.shape[0], -1)
-    if type_ in ("x", "y", "z", "real"):
+    if type_ in SCALAR_TYPES:
         return x[:, 0].copy()
     if type_ in VECTOR_TYPES:
         return x.copy()

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import GraphError, InputError, MtmcError
 from mtmc.graph.model import Graph, check
-from mtmc.graph.places import ProbeDefaults
+from mtmc.graph.places import SCALAR_TYPES, ProbeDefaults
 from mtmc.graph.run import run_graph
 from mtmc.parallel import ExecutorKind, map_blocks
 from mtmc.uncertainty.sampling import resolve_seed
@@ -391,7 +391,7 @@ def sweep(
     plan = check(graph)
     if output not in plan.types:
         raise InputError(f"the graph has no place {output}", file=graph.file, field=output)
-    if plan.types[output] not in ("x", "y", "z", "real"):
+    if plan.types[output] not in SCALAR_TYPES:
         raise GraphError(
             f"a sweep needs a scalar output place (x, y, z or real); {output} is a "
             f"{plan.types[output]}",

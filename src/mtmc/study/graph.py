@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import MtmcError
 from mtmc.graph.model import Graph, Plan, check
+from mtmc.graph.places import SCALAR_TYPES
 from mtmc.graph.run import PARTS, graph_model, random_inputs
 from mtmc.graph.sweep import Surrogate, apply_setting, sweep
 from mtmc.graph.toml_format import load
@@ -43,8 +44,6 @@ from mtmc.uncertainty.montecarlo import monte_carlo
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = ["GraphStudy", "SweepSpec", "SweepStudy", "component_names", "normal_plane_basis"]
-
-_SCALAR = ("x", "y", "z", "real")
 
 
 def component_names(place: str, type_: str) -> list[tuple[str, str]]:
@@ -347,7 +346,7 @@ def _read_sweep(top: Fields, graph: Graph, plan: Plan) -> SweepSpec:
     output = t.text("output")
     if output not in plan.types:
         raise t.error(f"the graph has no place {output!r}", "output")
-    if plan.types[output] not in _SCALAR:
+    if plan.types[output] not in SCALAR_TYPES:
         raise t.error(
             f"a sweep needs a scalar place (x, y, z or real); {output} is a {plan.types[output]}",
             "output",
