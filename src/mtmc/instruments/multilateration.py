@@ -147,7 +147,7 @@ def datum_frame(
     Raises
     ------
     InputError
-        If the first three stations are collinear.
+        As :func:`datum_pose`: stations 0 and 1 coincide, or the first three are collinear.
     """
     C = np.asarray(stations, dtype=np.float64)
     R, origin = datum_pose(C)  # columns: datum axes in the given frame
