@@ -30,7 +30,14 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-__all__ = ["FrozenMapping", "frozen_array", "frozen_mapping", "frozen_value"]
+__all__ = [
+    "FrozenMapping",
+    "frozen_array",
+    "frozen_floats",
+    "frozen_mapping",
+    "frozen_value",
+    "read_only",
+]
 
 K = TypeVar("K")
 V = TypeVar("V")
@@ -52,6 +59,38 @@ def frozen_array(a: npt.ArrayLike) -> NDArray[Any]:
     out: NDArray[Any] = np.array(a, copy=True)
     out.setflags(write=False)
     return out
+
+
+def frozen_floats(a: Any) -> NDArray[np.float64]:
+    """A read-only float64 copy of ``a`` (as :func:`frozen_array`, converted to float64).
+
+    Examples
+    --------
+    >>> b = frozen_floats([1, 2])
+    >>> b.dtype.name, b.flags.writeable
+    ('float64', False)
+    """
+    out: NDArray[np.float64] = np.array(a, dtype=np.float64)
+    out.setflags(write=False)
+    return out
+
+
+def read_only(value: Any) -> Any:
+    """``value`` with its ``writeable`` flag cleared in place, if it is an array; no copy.
+
+    For the arrays a result is made of that were made for it and are shared with
+    nothing (no caller holds them); anything else (a number, a geometric primitive,
+    read-only already) is returned as it is.
+
+    Examples
+    --------
+    >>> a = np.zeros(2)
+    >>> read_only(a) is a, a.flags.writeable
+    (True, False)
+    """
+    if isinstance(value, np.ndarray):
+        value.setflags(write=False)
+    return value
 
 
 def frozen_value(v: Any) -> Any:

@@ -33,6 +33,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.artefact.artefact import distances
+from mtmc.frozen import read_only
 
 __all__ = ["ANALYSIS_OUTPUTS", "Analysis", "analyse", "best_rotation", "rigid_fit_residuals"]
 
@@ -173,13 +174,6 @@ def rigid_fit_residuals(points: npt.ArrayLike, reference: npt.ArrayLike) -> _F:
     return np.asarray(moved - Y, dtype=np.float64)
 
 
-def _frozen(a: _F) -> _F:
-    """``a`` (an array made here, shared with nothing) made read-only, not copied."""
-    a = np.asarray(a, dtype=np.float64)
-    a.setflags(write=False)
-    return a
-
-
 @dataclass(frozen=True, eq=False)
 class Analysis:
     """The quantities of Tables 2 and 3 and of Fig. 7 for a batch of ``M`` evaluations.
@@ -288,7 +282,7 @@ def analyse(
     a_meas, a_model = np.abs(r_meas), np.abs(r_model)
     return Analysis(
         *(
-            _frozen(v)
+            read_only(v)
             for v in (
                 E,
                 mean,

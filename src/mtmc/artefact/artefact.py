@@ -33,6 +33,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError, ParseError
+from mtmc.frozen import frozen_floats
 
 __all__ = [
     "Artefact",
@@ -44,13 +45,6 @@ __all__ = [
 ]
 
 _F = NDArray[np.float64]
-
-
-def _ro(a: npt.ArrayLike) -> _F:
-    """A read-only float64 copy (the arrays of the frozen results)."""
-    out = np.array(a, dtype=np.float64)
-    out.setflags(write=False)
-    return out
 
 
 def pairs(n: int) -> tuple[tuple[int, int], ...]:
@@ -164,9 +158,9 @@ class Artefact:
         if np.linalg.det(r) < 0:
             raise InputError("expected a proper rotation (det = +1)", field="rotation")
         object.__setattr__(self, "names", tuple(self.names))
-        object.__setattr__(self, "centres", _ro(c))
-        object.__setattr__(self, "position", _ro(p))
-        object.__setattr__(self, "rotation", _ro(r))
+        object.__setattr__(self, "centres", frozen_floats(c))
+        object.__setattr__(self, "position", frozen_floats(p))
+        object.__setattr__(self, "rotation", frozen_floats(r))
         object.__setattr__(self, "diameter", float(self.diameter))
 
     @property

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.artefact.artefact import _ro
 from mtmc.errors import InputError
+from mtmc.frozen import frozen_floats
 
 __all__ = ["GravityEffect", "gravity_effect", "read_gravity"]
 
@@ -121,10 +121,10 @@ def gravity_effect(rows: list[tuple[str, str, float, float, float]]) -> GravityE
     return GravityEffect(
         tuple(balls),
         others,
-        _ro(delta),
-        _ro(dd),
-        _ro(np.abs(delta).mean(axis=1)),
-        _ro(dd.mean(axis=1)),
+        frozen_floats(delta),
+        frozen_floats(dd),
+        frozen_floats(np.abs(delta).mean(axis=1)),
+        frozen_floats(dd.mean(axis=1)),
         counts,
     )
 

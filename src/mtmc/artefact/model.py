@@ -46,9 +46,10 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.artefact.artefact import Artefact, _ro
+from mtmc.artefact.artefact import Artefact
 from mtmc.artefact.probing import fit_sensitivity, patch_offsets, patch_points
 from mtmc.errors import InputError
+from mtmc.frozen import frozen_floats
 from mtmc.geometry.fits import fit_sphere
 from mtmc.kinematics import Machine
 from mtmc.kinematics.topology import is_linear
@@ -305,12 +306,12 @@ class FiducialSetup:
         centres = fit.geometry.centre.reshape(p, n, 3)  # type: ignore[union-attr]
         K = fit_sensitivity(pts.reshape(p * n, k, 3), centres.reshape(-1, 3), free_radius)
         return Measurement(
-            _ro(P),
-            _ro(self.commanded(P)),
-            _ro(pts),
-            _ro(centres),
-            _ro(K.reshape(p, n, 3, 3 * k)),
-            _ro(A),
+            frozen_floats(P),
+            frozen_floats(self.commanded(P)),
+            frozen_floats(pts),
+            frozen_floats(centres),
+            frozen_floats(K.reshape(p, n, 3, 3 * k)),
+            frozen_floats(A),
         )
 
 
@@ -437,4 +438,12 @@ def identify(
         V = V.copy()
         V[inf, :] = np.inf
         V[:, inf] = np.inf
-    return Identification(tuple(names), _ro(est), _ro(V), _ro(res), rank, _ro(s), _ro(null))
+    return Identification(
+        tuple(names),
+        frozen_floats(est),
+        frozen_floats(V),
+        frozen_floats(res),
+        rank,
+        frozen_floats(s),
+        frozen_floats(null),
+    )

@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.errors import ConditioningWarning, DegenerateGeometryError, GraphError, MtmcError
+from mtmc.frozen import frozen_floats
 from mtmc.graph.model import Plan, Step
 from mtmc.graph.places import VECTOR_TYPES
 
@@ -287,7 +288,7 @@ def check_nominal(plan: Plan, *, max_condition: float = MAX_CONDITION) -> Nomina
     for note in notes:
         warnings.warn(note, ConditioningWarning, stacklevel=2)
     return NominalReport(
-        MappingProxyType({k: _ro(v) for k, v in values.items()}),
+        MappingProxyType({k: frozen_floats(v) for k, v in values.items()}),
         MappingProxyType(condition),
         tuple(notes),
     )
@@ -297,9 +298,3 @@ def _unflat(type_: str, flat: NDArray[np.float64]) -> Any:
     from mtmc.graph.run import unflatten
 
     return unflatten(type_, flat[None, :])
-
-
-def _ro(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    a = np.array(a, dtype=np.float64)
-    a.flags.writeable = False
-    return a

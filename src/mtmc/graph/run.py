@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.errors import GraphError, InputError, MtmcError
-from mtmc.frozen import frozen_array, frozen_mapping
+from mtmc.frozen import frozen_array, frozen_mapping, read_only
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 from mtmc.graph import ops as _ops
 from mtmc.graph import probe as _probe
@@ -825,16 +825,9 @@ def run_graph(
         else:
             r = res[n]
         places[n] = PlaceSummary(n, plan.types[n], r)
-    samples_out = {n: _read_only(unflatten(plan.types[n], res[n].values)) for n in keep_s}
+    samples_out = {n: read_only(unflatten(plan.types[n], res[n].values)) for n in keep_s}
     assert res.seed is not None  # monte_carlo records the seed it drew
     return GraphResult(res.trials, res.seed, places, samples_out, dict(plan.types))
-
-
-def _read_only(value: Any) -> Any:
-    """A new array made read-only in place (no copy); a primitive (read-only already) as is."""
-    if isinstance(value, np.ndarray):
-        value.setflags(write=False)
-    return value
 
 
 def _derived_parts(plan: Plan, summarised: Container[str]) -> dict[str, tuple[str, str]]:

@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.frozen import frozen_floats
 from mtmc.io import to_jsonable
 from mtmc.study.spec import RunSettings, Source
 from mtmc.uncertainty.gum import GumResult, validate
@@ -55,12 +56,6 @@ CONVERGENCE_POINTS = 60
 SCATTER_POINTS = 400
 
 ProgressFn = Callable[[int, int | None], None]
-
-
-def _ro(a: Any) -> NDArray[np.float64]:
-    arr = np.array(a, dtype=np.float64)
-    arr.setflags(write=False)
-    return arr
 
 
 def _plain(obj: Any) -> Any:
@@ -419,14 +414,14 @@ def region(
         name=name,
         labels=labels,
         unit=unit,
-        centre=_ro(ell.centre),
-        cov=_ro(ell.cov),
+        centre=frozen_floats(ell.centre),
+        cov=frozen_floats(ell.cov),
         k=float(ell.k),
         k_chi2=float(chi.k),
         p=p,
-        semi_axes=_ro(ell.semi_axes),
-        axes=_ro(ell.axes),
-        scatter=_ro(samples[:SCATTER_POINTS]),
+        semi_axes=frozen_floats(ell.semi_axes),
+        axes=frozen_floats(ell.axes),
+        scatter=frozen_floats(samples[:SCATTER_POINTS]),
     )
 
 

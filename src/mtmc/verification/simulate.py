@@ -65,6 +65,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
+from mtmc.frozen import frozen_floats
 from mtmc.instruments.laser_tracker import LaserTracker
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.uncertainty.distributions import IID, Normal
@@ -437,12 +438,6 @@ REFINE_POINTS: int = 1000
 _ROWS = 65536
 
 
-def _ro(a: Any) -> _F:
-    out = np.array(a, dtype=np.float64)
-    out.setflags(write=False)
-    return out
-
-
 @dataclass(frozen=True)
 class VerificationGUM:
     """GUM linearisation of the identification (JCGM 100 §5, JCGM 102 §6.2).
@@ -505,10 +500,10 @@ def gum_verification(vm: VerificationModel) -> VerificationGUM:
     pc = np.einsum("nik,kl,njl->nij", G, cov, G)
     return VerificationGUM(
         vm.names,
-        _ro(cov),
-        _ro(np.sqrt(np.diag(cov))),
-        _ro(pc),
-        _ro(np.sqrt(np.trace(pc, axis1=1, axis2=2))),
+        frozen_floats(cov),
+        frozen_floats(np.sqrt(np.diag(cov))),
+        frozen_floats(pc),
+        frozen_floats(np.sqrt(np.trace(pc, axis1=1, axis2=2))),
     )
 
 
@@ -646,16 +641,16 @@ def simulate(
         trials=int(res.trials),
         seed=res.seed,
         names=vm.names,
-        ve_estimate=_ro(ve.estimate_vector),
-        ve_u=_ro(ve.u_vector),
-        ve_samples=_ro(ve.samples),
-        coef_estimate=_ro(coef.estimate_vector),
-        coef_u=_ro(coef.u_vector),
-        coef_cov=_ro(coef.cov),
-        coef_samples=_ro(coef.samples),
-        comp_bias=_ro(comp.estimate_vector.reshape(-1, 3)),
-        comp_u=_ro(cu),
-        point_u=_ro(np.sqrt(np.sum(cu * cu, axis=1))),
+        ve_estimate=frozen_floats(ve.estimate_vector),
+        ve_u=frozen_floats(ve.u_vector),
+        ve_samples=frozen_floats(ve.samples),
+        coef_estimate=frozen_floats(coef.estimate_vector),
+        coef_u=frozen_floats(coef.u_vector),
+        coef_cov=frozen_floats(coef.cov),
+        coef_samples=frozen_floats(coef.samples),
+        comp_bias=frozen_floats(comp.estimate_vector.reshape(-1, 3)),
+        comp_u=frozen_floats(cu),
+        point_u=frozen_floats(np.sqrt(np.sum(cu * cu, axis=1))),
         gum=gum_verification(vm),
         reference=ref,
     )

@@ -45,6 +45,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
+from mtmc.frozen import frozen_array
 from mtmc.kinematics.topology import AXIS_DIRECTION, is_rotary
 from mtmc.study.spec import Fields, Source
 
@@ -466,12 +467,6 @@ def _approach_moves(
     return moves, target
 
 
-def _ro(a: NDArray[Any]) -> NDArray[Any]:
-    a = np.array(a)
-    a.setflags(write=False)
-    return a
-
-
 @dataclass(frozen=True)
 class MeasurementPlan:
     """The verification points of a machine and the moves of the machine through them.
@@ -587,13 +582,13 @@ class MeasurementPlan:
         offset_index = _fill_back(offset_index)
         target = np.where(hit, target % n, -1)
         object.__setattr__(self, "axes", axes)
-        object.__setattr__(self, "points", _ro(pts))
-        object.__setattr__(self, "offsets", _ro(off))
-        object.__setattr__(self, "overshoot", _ro(ov))
+        object.__setattr__(self, "points", frozen_array(pts))
+        object.__setattr__(self, "offsets", frozen_array(off))
+        object.__setattr__(self, "overshoot", frozen_array(ov))
         object.__setattr__(self, "approach", ap)
-        object.__setattr__(self, "moves", _ro(moves))
-        object.__setattr__(self, "move_point", _ro(target))
-        object.__setattr__(self, "move_offset", _ro(offset_index))
+        object.__setattr__(self, "moves", frozen_array(moves))
+        object.__setattr__(self, "move_point", frozen_array(target))
+        object.__setattr__(self, "move_offset", frozen_array(offset_index))
 
     @property
     def n_points(self) -> int:
