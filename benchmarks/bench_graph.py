@@ -6,7 +6,9 @@ the same seed and block size, and the same sampler (mtmc.uncertainty.iter_blocks
 runs keep no samples. The graph is run as a user runs it, ``run_graph(load_graph(path),
 trials=M)`` (file read and checked, every place summarised), and with the two outputs
 only. For comparison the script also times plain NumPy drawing the same number of normal
-values from one Generator (no seed blocks, no name-keyed streams).
+values from one Generator (no seed blocks, no name-keyed streams), and drawing the inputs
+and firing every transition with nothing summarised (the compiled model on each block of
+``iter_blocks``): what any summary of the places is added to.
 
 Each line is timed in interleaved repeats (best of ``repeats``), by the wall clock and by
 the CPU time of this process (user + system: on a shared machine the wall time also
@@ -27,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from mtmc.graph import check_graph, load_graph, run_graph
-from mtmc.graph.run import GRAPH_BLOCK_SIZE, random_inputs
+from mtmc.graph.run import GRAPH_BLOCK_SIZE, GraphModel, random_inputs
 from mtmc.uncertainty.heap import keep_heap
 from mtmc.uncertainty.sampling import iter_blocks
 
@@ -62,6 +64,12 @@ def main() -> None:
         for d in inputs.values():
             rng.normal(d.mean, d.std, m)  # type: ignore[attr-defined]
 
+    model = GraphModel(plan, ())
+
+    def transitions_only():
+        for _a, _b, samples in iter_blocks(inputs, m, 1234, GRAPH_BLOCK_SIZE):
+            model(**samples)
+
     def as_a_user():
         run_graph(load_graph(FILE), trials=m, seed=1234)
 
@@ -73,6 +81,7 @@ def main() -> None:
         "plain NumPy: one Generator, rng.normal": plain_numpy,
         "run_graph(load_graph(file), trials=M): all places": as_a_user,
         "the same, outputs axis_c and p_c": outputs_only,
+        "draw and fire every transition, nothing summarised": transitions_only,
     }
     as_a_user()  # warm-up (and the heap setting of the first run, for every line)
     best = {k: [np.inf, np.inf] for k in cases}
