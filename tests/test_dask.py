@@ -59,15 +59,18 @@ def test_local_cluster_rejects_a_bad_worker_count():
         local_cluster(0)
 
 
-@pytest.mark.parametrize("keep", [True, False])
-def test_monte_carlo_on_a_cluster_is_bit_identical(client, keep):
-    ref = monte_carlo(model, INPUTS, trials=100_000, seed=7, keep=keep)
+@pytest.mark.parametrize(
+    ("keep", "sampling"), [(True, "random"), (False, "random"), (True, "sobol")]
+)
+def test_monte_carlo_on_a_cluster_is_bit_identical(client, keep, sampling):
+    ref = monte_carlo(model, INPUTS, trials=100_000, seed=7, keep=keep, sampling=sampling)
     got = monte_carlo(
         model,
         INPUTS,
         trials=100_000,
         seed=7,
         keep=keep,
+        sampling=sampling,
         executor="dask",
         scheduler=client,
         block_size=20_000,
