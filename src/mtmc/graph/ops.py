@@ -536,44 +536,58 @@ def rotary_axis(
     p3: npt.ArrayLike,
     alpha: npt.ArrayLike | None = None,
 ) -> Line:
-    r"""Locate a rotary axis from three positions of a ball centre (Stryczek eqs. 8-19).
+    r"""Locate a rotary axis from three positions of a ball centre (Stryczek eqs. 8-27).
 
     A ball fixed on the rotary table is measured at the axis angles 0, +α and −α; its
-    centres ``P1`` (at 0), ``P2`` (at +α) and ``P3`` (at −α) lie on a circle about the
-    axis. The axis is the line through that circle's centre along its normal.
+    centres ``P1`` (at 0), ``P2`` (at +α) and ``P3`` (at −α) lie on a circle of radius
+    ``R`` about the axis, in a plane normal to it. The axis is the line through that
+    circle's centre ``P0`` along its normal.
 
     Direction (Stryczek eqs. 20-27): the unit normal of the plane of the three points,
 
     .. math:: \mathbf a = \frac{(P_2 - P_1)\times(P_3 - P_1)}{|(P_2 - P_1)\times(P_3 - P_1)|},
 
-    which points along the positive axis of rotation (right-hand rule) when ``P3 → P1 → P2``
-    is the order of increasing angle. Stryczek prints the y-component of the cross product
-    (its eq. 22) as ``a_x b_z − b_x a_z``; the correct component is ``a_z b_x − a_x b_z``.
+    which points along the axis about which ``P1`` turns into ``P2`` by +α (right-hand
+    rule), i.e. ``P3 → P1 → P2`` in the order of increasing angle. Stryczek prints the
+    y-component of the cross product (his eq. 22) as ``a_x b_z − b_x a_z``; the cofactor
+    of his determinant (20) is ``a_z b_x − a_x b_z``, which is what is computed.
 
-    Location with α given (Stryczek eqs. 8-19): ``P4 = (P2 + P3)/2`` (eqs. 8-10) lies on
-    the radius through ``P1`` because ``P2`` and ``P3`` are symmetric about it. The half
-    chord ``|P3 P4|`` (eq. 11) equals ``R sin α``, so ``R = |P3 P4| / sin α`` (eq. 12).
-    With the unit vector from ``P1`` towards ``P4``, ``v = (P4 − P1)/|P4 − P1|`` (eqs.
-    13-16), the circle centre is ``P0 = P1 + R v`` (eqs. 17-19). Stryczek prints eq. 14
-    as ``I0 = (X4 − X3)/|P1 P4|``; by eqs. 15-16 and the construction it is
-    ``(X4 − X1)/|P1 P4|``. Eq. 11 prints only the right-hand side; it is ``|P3 P4|``.
+    Location with α given (Stryczek eqs. 8-19). With ``u`` the unit vector from ``P0``
+    to ``P1``, the positions are ``P1 = P0 + R u`` and ``P2, P3 = P0 + R (cos α u ±
+    sin α w)`` (``w`` in the plane, normal to ``u``), so
+
+    - ``P4 = (P2 + P3)/2 = P0 + R cos α u`` (eqs. 8-10): on the radius through ``P1``;
+    - ``|P3 P4| = |P3 − P2|/2 = R |sin α|`` (eq. 11, which prints only this right-hand
+      side), hence ``R = |P3 P4| / |sin α|`` (eq. 12, where Stryczek writes ``sin α``
+      for his 0 < α < π);
+    - ``P4 − P1 = −R (1 − cos α) u``: the unit vector ``v = (P4 − P1)/|P1 P4|`` (eqs.
+      13-16) is ``−u`` for every α that is not a multiple of 2π (also for α > π/2, where
+      ``P4`` lies beyond ``P0``). Stryczek prints eq. 14 as ``I0 = (X4 − X3)/|P1 P4|``;
+      by eqs. 15-16 and this construction it is ``(X4 − X1)/|P1 P4|``;
+    - ``P0 = P1 + R v`` (eqs. 17-19).
+
+    Only ``|sin α|`` enters, so α, −α, π − α and α + 2kπ give the same point: the
+    method takes ``R`` from the chord and the angle, and ``|P1 P4|`` only through the
+    unit vector ``v``. ``P0`` lies in the plane of the three points.
 
     Location without α: the centre of the circle through the three points
     (:func:`mtmc.geometry.circle_from_points`), which needs no assumption on the angles.
     With exact data both give the same axis; with noisy data the first uses the known
-    angle and the symmetric placement, as Stryczek does.
+    angle and the symmetric placement, as Stryczek does, and the two differ by an amount
+    of the order of the noise.
 
     Parameters
     ----------
     p1, p2, p3 : array_like, shape (M, 3) or (3,)
-        Ball centres at the angles 0, +α and −α, mm.
+        Ball centres at the angles 0, +α and −α, mm. A batch of one broadcasts.
     alpha : array_like, shape (M,) or (), optional
-        The angle α, rad, with 0 < α < π.
+        The angle α, rad; not a multiple of π (Stryczek: 0 < α < π).
 
     Returns
     -------
     Line
-        The axis: ``point`` the circle centre ``P0`` (mm), ``direction`` the unit axis.
+        The axis, a batch of ``M``: ``point`` the circle centre ``P0``, shape ``(M, 3)``,
+        mm; ``direction`` the unit vector ``a``, shape ``(M, 3)``.
 
     Raises
     ------
@@ -582,9 +596,39 @@ def rotary_axis(
         or ``()``, or the batch sizes differ (other than 1 against ``M``).
     DegenerateGeometryError
         With the relative tolerance :data:`mtmc.geometry.checks.RTOL` (``1e-10``): if the
-        three points are collinear (``|(P2 − P1) × (P3 − P1)| <= RTOL |P2 − P1| |P3 − P1|``),
-        ``P1`` coincides with ``P4`` (``|P4 − P1| <= RTOL max(|P2 − P1|, |P3 − P1|)``), or
-        ``|sin α| <= RTOL``.
+        three points are collinear (``|(P2 − P1) × (P3 − P1)| <= RTOL |P2 − P1| |P3 − P1|``,
+        field ``axis``), ``P1`` coincides with ``P4`` (``|P4 − P1| <= RTOL max(|P2 − P1|,
+        |P3 − P1|)``, field ``axis``), or ``|sin α| <= RTOL`` (α a multiple of π, field
+        ``alpha``). The message says in how many trials and the first one.
+
+    Notes
+    -----
+    Sign of the direction on a machine. ISO 841 commands the motion of the tool relative
+    to the workpiece: a rotary table (an axis that carries the workpiece) commanded to
+    +α turns the ball by −α about the +C axis. Centres measured at the commanded
+    0, +α, −α then give ``direction = −e_C``; the line, and ``P0``, are the same.
+
+    ISO 230-7 location errors. For an axis C of nominal direction +z through the point
+    ``o`` (:class:`mtmc.kinematics.Machine`, ``L = T(EX0C, EY0C, 0) R(EA0C, EB0C)``), with
+    ``a`` oriented along +z: the line meets the plane ``z = o_z`` at
+    ``(o_x + EX0C, o_y + EY0C, o_z)``, and ``a = Ry(EB0C) Rx(EA0C) e_z = (sin EB0C cos
+    EA0C, −sin EA0C, cos EB0C cos EA0C)``; to first order ``EA0C = −a_y`` and ``EB0C =
+    a_x`` (rad, right-hand rule about x and y).
+
+    First-order sensitivities of the variant with α, at the exact configuration, in the
+    frame of the circle (x along ``u``, z along ``a``, ``c = cos α``, ``s = sin α``,
+    ``δ`` a deviation of a coordinate):
+
+    .. math::
+        \delta P_{0x} &= \delta x_1 - (\delta y_2 - \delta y_3) / (2 s), \\
+        \delta P_{0y} &= \delta y_1 + ((\delta y_2 + \delta y_3)/2 - \delta y_1) / (1 - c), \\
+        \delta P_{0z} &= \delta z_1 + ((\delta z_2 + \delta z_3)/2 - \delta z_1) / (1 - c), \\
+        \delta a_x &= -(\delta z_1 - (\delta z_2 + \delta z_3)/2) / (R (1 - c)), \qquad
+        \delta a_y = -(\delta z_2 - \delta z_3) / (2 R s).
+
+    A deviation of ``P4 − P1`` normal to ``u`` moves ``P0`` ``1/(1 − c)`` times as far:
+    2 times at α = 60°, 7.5 times at α = 30°. (A test compares these with central
+    differences and with the sensitivities of :func:`mtmc.uncertainty.gum`.)
 
     Examples
     --------
@@ -612,11 +656,12 @@ def rotary_axis(
     sab, sac, sn = _sq(ab), _sq(ac), squared_rows(n)
     _check_collinear(sab, sac, sn)
     s = np.sin(al)
-    if not np.all(np.abs(s) > RTOL):
+    np.abs(s, out=s)  # |sin(alpha)|: R > 0 whatever the sign of alpha (eq. 12)
+    if not np.all(s > RTOL):
         degenerate(
-            ~(np.abs(s) > RTOL),
-            "sin(alpha) is 0: the three positions are not distinct",
-            "0 < alpha < pi",
+            ~(s > RTOL),
+            "sin(alpha) is 0: alpha is a multiple of pi, so P2 and P3 coincide",
+            "0 < |alpha| < pi",
             "alpha",
         )
     # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
@@ -637,7 +682,7 @@ def rotary_axis(
             "P1 away from the chord P2 P3",
             "axis",
         )
-    # eq. 12: R = |P3 P4| / sin(alpha); eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
+    # eq. 12: R = |P3 P4| / |sin(alpha)|; eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
     length *= s
     half_chord /= length
     w *= half_chord
