@@ -28,6 +28,11 @@ SCRIPT = Path(sys.executable).parent / "mtmc"
         (["graph", "bogus"], "No such command 'bogus'. (see 'mtmc graph --help')"),
         (["propagate", "x", "-i", "x=normal(0, 1)", "-n", "many"], "Invalid value for '--trials'"),
         (["kinematics", "show", "--colour"], "No such option: --colour"),
+        (
+            ["run", str(EXAMPLES.parent / "studies" / "ball_centre.toml"), "-n", "-5"],
+            "--trials: expected an integer >= 2, got -5",
+        ),
+        (["report", "no-such-folder"], "no-such-folder: not a result folder: it has no result"),
     ],
 )
 def test_usage_errors_are_one_line_exit_2(argv, fragment, capsys):
@@ -60,6 +65,9 @@ def test_success_and_help_exit_0(capsys):
     assert capsys.readouterr().out == f"mtmc {__version__}\n"
     assert main(["graph", "run", "--help"]) == 0
     assert "--progress" in capsys.readouterr().out
+    # the help shows the study's keys as written (nothing eaten as Rich markup)
+    assert main(["run", "--help"]) == 0
+    assert "run.trials" in " ".join(capsys.readouterr().out.split())
 
 
 def _env() -> dict[str, str]:

@@ -26,6 +26,9 @@ def test_show(capsys) -> None:  # type: ignore[no-untyped-def]
     assert "chain: workpiece -> C -> B -> X -> frame -> Y -> Z -> tool" in out
     assert "  C: rotary, moves the part" in out
     assert "  Z: linear, moves the tool" in out
+    # the travel with its unit: degrees for a rotary axis, mm for a linear one
+    assert "  B: rotary, moves the part, travel -90 .. 90 deg" in out
+    assert "  Z: linear, moves the tool, travel -500 .. 0 mm" in out
     assert main(["kinematics", "show", "table-head", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     m = library_machine("table-head")

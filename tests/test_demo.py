@@ -46,6 +46,14 @@ def test_every_study_has_its_result_folder_and_the_index_links_them(quick):
         assert result["title"] in page
     assert lines[-1] == f"Report: {index}"
     assert len(lines) == len(stems) + 2
+    # each headline states U with its unit and the coverage probability (JCGM 100 §7.2.4)
+    assert lines[0].startswith("Mass calibration (JCGM 101 §9.3): dm = ")
+    for line in lines[:-2]:
+        assert re.search(r" = -?[0-9.]+ (mm|mg), U = [0-9.]+ (mm|mg)", line), line
+        assert "(U at p = 95 %; " in line, line
+        assert "±" not in line
+    assert re.search(r"dm = [0-9.]+ mg, U = [0-9.]+ mg", page)
+    assert '<td class="n">95 %</td>' in page
 
 
 def test_the_results_against_independent_references(quick):

@@ -50,6 +50,11 @@ STUDIES: tuple[str, ...] = (
 )
 
 
+def _unit(unit: str) -> str:
+    """A unit after a number: ``" mm"``; nothing for a quantity of dimension one."""
+    return "" if unit in ("", "1") else f" {unit}"
+
+
 def study_path(name: str) -> Path:
     """The path of a shipped study file (``mtmc/data/studies/NAME``)."""
     return Path(str(resources.files("mtmc").joinpath("data", "studies", name)))
@@ -116,11 +121,13 @@ def run_demo(
             argv=["mtmc", "demo"],
         )
         entries.append((stem, stem))
-        heads = ", ".join(
-            f"{q.name} = {q.reported['estimate']} ± {q.reported['U']} {q.unit}"
+        heads = "; ".join(
+            f"{q.name} = {q.reported['estimate']}{_unit(q.unit)}, "
+            f"U = {q.reported['U']}{_unit(q.unit)}"
             for q in result.quantities[:2]
         )
-        echo(f"{result.title}: {heads} ({time.perf_counter() - t0:.1f} s)")
+        p = f"{100 * result.p:g} %"
+        echo(f"{result.title}: {heads} (U at p = {p}; {time.perf_counter() - t0:.1f} s)")
     index = render_index(entries, folder / "index.html")
     echo(f"{len(entries)} studies in {time.perf_counter() - start:.1f} s.")
     echo(f"Report: {index}")

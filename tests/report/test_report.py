@@ -52,6 +52,12 @@ class _Cells(HTMLParser):
             item[3].append(data)
 
 
+def _rounds_to(text, want):
+    """Whether ``text`` is ``want`` rounded to the last decimal place that ``text`` shows."""
+    places = len(text.split(".")[1]) if "." in text else 0
+    return abs(float(text) - want) <= 0.5 * 10.0**-places * (1 + 1e-9)
+
+
 def _lookup(doc, key):
     cur = doc
     for name, index in re.findall(r"([A-Za-z_0-9]+)|\[(\d+)\]", key):
@@ -81,12 +87,13 @@ def test_every_number_shown_is_the_one_in_result_json(folder):
             assert text == want, key
         else:
             assert float(value) == want, key
-            if "share" in key or "max_rel_error" in key:
+            if "share" in key:
                 assert text == f"{100 * want:.1f} %", key
-            elif "shortest" in key or "symmetric" in key:
-                assert text in (fmt(want), fmt(want, 8)), key
-            else:
-                assert text == fmt(want), key
+            elif "max_rel_error" in key:
+                assert text == f"{100 * want:.2g} %", key
+            elif text != fmt(want):
+                # a value rounded for display: the nearest number at its last decimal place
+                assert _rounds_to(text, want), (key, text, want)
     # every quantity's statement is there
     for i, q in enumerate(doc["quantities"]):
         for k in ("reported.estimate", "reported.U", "monte_carlo.u", "monte_carlo.symmetric[1]"):
@@ -140,3 +147,45 @@ def test_report_of_a_result_object_equals_the_folder(tmp_path):
     assert page.count("<svg") == (folder / "report.html").read_text().count("<svg") == 2
     assert report(folder) == folder / "report.html"
     assert report(result, tmp_path / "page.html").read_text(encoding="utf-8") == page
+
+
+def _decimals(text):
+    return len(text.split(".")[1]) if "." in text else 0
+
+
+def test_summary_rounds_u_and_the_interval_and_the_tables_keep_one_decimal_place(tmp_path):
+    # JCGM 101 §5.5: u(y) to two significant digits, the interval ends to its decimal place
+    # (the summary); the tables of each quantity show every length to one decimal place
+    # (that of u at four digits), so d_low and d_high can be recomputed from them
+    study = load_study(STUDIES / "bcs_origin.toml")
+    folder = write_result(study.run(trials=3000, seed=2), tmp_path / "b")
+    doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    parser = _Cells()
+    parser.feed((folder / "report.html").read_text(encoding="utf-8"))
+    shown: dict[str, list[str]] = {}
+    for key, _, text in parser.cells:
+        shown.setdefault(key, []).append(text)
+    for i, q in enumerate(doc["quantities"]):
+        mc, u = q["monte_carlo"], q["monte_carlo"]["u"]
+        u_summary, u_table = shown[f"quantities[{i}].monte_carlo.u"]
+        assert len(u_summary.lstrip("0.")) == 2, u_summary  # two significant digits
+        places = _decimals(u_summary)
+        lo, hi = (
+            shown[f"quantities[{i}].monte_carlo.{mc['interval']}[0]"][0],
+            shown[f"quantities[{i}].monte_carlo.{mc['interval']}[1]"][0],
+        )
+        assert _decimals(lo) == _decimals(hi) == places, (lo, hi, u_summary)
+        assert shown[f"quantities[{i}].monte_carlo.k"][0] == f"{mc['k']:.2f}"
+        assert shown[f"quantities[{i}].gum.u"][0] == f"{q['gum']['u']:.{places}f}"
+        # the table of the quantity: u to four digits, every length at its decimal place
+        assert len(u_table.lstrip("0.")) == 4, u_table
+        for k in ("monte_carlo.estimate", "monte_carlo.U", "gum.estimate", "gum.interval[0]"):
+            text = shown[f"quantities[{i}].{k}"][-1]
+            assert _decimals(text) == _decimals(u_table), (k, text, u_table)
+        v = q["validation"]
+        g_lo = float(shown[f"quantities[{i}].gum.interval[0]"][-1])
+        m_lo = float(shown[f"quantities[{i}].monte_carlo.{v['kind']}[0]"][-1])
+        assert abs(abs(g_lo - m_lo) - v["d_low"]) <= 10.0 ** -_decimals(u_table)
+        assert u == pytest.approx(float(u_table), abs=10.0 ** -_decimals(u_table))
+    page = (folder / "report.html").read_text(encoding="utf-8")
+    assert re.search(r"\(k = \d\.\d\d, p = 95 %\)", page)

@@ -79,6 +79,23 @@ def test_simulate_json_contract(capsys) -> None:  # type: ignore[no-untyped-def]
     assert "no tracker position 'x'" in capsys.readouterr().err
 
 
+def test_simulate_text_rounds_as_the_gum_says(capsys) -> None:  # type: ignore[no-untyped-def]
+    # the same run as text: each statistic with its u to two significant digits and the
+    # estimate to its decimal place (JCGM 100 §7.2.6), u named, not given as ±
+    from mtmc.uncertainty.tolerance import round_to_uncertainty
+
+    args = ["verify", "simulate", str(STUDIES / "aguado2017.toml"), "--trials", "40"]
+    assert main([*args, "--seed", "3", "--json", "--no-progress"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert main([*args, "--seed", "3", "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "±" not in out
+    assert "standard uncertainty, k = 1" in out
+    v = d["initial_ve_um"]["max"]
+    y, u = round_to_uncertainty(v["estimate"], v["u"])
+    assert f"initial: max {y} (u = {u})," in out
+
+
 def test_identify_from_csv_and_export(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
     study = STUDIES / "aguado2017.toml"
     st = load_verification_study(study)

@@ -23,6 +23,7 @@ from mtmc.cli.common import (
     parallel_options,
     print_json,
     progress_bar,
+    with_u,
 )
 from mtmc.errors import MtmcError
 
@@ -89,7 +90,10 @@ def simulate_cmd(
         print_json(out)
         return
     con = Console()
-    t = Table(title=f"{st.title}: errors of the fiducial distances (µm), Table 2 layout")
+    t = Table(
+        title=f"{st.title}: errors of the fiducial distances (µm), Table 2 layout; "
+        "① measured, ② model; Monte Carlo mean (u: its standard uncertainty)"
+    )
     axes = [a.lower() for a in st.setup.rotary]
     for a in axes:
         t.add_column(a, justify="right")
@@ -100,15 +104,15 @@ def simulate_cmd(
         m2, a2 = row["r_max_model_um"], row["r_avg_model_um"]
         t.add_row(
             *(f"{row[f'{a}_deg']:g}°" for a in axes),
-            f"{m1['estimate']:.2f} ± {m1['u']:.2f}",
-            f"{a1['estimate']:.2f} ± {a1['u']:.2f}",
-            f"{m2['estimate']:.2f} ± {m2['u']:.2f}",
-            f"{a2['estimate']:.2f} ± {a2['u']:.2f}",
+            with_u(m1["estimate"], m1["u"]),
+            with_u(a1["estimate"], a1["u"]),
+            with_u(m2["estimate"], m2["u"]),
+            with_u(a2["estimate"], a2["u"]),
             f"{m1['estimate'] - m2['estimate']:.2f}",
             f"{a1['estimate'] - a2['estimate']:.2f}",
         )
     con.print(t)
-    s = Table(title="Setup errors (µm): injected, identified (noise-free), MC mean ± u, GUM u")
+    s = Table(title="Setup errors (µm): injected, identified (noise-free), MC mean (u), GUM u")
     for col in ("name", "injected", "noise-free", "MC", "GUM u"):
         s.add_column(col, justify="right")
     for name, v in out["setup_errors"].items():
@@ -116,7 +120,7 @@ def simulate_cmd(
             name,
             f"{v['injected']:.3f}",
             f"{v['noise_free']:.3f}",
-            f"{v['estimate']:.3f} ± {v['u']:.3f}",
+            with_u(v["estimate"], v["u"]),
             f"{v['gum_u']:.3f}" if "gum_u" in v else "-",
         )
     con.print(s)

@@ -126,6 +126,26 @@ def parallel_options(workers: int, executor: str, scheduler: str | None) -> dict
     return {"workers": workers, "executor": executor, "scheduler": scheduler}
 
 
+def with_u(y: float, u: float) -> str:
+    """An estimate with its standard uncertainty: ``"282 (u = 43)"``.
+
+    Both rounded as JCGM 100 §7.2.6 says (u to two significant digits, y to the same
+    decimal place), written with ``u =`` and not ``±`` (JCGM 100 §7.2.2 keeps ``±`` for an
+    expanded uncertainty). A ``u`` that is not positive leaves y unrounded.
+
+    Examples
+    --------
+    >>> with_u(282.3712, 43.0711), with_u(0.0, 0.0)
+    ('282 (u = 43)', '0 (u = 0)')
+    """
+    from mtmc.uncertainty.tolerance import round_to_uncertainty
+
+    if not (u > 0.0 and abs(u) < float("inf")):
+        return f"{y:g} (u = {u:g})"
+    y_text, u_text = round_to_uncertainty(y, u)
+    return f"{y_text} (u = {u_text})"
+
+
 def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
     """Print a one-line error on stderr and stop the subcommand with status ``code``.
 

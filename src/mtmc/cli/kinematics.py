@@ -7,6 +7,7 @@ the drawing is written atomically (:mod:`mtmc.io`).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -99,7 +100,12 @@ def show_cmd(
     for ax in topo.chain:
         kind = "linear" if ax in topo.linear_axes else "rotary"
         trav = m.travel.get(ax)
-        extra = f", travel {trav[0]:g} .. {trav[1]:g}" if trav else ""
+        if not trav:
+            extra = ""
+        elif kind == "linear":
+            extra = f", travel {trav[0]:g} .. {trav[1]:g} mm"
+        else:  # rad inside, shown in degrees as library.toml gives them
+            extra = f", travel {math.degrees(trav[0]):g} .. {math.degrees(trav[1]):g} deg"
         typer.echo(f"  {ax}: {kind}, moves the {topo.side(ax)}{extra}")
     typer.echo(f"tool point: {m.tool.tolist()} mm; workpiece origin: {m.workpiece.tolist()} mm")
     typer.echo(f"errors ({len(m.error_names)}): {' '.join(m.error_names)}")

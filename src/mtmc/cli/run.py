@@ -85,8 +85,10 @@ def run_cmd(
     outdir: Path | None = typer.Option(
         None, "-o", "--outdir", help="Result folder (default: mtmc-results/STUDY-NAME)."
     ),
-    trials: int | None = typer.Option(None, "--trials", "-n", help="Override [run] trials."),
-    seed: int | None = typer.Option(None, "--seed", help="Override [run] seed."),
+    trials: int | None = typer.Option(
+        None, "--trials", "-n", help="Trials (default: the study's run.trials)."
+    ),
+    seed: int | None = typer.Option(None, "--seed", help="Seed (default: the study's run.seed)."),
     samples: bool = typer.Option(False, "--samples", help="Also write the samples as .npy."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no table."),
     workers: int = WORKERS_OPTION,
@@ -94,6 +96,8 @@ def run_cmd(
     scheduler: str | None = SCHEDULER_OPTION,
 ) -> None:
     """Run STUDY and write its result folder and HTML report."""
+    if trials is not None and trials < 2:
+        fail(f"--trials: expected an integer >= 2, got {trials}")
     out = outdir if outdir is not None else default_outdir(study)
     try:
         result = run_study_file(

@@ -20,11 +20,12 @@ from mtmc.cli.common import (
     parallel_options,
     print_json,
     progress_bar,
+    with_u,
 )
 from mtmc.errors import MtmcError
 
 app = typer.Typer(
-    help="Laser-tracker volumetric verification: plan, simulate, identify.",
+    help="Laser-tracker volumetric verification: plan, simulate, identify, place.",
     no_args_is_help=True,
 )
 
@@ -182,19 +183,24 @@ def simulate_cmd(
         f"{r.trials} verifications (seed {r.seed}), {ver.n_points} points "
         f"({out['point_set']}), tracker {out['tracker']}"
     )
+    typer.echo(
+        "volumetric error over the points, µm: Monte Carlo mean (u: its standard "
+        "uncertainty, k = 1, to two digits, JCGM 100 §7.2.6)"
+    )
     for key, label in (
-        ("initial_ve_um", "initial VE"),
-        ("residual_ve_um", "residual VE (eq. 17)"),
+        ("initial_ve_um", "initial"),
+        ("residual_ve_um", "residual (eq. 17)"),
         ("compensated_ve_um", "after compensation"),
     ):
         d = out[key]
         typer.echo(
-            f"{label:>22} um: max {d['max']['estimate']:.2f} ± {d['max']['u']:.2f}, "
-            f"mean {d['mean']['estimate']:.2f} ± {d['mean']['u']:.2f}, "
-            f"min {d['min']['estimate']:.2f} ± {d['min']['u']:.2f}"
+            f"{label:>18}: "
+            + ", ".join(
+                f"{s} {with_u(d[s]['estimate'], d[s]['u'])}" for s in ("max", "mean", "min")
+            )
         )
     pu = out["point_u_um"]
-    typer.echo(f"calibration u per point: max {pu['max']:.2f} um, mean {pu['mean']:.2f} um (MC)")
+    typer.echo(f"calibration u per point: max {pu['max']:.2f} µm, mean {pu['mean']:.2f} µm (MC)")
 
 
 @app.command("identify")
@@ -248,7 +254,7 @@ def identify_cmd(
     except OSError as exc:
         fail(f"{out}: cannot write: {exc.strerror or exc}")
     u = r.u[0]
-    coefs = {}
+    coefs: dict[str, dict[str, Any]] = {}
     for i, n in enumerate(r.names):
         unit, f = _coef_unit(st.model, n)
         coefs[n] = {"estimate": float(r.estimate[0, i]) * f, "u": float(u[i]) * f, "unit": unit}
@@ -275,11 +281,11 @@ def identify_cmd(
         how = "self-calibrated from the lengths" if self_cal else "as the study places them"
         typer.echo(f"points from the lengths of {len(d.stations)} stations, positions {how}")
     typer.echo(
-        f"VE um: initial max {ini[0]:.2f} mean {ini[1]:.2f} min {ini[2]:.2f}; "
+        f"VE µm: initial max {ini[0]:.2f} mean {ini[1]:.2f} min {ini[2]:.2f}; "
         f"residual max {res[0]:.2f} mean {res[1]:.2f} min {res[2]:.2f}"
     )
     for n, c in coefs.items():
-        typer.echo(f"  {n:>10} = {c['estimate']:+.4f} ± {c['u']:.4f} {c['unit']}")
+        typer.echo(f"  {n:>10} = {with_u(c['estimate'], c['u'])} {c['unit']}")
     if out is not None:
         typer.echo(f"compensation ({export}): {out}")
 

@@ -16,10 +16,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Protocol, overload
 
-from mtmc.errors import InputError
+from mtmc.errors import InputError, MtmcError
 from mtmc.io import write_text_atomic
 
-__all__ = ["fmt", "html", "render", "render_index", "report"]
+__all__ = ["at_place", "fmt", "html", "render", "render_index", "report"]
 
 
 def fmt(x: Any, digits: int = 6) -> str:
@@ -43,6 +43,34 @@ def fmt(x: Any, digits: int = 6) -> str:
     return str(x)
 
 
+def at_place(x: Any, u: Any, ndig: int = 2, *, the_u: bool = False) -> str:
+    """A value in the unit of ``u``, to the decimal place of ``u`` at ``ndig`` significant digits.
+
+    JCGM 101 §5.5: ``u(y)`` to one or two significant digits, and the estimate and the
+    ends of the coverage interval to the same decimal place. With ``the_u`` the text is
+    ``u`` itself so rounded. Where ``u`` is not a positive finite number (a constant
+    output) the value is shown as :func:`fmt` shows it.
+
+    Examples
+    --------
+    >>> at_place(1.0854629, 0.0754861), at_place(0.0754861, 0.0754861, the_u=True)
+    ('1.085', '0.075')
+    >>> at_place(50.0000012, 0.00522598, 4), at_place(3.2e-06, 0.00668892, 4)
+    ('50.000001', '0.000003')
+    >>> at_place(2.5, 0.0), at_place(None, 0.1)
+    ('2.5', '—')
+    """
+    from mtmc.uncertainty.tolerance import round_to_uncertainty
+
+    if x is None or isinstance(x, bool):
+        return fmt(x)
+    try:
+        y_text, u_text = round_to_uncertainty(float(x), float(u), ndig)
+    except (MtmcError, TypeError, ValueError, OverflowError):
+        return fmt(x)
+    return u_text if the_u else y_text
+
+
 def _env() -> Any:
     import jinja2
 
@@ -54,6 +82,7 @@ def _env() -> Any:
         lstrip_blocks=True,
     )
     env.filters["fmt"] = fmt
+    env.filters["at_place"] = at_place
     env.filters["pct"] = lambda x: "—" if x is None else f"{100 * x:.1f} %"
     from mtmc.report import plots  # NumPy, SciPy, Matplotlib: imported when a report is made
 
@@ -143,7 +172,7 @@ def render(folder: str | Path) -> Path:
     """
     d = Path(folder)
     if not (d / "result.json").is_file():
-        raise InputError(f"{d} is not a result folder: it has no result.json", file=str(d))
+        raise InputError("not a result folder: it has no result.json", file=str(d))
     result = _read_json(d / "result.json")
     prov = _read_json(d / "provenance.json") if (d / "provenance.json").is_file() else None
     return write_text_atomic(d / "report.html", html(result, prov))
