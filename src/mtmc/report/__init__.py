@@ -19,7 +19,7 @@ from typing import Any, Protocol, overload
 from mtmc.errors import InputError, MtmcError
 from mtmc.io import write_text_atomic
 
-__all__ = ["at_place", "fmt", "html", "render", "render_index", "report"]
+__all__ = ["fmt", "html", "render", "render_index", "report"]
 
 
 def fmt(x: Any, digits: int = 6) -> str:
