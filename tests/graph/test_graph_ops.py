@@ -156,3 +156,27 @@ def test_rotary_axis_broadcasts_constants_against_a_batch():
     batch = np.repeat(np.asarray(p[0], dtype=float)[None], 4, axis=0)
     line2 = ops.rotary_axis(batch, p[1], p[2], al)
     np.testing.assert_allclose(line2.point, line.point, atol=1e-12)
+
+
+def test_a_direction_place_is_a_unit_vector_with_or_without_u():
+    """displace(point, direction, r) moves by r whatever the length typed for the direction."""
+    from mtmc.graph import loads_graph, run_graph
+    from mtmc.graph.places import Place
+
+    assert Place("d", "direction", (0.0, 0.0, 2.0)).value == (0.0, 0.0, 1.0)
+    assert Place("d", "direction", (3.0, 0.0, 4.0)).value == (0.6, 0.0, 0.8)
+    unit = (0.6, 0.0, 0.8)  # |unit| = 1 to 1e-16: kept bit for bit
+    assert Place("d", "direction", unit).value == unit
+
+    def graph(u: str) -> str:
+        return (
+            'title = "t"\n[[place]]\nname = "p"\ntype = "point"\nvalue = [1.0, 2.0, 3.0]\n'
+            f'[[place]]\nname = "d"\ntype = "direction"\nvalue = [0.0, 0.0, 2.0]\n{u}'
+            '[[place]]\nname = "r"\ntype = "real"\nvalue = 5.0\n'
+            '[[transition]]\nname = "t"\nop = "displace"\nin = ["p", "d", "r"]\nout = "q"\n'
+        )
+
+    for u in ("", "u = 1e-9\n"):
+        r = run_graph(loads_graph(graph(u)), 100, seed=1)
+        np.testing.assert_allclose(r.places["q"].estimate_vector, [1, 2, 8], atol=1e-7)
+        np.testing.assert_allclose(r.places["d"].estimate_vector, [0, 0, 1], atol=1e-8)

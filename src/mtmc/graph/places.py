@@ -146,7 +146,10 @@ class Place:
         One of :data:`PLACE_TYPES`.
     value : float or tuple of 3 floats, optional
         Nominal value (scalar for ``x``/``y``/``z``/``real``, 3 numbers for ``point``,
-        ``vector``, ``direction``). In the file's length unit, or in ``unit``.
+        ``vector``, ``direction``). In the file's length unit, or in ``unit``. A
+        ``direction`` is divided by its length on construction (``[0, 0, 2]`` is
+        ``[0, 0, 1]``), so that every op that takes it, ``displace`` by ``r`` along it
+        included, sees a unit vector, with or without ``u``.
     u : float or tuple of 3 floats, optional
         Standard uncertainty: the place is ``value + N(0, u²)`` (each coordinate
         independently for 3-vectors; a ``direction`` is renormalised). A ``point``,
@@ -214,12 +217,16 @@ class Place:
         if self.value is not None:
             if self.type in VECTOR_TYPES:
                 vec = _vector3(self.value, what, "value", self.line)
-                if self.type == "direction" and math.hypot(*vec) == 0.0:
-                    raise GraphError(
-                        f"{what}: a direction (a unit vector) cannot be zero",
-                        line=self.line,
-                        field="value",
-                    )
+                if self.type == "direction":
+                    norm = math.hypot(*vec)
+                    if norm == 0.0:
+                        raise GraphError(
+                            f"{what}: a direction (a unit vector) cannot be zero",
+                            line=self.line,
+                            field="value",
+                        )
+                    if abs(norm - 1.0) > 1e-15:  # a unit vector (to 1e-15) is kept as it is
+                        vec = tuple(c / norm for c in vec)
                 object.__setattr__(self, "value", vec)
             else:
                 object.__setattr__(self, "value", _finite(self.value, what, "value", self.line))
