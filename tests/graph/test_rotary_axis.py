@@ -213,3 +213,22 @@ def test_degenerate_cases_are_named():
             rotary_axis(*ok, [math.pi / 3, alpha])
         assert exc.value.field == "alpha"
         assert "in 1 of 2 trials (first: trial 1)" in str(exc.value)
+
+
+def test_nan_propagates_to_its_trial():
+    """As in mtmc.geometry: a NaN trial gives a NaN axis (not a 'collinear' error)."""
+    al = math.radians(60)
+    _, _, p1, p2, p3 = circle_points(np.random.default_rng(5), 4, al)
+    clean = [rotary_axis(p1, p2, p3, al), rotary_axis(p1, p2, p3)]
+    p2 = p2.copy()
+    p2[1, 0] = np.nan
+    alpha = np.full(4, al)
+    alpha[2] = np.nan
+    for line, ref, nan_rows in (
+        (rotary_axis(p1, p2, p3, alpha), clean[0], [1, 2]),
+        (rotary_axis(p1, p2, p3), clean[1], [1]),
+    ):
+        ok = np.setdiff1d(np.arange(4), nan_rows)
+        assert np.isnan(line.point[nan_rows]).any(axis=1).all()
+        np.testing.assert_array_equal(line.point[ok], ref.point[ok])
+        np.testing.assert_array_equal(line.direction[ok], ref.direction[ok])

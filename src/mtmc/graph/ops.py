@@ -599,7 +599,9 @@ def rotary_axis(
         three points are collinear (``|(P2 − P1) × (P3 − P1)| <= RTOL |P2 − P1| |P3 − P1|``,
         field ``axis``), ``P1`` coincides with ``P4`` (``|P4 − P1| <= RTOL max(|P2 − P1|,
         |P3 − P1|)``, field ``axis``), or ``|sin α| <= RTOL`` (α a multiple of π, field
-        ``alpha``). The message says in how many trials and the first one.
+        ``alpha``). The message says in how many trials and the first one. NaN
+        coordinates or angles are not refused: they propagate to the axis of their trial
+        (as in :mod:`mtmc.geometry`), so that a run with ``nan_policy="omit"`` can drop it.
 
     Notes
     -----
@@ -657,9 +659,10 @@ def rotary_axis(
     _check_collinear(sab, sac, sn)
     s = np.sin(al)
     np.abs(s, out=s)  # |sin(alpha)|: R > 0 whatever the sign of alpha (eq. 12)
-    if not np.all(s > RTOL):
+    bad = s <= RTOL  # NaN is not caught: it propagates, as in mtmc.geometry
+    if bad.any():
         degenerate(
-            ~(s > RTOL),
+            bad,
             "sin(alpha) is 0: alpha is a multiple of pi, so P2 and P3 coincide",
             "0 < |alpha| < pi",
             "alpha",
@@ -675,9 +678,10 @@ def rotary_axis(
     np.sqrt(length, out=length)
     np.maximum(sab, sac, out=sab)
     sab *= RTOL**2
-    if not np.all(length * length > sab):
+    bad = length * length <= sab
+    if bad.any():
         degenerate(
-            ~(length * length > sab),
+            bad,
             "P1 coincides with P4, the middle of P2 and P3",
             "P1 away from the chord P2 P3",
             "axis",
@@ -705,9 +709,10 @@ def _check_collinear(
     """Refuse collinear ball centres: ``|n|² <= RTOL² |P2 - P1|² |P3 - P1|²``."""
     bound = RTOL**2 * sab
     bound *= sac
-    if not np.all(sn > bound):
+    bad = sn <= bound  # NaN is not caught: it propagates, as in mtmc.geometry
+    if bad.any():
         degenerate(
-            ~(sn > bound),
+            bad,
             "the three ball centres are collinear",
             "three ball centres on a circle",
             "axis",
