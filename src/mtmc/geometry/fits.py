@@ -7,8 +7,10 @@ only, all trials together, and drop the trials that have converged from the foll
 iterations; each trial stops exactly as it would alone, so a batch gives bit-for-bit the
 results of ``M`` separate calls.
 
-All fits minimise the sum of squared *orthogonal* (geometric) distances of the points to
-the feature:
+The plane, line and sphere fits minimise the sum of squared *orthogonal* (geometric)
+distances of the points to the feature; the circle in 3D does it in two steps (the plane,
+then the circle in that plane), which is not the joint minimum of the 3D distances to the
+circle when the points are off their plane:
 
 - plane and line: the centroid and the eigenvectors of the scatter matrix
   ``S = sum_i (p_i - c)(p_i - c)^T`` (the plane's normal is the eigenvector of the

@@ -613,9 +613,10 @@ def rotary_axis(
     ISO 230-7 location errors. For an axis C of nominal direction +z through the point
     ``o`` (:class:`mtmc.kinematics.Machine`, ``L = T(EX0C, EY0C, 0) R(EA0C, EB0C)``), with
     ``a`` oriented along +z: the line meets the plane ``z = o_z`` at
-    ``(o_x + EX0C, o_y + EY0C, o_z)``, and ``a = Ry(EB0C) Rx(EA0C) e_z = (sin EB0C cos
-    EA0C, −sin EA0C, cos EB0C cos EA0C)``; to first order ``EA0C = −a_y`` and ``EB0C =
-    a_x`` (rad, right-hand rule about x and y).
+    ``(o_x + EX0C, o_y + EY0C, o_z)``, and, with exact rotations, ``a = Ry(EB0C) Rx(EA0C)
+    e_z = (sin EB0C cos EA0C, −sin EA0C, cos EB0C cos EA0C)``; to first order (and with
+    the default small-angle rotations) ``EA0C = −a_y`` and ``EB0C = a_x`` (rad,
+    right-hand rule about x and y).
 
     First-order sensitivities of the variant with α, at the exact configuration, in the
     frame of the circle (x along ``u``, z along ``a``, ``c = cos α``, ``s = sin α``,
