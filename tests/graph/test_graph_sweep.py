@@ -27,6 +27,8 @@ def test_fit_surrogate_recovers_exact_coefficients():
     paper = np.sqrt(0.05999**2 * (sig[:, 0] ** 2 / 845 + sig[:, 1] ** 2 / 868))
     fit31 = fit_surrogate(sig, paper, intercept=False)
     np.testing.assert_allclose(fit31.coefficients, [0.05999**2 / 845, 0.05999**2 / 868], rtol=1e-10)
+    # the fitted quantity is the standard uncertainty u (Stryczek's U), not an expanded one
+    assert fit.formula() == "u = sqrt(0.25 + 0.7*a^2 + 2.5*b^2)"
 
 
 def test_fit_surrogate_errors():

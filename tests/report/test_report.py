@@ -189,3 +189,22 @@ def test_summary_rounds_u_and_the_interval_and_the_tables_keep_one_decimal_place
         assert u == pytest.approx(float(u_table), abs=10.0 ** -_decimals(u_table))
     page = (folder / "report.html").read_text(encoding="utf-8")
     assert re.search(r"\(k = \d\.\d\d, p = 95 %\)", page)
+
+
+def test_the_sweep_names_u_and_gives_its_table_units(folder):
+    doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    if not doc.get("sweep"):
+        pytest.skip("no sweep in this study")
+    (table,) = [t for t in doc["tables"] if t["name"] == "sweep"]
+    assert table["columns"] == [
+        "probe.u_probe / mm",
+        "probe.u_axis / mm",
+        "estimate / mm",
+        "u / mm",
+        "u_surrogate / mm",
+        "rel_error",
+    ]
+    assert doc["sweep"]["surrogate"]["formula"].startswith("u = sqrt(")
+    page = (folder / "report.html").read_text(encoding="utf-8")
+    assert "the surrogate u² = c0 + Σ cᵢ σᵢ²" in page
+    assert "U² = c0" not in page

@@ -229,7 +229,7 @@ def sweep_cmd(
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
-    """Run FILE on a grid and fit the surrogate U^2 = c0 + sum c_i sigma_i^2 (Stryczek eq. 31)."""
+    """Run FILE on a grid and fit the surrogate u^2 = c0 + sum c_i sigma_i^2 (Stryczek eq. 31)."""
     from mtmc.graph.sweep import parse_range, sweep
 
     try:

@@ -6,14 +6,16 @@ the "3-axis ellipsoid" of its eq. 31,
 
 .. math:: U = 0.05999 \sqrt{\sigma_p^2 / 845 + \sigma_m^2 / 868},
 
-with a fit error of at most 5 %. Squared, eq. 31 is ``U² = c_p σ_p² + c_m σ_m²`` with
-``c_p = 0.05999²/845`` and ``c_m = 0.05999²/868``: Stryczek's three constants are two
-free ones. :func:`fit_surrogate` fits the general form
+with a fit error of at most 5 %. Stryczek's U is the standard uncertainty of the output,
+written u here (U is the expanded uncertainty in the GUM and in mtmc's results). Squared,
+eq. 31 is ``u² = c_p σ_p² + c_m σ_m²`` with ``c_p = 0.05999²/845`` and
+``c_m = 0.05999²/868``: Stryczek's three constants are two free ones.
+:func:`fit_surrogate` fits the general form
 
-.. math:: U^2 = c_0 + \sum_i c_i \sigma_i^2
+.. math:: u^2 = c_0 + \sum_i c_i \sigma_i^2
 
-by linear least squares in ``U²`` weighted by ``1/U²`` (so the residuals are relative),
-and reports the largest relative error of ``U`` on the grid. For a model linear in its
+by linear least squares in ``u²`` weighted by ``1/u²`` (so the residuals are relative),
+and reports the largest relative error of ``u`` on the grid. For a model linear in its
 input errors the form is exact: the output variance is a linear combination of the input
 variances (JCGM 100 eq. 10), so what remains is the Monte Carlo noise of each grid point.
 
@@ -158,7 +160,7 @@ def _apply(graph: Graph, key: str, value: float) -> Graph:
 
 @dataclass(frozen=True)
 class Surrogate:
-    """The surrogate ``U² = c0 + Σ cᵢ σᵢ²`` fitted to a sweep (Stryczek eq. 31, general form).
+    """The surrogate ``u² = c0 + Σ cᵢ σᵢ²`` fitted to a sweep (Stryczek eq. 31, general form).
 
     Parameters
     ----------
@@ -169,7 +171,7 @@ class Surrogate:
     c0 : float
         The constant term (0 when fitted without one).
     rel_errors : ndarray, shape (n,)
-        ``U_surrogate / U - 1`` at each grid point.
+        ``u_surrogate / u - 1`` at each grid point.
     """
 
     names: tuple[str, ...]
@@ -179,20 +181,20 @@ class Surrogate:
 
     @property
     def max_rel_error(self) -> float:
-        """The largest ``|U_surrogate / U - 1|`` on the grid (Stryczek: at most 5 %)."""
+        """The largest ``|u_surrogate / u - 1|`` on the grid (Stryczek: at most 5 %)."""
         return float(np.max(np.abs(self.rel_errors)))
 
     def predict(self, sigmas: npt.ArrayLike) -> NDArray[np.float64]:
-        """``U = √(c0 + Σ cᵢ σᵢ²)`` at the rows of ``sigmas`` (shape ``(n, k)``)."""
+        """``u = √(c0 + Σ cᵢ σᵢ²)`` at the rows of ``sigmas`` (shape ``(n, k)``)."""
         s = np.atleast_2d(np.asarray(sigmas, dtype=np.float64))
         return np.sqrt(np.clip(self.c0 + (s**2) @ self.coefficients, 0.0, None))
 
     def formula(self) -> str:
-        """The fitted formula in words, e.g. ``U = sqrt(0.0041*u_probe^2 + ...)``."""
+        """The fitted formula in words, e.g. ``u = sqrt(0.0041*u_probe^2 + ...)``."""
         terms = [f"{c:.6g}*{n}^2" for c, n in zip(self.coefficients, self.names, strict=True)]
         if self.c0:
             terms.insert(0, f"{self.c0:.6g}")
-        return "U = sqrt(" + " + ".join(terms) + ")"
+        return "u = sqrt(" + " + ".join(terms) + ")"
 
 
 def fit_surrogate(
@@ -202,7 +204,7 @@ def fit_surrogate(
     names: Sequence[str] | None = None,
     intercept: bool = True,
 ) -> Surrogate:
-    """Fit ``U² = c0 + Σ cᵢ σᵢ²`` to a grid of uncertainties (relative least squares).
+    """Fit ``u² = c0 + Σ cᵢ σᵢ²`` to a grid of uncertainties (relative least squares).
 
     Parameters
     ----------

@@ -258,7 +258,7 @@ def machine_svg(name: str) -> str:
 def sweep_svg(sw: dict[str, Any]) -> str:
     """The swept standard uncertainty over a two-parameter grid with the surrogate surface.
 
-    Monte Carlo values as dots, the fitted surrogate ``U = √(c0 + Σ cᵢσᵢ²)`` as a
+    Monte Carlo values as dots, the fitted surrogate ``u = √(c0 + Σ cᵢσᵢ²)`` as a
     surface (Stryczek Fig. 14–15), both in µm over σ in µm; with one varied parameter,
     a curve.
     """

@@ -8,7 +8,7 @@ location in the plane normal to it and of its direction (JCGM 102 §7.7; Strycze
 
 ``sweep`` (or a ``[sweep]`` table in a ``graph`` study): the standard uncertainty of one
 scalar place on a grid of probe or place uncertainties (:func:`mtmc.sweep_graph`) and
-the surrogate ``U² = c0 + Σ cᵢ σᵢ²`` fitted to it (Stryczek Fig. 14–15, eq. 31), with and
+the surrogate ``u² = c0 + Σ cᵢ σᵢ²`` fitted to it (Stryczek Fig. 14–15, eq. 31), with and
 without the constant ``c0``.
 """
 
@@ -305,7 +305,11 @@ class GraphStudy(Study):
         table = Table(
             "sweep",
             f"u({sw.output}) on the grid, {sw.trials} trials per point, and the surrogate",
-            (*sw.names, "estimate", "u", "u_surrogate", "rel_error"),
+            (
+                *(f"{n} / mm" for n in sw.names),
+                *(f"{c} / {d['unit']}" for c in ("estimate", "u", "u_surrogate")),
+                "rel_error",
+            ),
             rows,
         )
         return d, table
