@@ -208,3 +208,22 @@ def test_the_sweep_names_u_and_gives_its_table_units(folder):
     page = (folder / "report.html").read_text(encoding="utf-8")
     assert "the surrogate u² = c0 + Σ cᵢ σᵢ²" in page
     assert "U² = c0" not in page
+
+
+def test_the_inputs_of_a_kinematics_study_carry_their_units(folder):
+    # ISO 230: a displacement error in mm, an angular one in rad, side by side in one table
+    doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    page = (folder / "report.html").read_text(encoding="utf-8")
+    if doc["kind"] != "kinematics":
+        assert all("unit" not in x for x in doc["inputs"])
+        assert "<th>unit of x</th>" not in page
+        return
+    units = {x["name"]: x["unit"] for x in doc["inputs"]}
+    assert units["EX0C"] == units["EZ0A"] == "mm"
+    assert units["EA0C"] == units["EC0Y"] == "rad"
+    assert "<th>unit of x</th>" in page
+    rows = re.findall(
+        r"<tr><td>(E\w+)</td><td><code>[^<]*</code></td>(?:<td[^>]*>[^<]*</td>){2}<td>(\w+)</td>",
+        page,
+    )
+    assert dict(rows) == units

@@ -149,7 +149,9 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
     if result.get("sweep"):
         figs["sweep"] = plots.sweep_svg(result["sweep"])
     template = _env().get_template("report.html.j2")
-    return str(template.render(r=result, prov=provenance or {}, figs=figs))
+    # the units of the inputs, where the result gives them (a kinematics study: mm, rad)
+    units = {x["name"]: x["unit"] for x in result.get("inputs", []) if x.get("unit")}
+    return str(template.render(r=result, prov=provenance or {}, figs=figs, input_units=units))
 
 
 def render(folder: str | Path) -> Path:

@@ -124,7 +124,13 @@ class KinematicsStudy(Study):
         pose_rows = tuple((i + 1, *p) for i, p in enumerate(self.poses_given))
         units = [f"{a} / {self.angles if is_rotary(a) else 'mm'}" for a in axes]
         inputs = tuple(
-            {"name": n, "distribution": str(d), "estimate": float(d.mean), "u": float(d.std)}
+            {
+                "name": n,
+                "distribution": str(d),
+                "estimate": float(d.mean),
+                "u": float(d.std),
+                "unit": "rad" if self.machine.error_term(n).angular else "mm",
+            }
             for n, d in self.errors.items()
         )
         nominal = model()  # (1, 3P): the tool positions with every error at zero
