@@ -148,8 +148,13 @@ def test_table_output(capsys):
         ),
         (["propagate", "a.real", "-i", "a=normal(0, 1)"], ["attribute access", "column 1"]),
         (["propagate", "a +", "-i", "a=normal(0, 1)"], ["syntax error"]),
-        (["propagate", "a", "-i", "a=normel(0, 1)"], ["field a", "unknown distribution"]),
-        (["propagate", "a", "-i", "a=normal(0)"], ["field a"]),
+        (["propagate", "a", "-i", "a=normel(0, 1)"], ["field -i a", "unknown distribution"]),
+        (["propagate", "a", "-i", "a=normal(0)"], ["field -i a"]),
+        # an option names itself, not a "line 1" of no file; the column stays
+        (
+            ["propagate", "a", "-i", "a=normal(0,,1)"],
+            ["error: field -i a: expected a number", "'normal(0,,1)' (column 10)"],
+        ),
         (["propagate", "a", "-i", "a"], ["expected NAME=DISTRIBUTION"]),
         (["propagate", "a", "-i", "a=normal(0,1)", "-i", "a=normal(0,1)"], ["more than once"]),
         (["propagate", "a", "-i", "a=normal(0, 1)", "--p", "1.5"], ["0 < p < 1"]),

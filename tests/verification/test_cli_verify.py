@@ -94,6 +94,9 @@ def test_simulate_text_rounds_as_the_gum_says(capsys) -> None:  # type: ignore[n
     v = d["initial_ve_um"]["max"]
     y, u = round_to_uncertainty(v["estimate"], v["u"])
     assert f"initial: max {y} (u = {u})," in out
+    pu = d["point_u_um"]
+    mx, mean = (round_to_uncertainty(pu[k], pu[k])[1] for k in ("max", "mean"))
+    assert f"calibration u per point: max {mx} µm, mean {mean} µm (MC)" in out
 
 
 def test_identify_from_csv_and_export(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]

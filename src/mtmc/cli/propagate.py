@@ -69,7 +69,11 @@ def parse_inputs(expr: Expression, specs: list[str]) -> dict[str, Distribution]:
             )
         if name in dists:
             raise InputError(f"input {name} given more than once", field=name)
-        dists[name] = parse_distribution(text.strip(), field=name)
+        try:
+            dists[name] = parse_distribution(text.strip(), field=name)
+        except MtmcError as exc:  # "line 1" would point at no file: name the option instead
+            where = f" (column {exc.column})" if exc.column is not None else ""
+            raise type(exc)(exc.message + where, field=f"-i {name}") from None
     extra = [n for n in dists if n not in expr.names]
     if extra:
         raise InputError(

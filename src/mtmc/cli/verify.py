@@ -200,7 +200,10 @@ def simulate_cmd(
             )
         )
     pu = out["point_u_um"]
-    typer.echo(f"calibration u per point: max {pu['max']:.2f} µm, mean {pu['mean']:.2f} µm (MC)")
+    from mtmc.uncertainty.tolerance import round_to_uncertainty
+
+    mx, mean = (round_to_uncertainty(pu[k], pu[k])[1] for k in ("max", "mean"))
+    typer.echo(f"calibration u per point: max {mx} µm, mean {mean} µm (MC)")
 
 
 @app.command("identify")
