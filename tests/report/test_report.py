@@ -227,3 +227,16 @@ def test_the_inputs_of_a_kinematics_study_carry_their_units(folder):
         page,
     )
     assert dict(rows) == units
+
+
+def test_a_study_without_input_rows_points_to_its_file_in_the_folder(tmp_path):
+    # the verification kind gives no input rows: the page says where the inputs are, and
+    # that place exists (study.toml of the folder, the file whose SHA-256 is shown)
+    study = load_study(STUDIES / "aguado2017.toml")
+    folder = write_result(
+        study.run(trials=20, seed=1), tmp_path / "v", study_text=study.source.text
+    )
+    page = (folder / "report.html").read_text(encoding="utf-8")
+    assert "<code>study.toml</code> of this result folder" in page
+    assert "in the provenance" not in page
+    assert (folder / "study.toml").read_text(encoding="utf-8") == study.source.text

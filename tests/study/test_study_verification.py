@@ -33,8 +33,15 @@ def test_verification_study_reports_what_simulate_computes():
         assert q.mc["u"] == pytest.approx(mc.ve_u[i], rel=1e-12)
     rows = r.tables[0].rows
     assert [row[0] for row in rows] == list(mc.names)
-    np.testing.assert_allclose([row[3] for row in rows], mc.coef_u, rtol=1e-12)
-    np.testing.assert_allclose([row[4] for row in rows], mc.gum.u, rtol=1e-12)
+    np.testing.assert_allclose([row[4] for row in rows], mc.coef_u, rtol=1e-12)
+    np.testing.assert_allclose([row[5] for row in rows], mc.gum.u, rtol=1e-12)
+    # each parameter with its unit (ISO 230-1): displacements and the pose shift in mm,
+    # rotations and the pose rotation vector in rad
+    assert r.tables[0].columns[1] == "unit"
+    units = {row[0]: row[1] for row in rows}
+    assert units["EXX[1]"] == units["EZY[3]"] == units["LT.x"] == "mm"
+    assert units["EAX[1]"] == units["ECX[2]"] == units["EC0Y"] == units["LT.rx"] == "rad"
+    assert set(units.values()) == {"mm", "rad"}
     field = r.fields[0]
     np.testing.assert_allclose(field.values, mc.point_u, rtol=1e-12)
     assert field.points.shape == (len(mc.point_u), 3)

@@ -111,12 +111,9 @@ def _stats_um(est: Any, u: Any, base: int) -> dict[str, dict[str, float]]:
 
 def _coef_unit(model: Any, name: str) -> tuple[str, float]:
     """File unit of a parameter: µm for lengths, µrad for angles (pose: µrad and µm)."""
-    from mtmc.verification.identify import POSE_NAMES
+    from mtmc.verification.identify import parameter_unit
 
-    if name in POSE_NAMES:
-        return ("urad", 1e6) if name[3] == "r" else ("um", 1e3)
-    term = model.machine.error_term(name.split("[")[0])
-    return ("urad", 1e6) if term.angular else ("um", 1e3)
+    return ("urad", 1e6) if parameter_unit(model.machine, name) == "rad" else ("um", 1e3)
 
 
 @app.command("simulate")

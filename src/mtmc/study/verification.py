@@ -40,6 +40,7 @@ class VerificationKindStudy(Study):
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Simulate the verification and tabulate it (module docstring)."""
+        from mtmc.verification.identify import parameter_unit
         from mtmc.verification.simulate import VE_NAMES, simulate
 
         s = self.study
@@ -70,6 +71,7 @@ class VerificationKindStudy(Study):
         coef_rows = tuple(
             (
                 name,
+                parameter_unit(s.machine, name),
                 float(ref[i]) if i < ref.size else "",
                 float(mc.coef_estimate[i]),
                 float(mc.coef_u[i]),
@@ -81,7 +83,7 @@ class VerificationKindStudy(Study):
             Table(
                 "coefficients",
                 "Identified parameters: noise-free, Monte Carlo mean and u, GUM u",
-                ("parameter", "noise-free", "MC mean", "MC u", "GUM u"),
+                ("parameter", "unit", "noise-free", "MC mean", "MC u", "GUM u"),
                 coef_rows,
             ),
         )

@@ -57,6 +57,7 @@ from mtmc.errors import IdentifiabilityError, InputError
 from mtmc.geometry.transforms import axis_angle_from_matrix
 from mtmc.instruments.laser_tracker import LaserTracker
 from mtmc.kinematics.functions import ErrorFunction
+from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.verification.lsq import STATUS, least_squares
 
@@ -66,6 +67,7 @@ __all__ = [
     "Identification",
     "identifiability",
     "identify",
+    "parameter_unit",
     "expmap",
     "logmap",
     "ve_stats",
@@ -75,6 +77,42 @@ _F = NDArray[np.float64]
 
 #: Names of the tracker pose parameters: rotation vector of ``R₀ᵀR`` (rad), shift (mm).
 POSE_NAMES: tuple[str, ...] = ("LT.rx", "LT.ry", "LT.rz", "LT.x", "LT.y", "LT.z")
+
+
+def parameter_unit(machine: Machine, name: str) -> str:
+    """The unit of an identified parameter inside the code: ``"mm"`` or ``"rad"``.
+
+    A coefficient of an error function (``EXX[2]``) has the unit of the error, ISO 230-1:
+    mm for a displacement (``EXX``, ``EYX``...), rad for a rotation (``EAX``, ``EC0Y``...);
+    the tracker pose (:data:`POSE_NAMES`) is a rotation vector in rad and a shift in mm.
+
+    Parameters
+    ----------
+    machine : Machine
+        The machine whose error names the parameters are.
+    name : str
+        A parameter name, e.g. ``"EXX[1]"``, ``"EC0Y"``, ``"LT.rx"``.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    InputError
+        If ``name`` is not an error of ``machine`` nor a pose parameter.
+
+    Examples
+    --------
+    >>> from mtmc.kinematics import library_machine
+    >>> m = library_machine("xfyz")
+    >>> [parameter_unit(m, n) for n in ("EXX[1]", "EAX[2]", "EC0Y", "LT.rx", "LT.z")]
+    ['mm', 'rad', 'rad', 'rad', 'mm']
+    """
+    if name in POSE_NAMES:
+        return "rad" if name.startswith("LT.r") else "mm"
+    return "rad" if machine.error_term(name.split("[")[0]).angular else "mm"
+
 
 #: Default relative threshold on the singular values of the column-scaled Jacobian.
 RANK_TOL: float = 1e-9
