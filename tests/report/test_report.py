@@ -240,3 +240,24 @@ def test_a_study_without_input_rows_points_to_its_file_in_the_folder(tmp_path):
     assert "<code>study.toml</code> of this result folder" in page
     assert "in the provenance" not in page
     assert (folder / "study.toml").read_text(encoding="utf-8") == study.source.text
+
+
+def test_the_histogram_draws_the_pdf_the_gum_interval_is_of():
+    # a t input gives a finite ν_eff: the GUM interval is y ± t_p(ν_eff) u, so the curve
+    # beside the histogram is that t, not a normal one (which the legend would misname)
+    from mtmc.study import loads_study
+
+    text = (
+        'kind = "propagate"\ntitle = "t"\nmodel = "a + b"\noutput = "y"\nunit = "mm"\n'
+        '[inputs]\na = "t(4, loc=10, scale=0.1)"\nb = "normal(0, 0.05)"\n'
+    )
+    result = loads_study(text).run(trials=2000, seed=1)
+    dof = result.quantity("y").gum["dof"]
+    assert 6.0 < dof < 6.5  # Welch-Satterthwaite: 0.0125**2 / (0.01**2 / 4) = 6.25
+    page = html(result.to_dict())
+    assert f"GUM: t PDF, ν_eff = {dof:.3g}" in page
+    assert "GUM: normal PDF" not in page
+    assert f"t with ν<sub>eff</sub> = {fmt(dof, 3)} degrees of freedom" in page
+    normal = html(load_study(STUDIES / "mass_calibration.toml").run(trials=2000, seed=1).to_dict())
+    assert "GUM: normal PDF" in normal
+    assert "the PDF of the GUM (normal)" in normal

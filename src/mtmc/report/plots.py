@@ -67,7 +67,10 @@ def _figure(w: float, h: float, **margins: float) -> Any:
 
 
 def histogram_svg(q: dict[str, Any]) -> str:
-    """Histogram of the Monte Carlo values, their coverage intervals and the GUM normal PDF.
+    """Histogram of the Monte Carlo values, their coverage intervals and the GUM's PDF.
+
+    The GUM's PDF is the normal one of y and u, or with a finite ν_eff the t distribution
+    with ν_eff degrees of freedom scaled by u (the one its interval y ± t_p(ν_eff) u is of).
 
     Parameters
     ----------
@@ -99,13 +102,13 @@ def histogram_svg(q: dict[str, Any]) -> str:
         from scipy import stats  # imported here: scipy.stats costs ~0.5 s at import
 
         x = np.linspace(edges[0], edges[-1], 400)
-        ax.plot(
-            x,
-            stats.norm.pdf(x, (g["estimate"] - ref) * scale, g["u"] * scale),
-            "k-",
-            lw=1.1,
-            label="GUM: normal PDF",
-        )
+        loc, s = (g["estimate"] - ref) * scale, g["u"] * scale
+        dof = g.get("dof")
+        if dof is None:  # ν_eff = ∞: the normal PDF of y ± k u (JCGM 100 §G.6)
+            pdf, name = stats.norm.pdf(x, loc, s), "normal PDF"
+        else:  # the scaled and shifted t of y ± t_p(ν_eff) u (JCGM 100 §G.6.4)
+            pdf, name = stats.t.pdf(x, dof, loc, s), f"t PDF, ν_eff = {dof:.3g}"
+        ax.plot(x, pdf, "k-", lw=1.1, label=f"GUM: {name}")
     unit = f" / {label}" if label not in ("", "1") else ""
     ax.set_xlabel(f"{q['name']} − estimate{unit}")
     ax.set_ylabel(f"density{' / ' + label + '⁻¹' if unit else ''}")
