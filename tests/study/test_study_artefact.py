@@ -25,6 +25,19 @@ def test_artefact_study_reports_what_simulate_computes():
     for name, e in j["setup_errors"].items():
         assert setup[name][3] == e["estimate"]
         assert setup[name][4] == e["u"]
+    # the columns name what they hold, in SI symbols: the noise-free value apart from the
+    # Monte Carlo mean, µm (not um), the rotary angles in deg
+    cols = r.tables[0].columns
+    assert cols[:6] == (
+        "b / deg",
+        "c / deg",
+        "r_max noise-free / µm",
+        "r_max MC mean / µm",
+        "r_max MC u / µm",
+        "r_max GUM u / µm",
+    )
+    assert r.tables[1].columns[1:3] == ("injected / µm", "identified noise-free / µm")
+    assert not any("um" in c.split("/")[-1] for t in r.tables for c in t.columns)
     first = r.tables[0].rows[0]
     assert first[-4:] == tuple(
         j["poses"][0]["r_avg_model_um"][k] for k in ("noise_free", "estimate", "u", "gum_u")

@@ -59,10 +59,15 @@ class ArtefactKindStudy(Study):
                 e = pose[key]
                 cells += [e["noise_free"], e["estimate"], e["u"], e.get("gum_u", "")]
             rows.append(tuple(cells))
-        angle_cols = [k for k in j["poses"][0] if k.endswith("_deg")]
+        angle_cols = [f"{k[: -len('_deg')]} / deg" for k in j["poses"][0] if k.endswith("_deg")]
         cols: list[str] = list(angle_cols)
         for key in ("r_max", "r_avg", "r_max_model", "r_avg_model"):
-            cols += [f"{key} / um", f"{key} MC mean / um", f"{key} MC u / um", f"{key} GUM u / um"]
+            cols += [
+                f"{key} noise-free / µm",
+                f"{key} MC mean / µm",
+                f"{key} MC u / µm",
+                f"{key} GUM u / µm",
+            ]
         setup_rows = tuple(
             (
                 name,
@@ -81,11 +86,11 @@ class ArtefactKindStudy(Study):
                 "Identified setup errors (eq. 18)",
                 (
                     "error",
-                    "injected / um",
-                    "identified / um",
-                    "MC mean / um",
-                    "MC u / um",
-                    "GUM u / um",
+                    "injected / µm",
+                    "identified noise-free / µm",
+                    "MC mean / µm",
+                    "MC u / µm",
+                    "GUM u / µm",
                 ),
                 setup_rows,
             ),
