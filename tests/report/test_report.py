@@ -191,10 +191,9 @@ def test_summary_rounds_u_and_the_interval_and_the_tables_keep_one_decimal_place
     assert re.search(r"\(k = \d\.\d\d, p = 95 %\)", page)
 
 
+@pytest.mark.parametrize("folder", ["bcs_origin"], indirect=True)  # the study with a sweep
 def test_the_sweep_names_u_and_gives_its_table_units(folder):
     doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
-    if not doc.get("sweep"):
-        pytest.skip("no sweep in this study")
     (table,) = [t for t in doc["tables"] if t["name"] == "sweep"]
     assert table["columns"] == [
         "probe.u_probe / mm",
