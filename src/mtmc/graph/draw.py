@@ -17,6 +17,10 @@ from mtmc.graph.model import Graph, Plan, check
 
 __all__ = ["layout", "to_dot", "draw"]
 
+#: Size of the place and transition labels, pt: read at the drawing's own size (the
+#: report shows it unscaled, in a box that scrolls).
+LABEL_PT = 7.0
+
 
 def layout(plan: Plan) -> dict[str, tuple[float, float]]:
     """Positions of every place and transition (x to the right, y downwards).
@@ -145,13 +149,13 @@ def draw(graph: Graph | Plan, path: str | Path) -> None:
         ax.add_patch(CirclePatch((x, y), r, fill=False, lw=0.8))
         if name in marked:
             ax.add_patch(CirclePatch((x, y), 3.0, color="black"))
-        ax.text(x, y + r + 8.0, f"{name}\n{type_}", ha="center", va="top", fontsize=5)
+        ax.text(x, y + r + 8.0, f"{name}\n{type_}", ha="center", va="top", fontsize=LABEL_PT)
     for t in g.transitions:
         x, y = pos[t.name]
         ax.add_patch(
             Rectangle((x - 6.0, y - 14.0), 12.0, 28.0, fill=True, fc="white", ec="black", lw=0.8)
         )
-        ax.text(x, y - 18.0, f"{t.name}\n{t.op}", ha="center", va="bottom", fontsize=5)
+        ax.text(x, y - 18.0, f"{t.name}\n{t.op}", ha="center", va="bottom", fontsize=LABEL_PT)
     import matplotlib
 
     with matplotlib.rc_context({"svg.fonttype": "none"}):  # names stay text in the SVG
