@@ -40,7 +40,7 @@ CASES = [
         "expected one of artefact, graph, kinematics, propagate",
     ),
     ('kind = "propagate"', "kind = 3", 1, "kind", "expected a string"),
-    ('kind = "propagate"\n', "", 1, "kind", "missing kind"),
+    ('kind = "propagate"\n', "", None, "kind", "missing kind"),
     ('model = "a + b"', 'model = "a + "', 3, "model", ""),
     ('model = "a + b"', 'model = "a + c"', 3, "model", "c have no input"),
     ('a = "normal(1, 0.1)"', 'a = "normal(1, -0.1)"', 8, "inputs.a", ">= 0"),
@@ -99,7 +99,7 @@ output = "d_ac"
 GRAPH_CASES = [
     ('outputs = ["d_ac"]', 'outputs = ["nowhere"]', 3, "outputs", "has no place 'nowhere'"),
     ('outputs = ["d_ac"]', 'outputs = "d_ac"', 3, "outputs", "array of strings"),
-    ('outputs = ["d_ac"]', "", 1, "outputs", "missing outputs"),
+    ('outputs = ["d_ac"]', "", None, "outputs", "missing outputs"),
     ('graph = "{graph}"', 'graph = "missing.toml"', 2, "graph", "expected an existing file"),
     ('output = "d_ac"', 'output = "p_o"', 9, "sweep.output", "scalar place"),
     ('"probe.u_probe"', '"probe.u_nothing"', 12, "sweep.vary.probe.u_nothing", "u_axis"),

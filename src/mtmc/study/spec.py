@@ -120,6 +120,16 @@ class Fields:
         """An error at ``key`` of this table (or the table itself)."""
         return self.source.error(message, self.path if key is None else (*self.path, key))
 
+    def missing(self, message: str, key: str) -> InputError:
+        """An error for ``key`` absent from this table.
+
+        A missing key has no line of its own: the error points at the line of the
+        table's header (``[run]``, ``[[place]]``, ``model = {...}``), or at no line for a
+        key missing at the top level, never at the line of another key.
+        """
+        err = self.source.error(message, (*self.path, key))
+        return InputError(message, file=err.file, line=self.source.line(self.path), field=err.field)
+
     def only(self, allowed: Iterable[str]) -> None:
         """Refuse any key not in ``allowed``, naming the allowed ones."""
         names = tuple(allowed)
@@ -136,10 +146,7 @@ class Fields:
             return self.data[key]
         if default is _REQUIRED:
             where = f"[{'.'.join(str(p) for p in self.path)}]" if self.path else "the file"
-            err = self.error(f"missing {key} in {where}", key)
-            # a missing key has no line of its own: its table's header, or the first line
-            err.line = self.source.line(self.path) or 1
-            raise InputError(err.message, file=err.file, line=err.line, field=err.field)
+            raise self.missing(f"missing {key} in {where}", key)
         return default
 
     def text(self, key: str, default: Any = _REQUIRED, choices: Iterable[str] = ()) -> Any:
@@ -371,9 +378,7 @@ def loads_study(text: str, *, file: str = "<study>", folder: Path | None = None)
     known = study_kinds()
     kind = top.text("kind") if "kind" in data else None
     if kind is None:
-        raise InputError(
-            f"missing kind; expected one of {', '.join(known)}", file=file, line=1, field="kind"
-        )
+        raise top.missing(f"missing kind; expected one of {', '.join(known)}", "kind")
     if kind not in known:
         raise top.error(f"unknown kind {kind!r}; expected one of {', '.join(known)}", "kind")
     try:

@@ -250,10 +250,10 @@ def _points_of(pf: Fields, n_axes: int) -> _F:
     kind = pf.text("kind", "mesh", choices=("mesh", "cloud"))
     a, b = _vector(pf, "start", n_axes), _vector(pf, "stop", n_axes)
     step = _vector(pf, "step", n_axes)
+    seed = pf.integer("seed", minimum=0) if kind == "cloud" else None
     try:
         if kind == "mesh":
             return mesh(a, b, step=step)
-        seed = pf.integer("seed", minimum=0)
         rng = np.random.default_rng(np.random.SeedSequence(seed))
         return cloud(a, b, rng, step=step)
     except MtmcError as exc:
@@ -286,11 +286,11 @@ def read_trackers(tf: Fields) -> tuple[dict[str, LaserTracker], TrackerLimits | 
         one = pf.table(name)
         assert one is not None
         one.only(("position", "euler_deg"))
+        position, euler = _vector(one, "position"), _vector(one, "euler_deg")
         try:
             trackers[name] = LaserTracker.from_euler(
-                _vector(one, "position"), _vector(one, "euler_deg"), seq=seq, degrees=True,
-                noise=noise, name=name,
-            )  # fmt: skip
+                position, euler, seq=seq, degrees=True, noise=noise, name=name
+            )
         except MtmcError as exc:
             raise one.error(str(exc)) from exc
     if not trackers:
