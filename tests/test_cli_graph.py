@@ -10,6 +10,7 @@ import pytest
 
 from mtmc.cli.main import main
 from mtmc.graph import load_graph, run_graph
+from mtmc.uncertainty.tolerance import round_to_uncertainty
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "graphs"
 
@@ -63,8 +64,42 @@ def test_run_table(capsys):
     est, u = cx.places["cx"].estimate, cx.places["cx"].u
     row = next(ln for ln in out.splitlines() if ln.startswith("│ cx "))
     cells = [c.strip() for c in row.strip("│").split("│")]
-    assert cells == ["cx", "x", "", f"{est:.6g}", f"{u:.6g}", "mm"]
+    assert cells == ["cx", "x", "", *round_to_uncertainty(est, u), "mm"]
+    _check_rounded(cells[3], cells[4], est, u)
+    assert 0.001 <= u < 0.01 and len(cells[3].partition(".")[2]) == 4  # a u of some um
     assert "trials 1000  seed 1" in out
+
+
+def _check_rounded(y_text, u_text, y, u):
+    """JCGM 100 §7.2.6: u to two significant digits, y to the same decimal place."""
+    places = len(u_text.partition(".")[2])
+    assert len(y_text.partition(".")[2]) == places
+    assert len(u_text.replace(".", "").lstrip("0")) == 2
+    assert abs(float(u_text) - u) <= 0.5 * 10.0**-places
+    assert abs(float(y_text) - y) <= 0.5 * 10.0**-places
+
+
+def test_run_table_rounds_each_component_to_its_u(capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "200")  # one line per row
+    # a plane fitted to three points: the point in mm at 4 decimals (u of some um), the
+    # unit normal at many more (u of some urad on its x, y; far less on its z)
+    g = EXAMPLES / "plane_3pt.toml"
+    assert main(["graph", "run", str(g), "-n", "2000", "--seed", "5", "-p", "plane"]) == 0
+    out = capsys.readouterr().out
+    lib = run_graph(load_graph(g), 2000, seed=5, outputs=["plane"]).places["plane"]
+    text = "".join(c for c in out if c not in "│ ")
+    for part in ("point", "normal"):
+        r = lib.part(part)
+        pairs = [
+            round_to_uncertainty(y, u) for y, u in zip(r.estimate_vector, r.u_vector, strict=True)
+        ]
+        for (y_text, u_text), y, u in zip(pairs, r.estimate_vector, r.u_vector, strict=True):
+            _check_rounded(y_text, u_text, y, u)
+        cells = "[" + ",".join(y for y, _ in pairs) + "]", "[" + ",".join(u for _, u in pairs) + "]"
+        assert "".join(cells) in text
+    assert main(["graph", "run", str(g), "-n", "2000", "--seed", "5", "-p", "plane", "--json"]) == 0
+    normal = json.loads(capsys.readouterr().out)["places"]["plane"]["normal"]
+    np.testing.assert_array_equal(normal["estimate"], lib.part("normal").estimate_vector)
 
 
 def test_draw_and_export(tmp_path, capsys):
@@ -179,12 +214,19 @@ def test_run_table_in_graph_units(tmp_path, capsys):
         return [c.strip() for c in line.strip("│").split("│")]
 
     d = lib.places["d01"]
-    assert row("d01") == ["d01", "real", "", f"{d.estimate * 1e3:.6g}", f"{d.u * 1e3:.6g}", "um"]
+    assert row("d01") == [
+        "d01",
+        "real",
+        "",
+        *round_to_uncertainty(d.estimate * 1e3, d.u * 1e3),
+        "um",
+    ]
     t = lib.places["twice"]
-    assert row("twice")[3:] == [f"{t.estimate * 1e3:.6g}", f"{t.u * 1e3:.6g}", "um"]
+    assert row("twice")[3:] == [*round_to_uncertainty(t.estimate * 1e3, t.u * 1e3), "um"]
+    _check_rounded(*row("twice")[3:5], t.estimate * 1e3, t.u * 1e3)
     assert row("k")[3:] == ["2", "0", "1"]
     tilt = lib.places["tilt"]
-    assert row("tilt")[3:] == [f"{tilt.estimate:.6g}", f"{tilt.u:.6g}", "rad"]
+    assert row("tilt")[3:] == [*round_to_uncertainty(tilt.estimate, tilt.u), "rad"]
     assert abs(tilt.estimate - np.pi / 6) < 1e-3
     assert row("pln")[2] == "point"
     assert row("pln")[-1] == "um"

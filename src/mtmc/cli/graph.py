@@ -179,14 +179,15 @@ def run_cmd(
         first = True
         for part in s.parts:
             r = s.part(part)
+            u = r.u if r.dim == 0 else r.u_vector
             power, angle = place_dimension(plan, name, part)
             scale = g.factor**power
             table.add_row(
                 name if first else "",
                 s.type if first else "",
                 "" if part == "value" else part,
-                _fmt(r.estimate if r.dim == 0 else r.estimate_vector, scale),
-                _fmt(r.u if r.dim == 0 else r.u_vector, scale),
+                _fmt(r.estimate if r.dim == 0 else r.estimate_vector, u, scale),
+                _fmt(u, u, scale, the_u=True),
                 _unit_label(g.units, power, angle),
             )
             first = False
@@ -203,11 +204,31 @@ def _unit_label(length_unit: str, length_power: int, angle_power: int) -> str:
     return "·".join(names) or "1"
 
 
-def _fmt(v: float | NDArray[np.float64], scale: float) -> str:
-    """A number, or the components of an array, in the file's unit (divided by ``scale``)."""
+def _fmt(
+    v: float | NDArray[np.float64],
+    u: float | NDArray[np.float64],
+    scale: float,
+    *,
+    the_u: bool = False,
+) -> str:
+    """A number, or the components of an array, in the file's unit (divided by ``scale``).
+
+    Each is rounded as the report rounds it (:func:`mtmc.report.at_place`, JCGM 100
+    §7.2.6): its standard uncertainty ``u`` (same shape) to two significant digits and the
+    estimate to the same decimal place; with ``the_u`` the text is ``u`` itself so rounded.
+    A component whose ``u`` is zero is shown to six significant digits.
+    """
+    import numpy
+
+    from mtmc.report import at_place
+
     if isinstance(v, float):
-        return f"{v / scale:.6g}"
-    return "[" + ", ".join(f"{x / scale:.6g}" for x in v.ravel()) + "]"
+        return at_place(v / scale, float(u) / scale, the_u=the_u)
+    us = numpy.broadcast_to(numpy.asarray(u, dtype=numpy.float64), v.shape).ravel()
+    cells = (
+        at_place(x / scale, ux / scale, the_u=the_u) for x, ux in zip(v.ravel(), us, strict=True)
+    )
+    return "[" + ", ".join(cells) + "]"
 
 
 @app.command("sweep")
