@@ -66,7 +66,8 @@ def test_run_table(capsys):
     cells = [c.strip() for c in row.strip("│").split("│")]
     assert cells == ["cx", "x", "", *round_to_uncertainty(est, u), "mm"]
     _check_rounded(cells[3], cells[4], est, u)
-    assert 0.001 <= u < 0.01 and len(cells[3].partition(".")[2]) == 4  # a u of some um
+    assert 0.001 <= u < 0.01  # a u of some um: the estimate in mm to 4 decimals
+    assert len(cells[3].partition(".")[2]) == 4
     assert "trials 1000  seed 1" in out
 
 
