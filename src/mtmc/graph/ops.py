@@ -661,13 +661,12 @@ def rotary_axis(
     s = np.sin(al)
     np.abs(s, out=s)  # |sin(alpha)|: R > 0 whatever the sign of alpha (eq. 12)
     bad = s <= RTOL  # NaN is not caught: it propagates, as in mtmc.geometry
-    if bad.any():
-        degenerate(
-            bad,
-            "sin(alpha) is 0: alpha is a multiple of pi, so P2 and P3 coincide",
-            "0 < |alpha| < pi",
-            "alpha",
-        )
+    degenerate(
+        bad,
+        "sin(alpha) is 0: alpha is a multiple of pi, so P2 and P3 coincide",
+        "0 < |alpha| < pi",
+        "alpha",
+    )
     # P4 - P1 = (P2 + P3)/2 - P1, eqs. 8-10 and 13 (in place: fewer temporaries)
     w = np.add(rb, rc, order="C")
     w *= 0.5
@@ -680,13 +679,12 @@ def rotary_axis(
     np.maximum(sab, sac, out=sab)
     sab *= RTOL**2
     bad = length * length <= sab
-    if bad.any():
-        degenerate(
-            bad,
-            "P1 coincides with P4, the middle of P2 and P3",
-            "P1 away from the chord P2 P3",
-            "axis",
-        )
+    degenerate(
+        bad,
+        "P1 coincides with P4, the middle of P2 and P3",
+        "P1 away from the chord P2 P3",
+        "axis",
+    )
     # eq. 12: R = |P3 P4| / |sin(alpha)|; eqs. 14-19: P0 = P1 + R (P4 - P1) / |P1 P4|
     length *= s
     half_chord /= length
@@ -711,13 +709,12 @@ def _check_collinear(
     bound = RTOL**2 * sab
     bound *= sac
     bad = sn <= bound  # NaN is not caught: it propagates, as in mtmc.geometry
-    if bad.any():
-        degenerate(
-            bad,
-            "the three ball centres are collinear",
-            "three ball centres on a circle",
-            "axis",
-        )
+    degenerate(
+        bad,
+        "the three ball centres are collinear",
+        "three ball centres on a circle",
+        "axis",
+    )
 
 
 @variant("axis", ("point", "point", "point"), "line")
