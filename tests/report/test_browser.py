@@ -3,7 +3,6 @@ every plot with a size, and leaves a screenshot for a person to look at."""
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import subprocess
@@ -11,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from conftest import absent
 from mtmc.study import load_study, write_result
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -37,17 +37,10 @@ def _find() -> str | None:
 
 @pytest.fixture(scope="session")
 def chromium() -> str:
-    """Debian's chromium, installed with apt-get when absent (as root, as in CI)."""
+    """Debian's chromium (``apt-get install chromium``; ``.ci/run`` installs it in CI)."""
     path = _find()
-    if path is None and shutil.which("apt-get") and hasattr(os, "geteuid") and os.geteuid() == 0:
-        env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
-        subprocess.run(["apt-get", "update"], capture_output=True, env=env, timeout=600)
-        subprocess.run(
-            ["apt-get", "install", "-y", "chromium"], capture_output=True, env=env, timeout=900
-        )
-        path = _find()
     if path is None:
-        pytest.skip("chromium is not installed and cannot be installed here (apt-get as root)")
+        absent("chromium", "Debian: apt-get install chromium")
     return path
 
 
