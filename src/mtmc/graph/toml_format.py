@@ -74,11 +74,10 @@ def key_lines(text: str) -> dict[KeyPath, int]:
     out: dict[KeyPath, int] = {}
     counts: dict[tuple[str, ...], int] = {}
     prefix: KeyPath = ()
-    depth = 0
+    state = _Value()
     for n, raw in enumerate(text.splitlines(), start=1):
-        stripped = raw.strip()
-        if depth > 0:  # inside a multi-line array
-            depth += stripped.count("[") - stripped.count("]")
+        if state.open:  # inside a multi-line array or string
+            state.scan(raw)
             continue
         h = _HEADER.match(raw)
         if h:
@@ -94,9 +93,65 @@ def key_lines(text: str) -> dict[KeyPath, int]:
         k = _KEY.match(raw)
         if k:
             out.setdefault((*prefix, *_parts(k.group(1))), n)
-            rest = raw[k.end() :].split("#", 1)[0]
-            depth = max(0, rest.count("[") - rest.count("]"))
+            state = _Value()
+            state.scan(raw[k.end() :])
     return out
+
+
+class _Value:
+    """Where a TOML value stands after the lines scanned so far.
+
+    The depth of its open brackets and braces, and the multi-line string it is inside
+    (``\"\"\"`` or ``'''``). Brackets inside strings and comments do not count: after
+    ``a = ["x[", "y"]`` the value is closed, and a multi-line string that holds ``[`` opens
+    no array.
+    """
+
+    def __init__(self) -> None:
+        self.depth = 0
+        self.string = ""
+
+    @property
+    def open(self) -> bool:
+        return self.depth > 0 or bool(self.string)
+
+    def scan(self, line: str) -> None:
+        i, n = 0, len(line)
+        while i < n:
+            if self.string:  # inside a multi-line string: only its closing quotes end it
+                end = line.find(self.string, i)
+                while end > 0 and self.string == '"""' and _escaped(line, end):
+                    end = line.find(self.string, end + 1)
+                if end < 0:
+                    return
+                i = end + 3
+                self.string = ""
+                continue
+            c = line[i]
+            if c == "#":
+                return
+            if line.startswith(('"""', "'''"), i):
+                self.string = line[i : i + 3]
+                i += 3
+            elif c in "\"'":  # a one-line string: skip to its closing quote
+                j = i + 1
+                while j < n and (line[j] != c or (c == '"' and _escaped(line, j))):
+                    j += 1
+                i = j + 1
+            else:
+                if c in "[{":
+                    self.depth += 1
+                elif c in "]}":
+                    self.depth = max(0, self.depth - 1)
+                i += 1
+
+
+def _escaped(line: str, i: int) -> bool:
+    """Whether the character at ``i`` follows an odd number of backslashes."""
+    k = i
+    while k > 0 and line[k - 1] == "\\":
+        k -= 1
+    return (i - k) % 2 == 1
 
 
 class _Lines:
