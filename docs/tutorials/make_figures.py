@@ -709,6 +709,19 @@ AGUADO2016: dict[tuple[str, str], tuple[float, ...]] = {
     ("mesh5408", "pos3"): (140.7, 87.0, 6.15, 113.4, 40.5, 1.2),
     ("mesh5408", "pos4"): (108.3, 63.6, 25.3, 46.1, 16.3, 8.0),
 }
+#: The table of each point set in Aguado et al. 2016.
+AGUADO2016_TABLE = {"mesh96": "Table II", "cloud96": "Table III", "mesh5408": "Table IV"}
+#: Aguado et al. 2016 Table I: tracker position (mm) and angles (α, β, φ) (deg).
+AGUADO2016_T1: dict[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
+    "pos1": ((3500.0, -1500.0, 500.0), (15.0, 37.0, 26.0)),
+    "pos2": ((4500.0, -800.0, 500.0), (32.0, 17.0, 12.0)),
+    "pos3": ((1250.0, 2000.0, 600.0), (5.0, 65.0, 32.0)),
+    "pos4": ((1100.0, -1000.0, 600.0), (63.0, 14.0, 35.0)),
+}
+#: Aguado et al. 2016 §5 (before Table II): the angular noise, µrad on each angle.
+AGUADO2016_ANGLE_URAD = 24.0
+#: The reading of Table I's angles before the study chose ``ZYZ``.
+AGUADO2016_OLD_EULER = "xyz"
 STATS = (
     "initial.max",
     "initial.mean",
@@ -717,43 +730,144 @@ STATS = (
     "residual.mean",
     "residual.min",
 )
+#: The paper's final error is read as the error left after compensation (see the tutorial).
+FINAL = ("compensated.max", "compensated.mean", "compensated.min")
+POSITIONS = ("pos1", "pos2", "pos3", "pos4")
+
+
+def euler_readings(chosen: str) -> list[tuple[str, bool]]:
+    """Every reading of three Euler angles, ``chosen`` and the old one first.
+
+    The 12 sequences, extrinsic (lower case) or intrinsic (upper case), the matrix ``R``
+    (tracker frame to machine frame) or its transpose.
+    """
+    seqs = ["xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz"]
+    every = [(c, t) for s in seqs for c in (s, s.upper()) for t in (False, True)]
+    first = [(chosen, False), (AGUADO2016_OLD_EULER, False)]
+    return first + [r for r in every if r not in first]
+
+
+def reading_name(seq: str, transposed: bool) -> str:
+    """``ZYZ``, or ``xyz, Rᵀ``."""
+    return f"{seq}, Rᵀ" if transposed else seq
+
+
+def implied_angle_urad(ver: Any, target_um: float, n: int, seed: int) -> tuple[float, float]:
+    """The angular noise (µrad, both angles) whose mean initial error is ``target_um``.
+
+    The initial error needs no identification: the readings of the true machine, perturbed
+    as the tracker's noise model does (radial part unchanged), against the nominal
+    readings, averaged over the points and ``n`` trials of standard normals drawn once
+    (``SeedSequence(seed)``), so that the mean is a smooth function of the angle. Returns
+    the angle and its Monte Carlo spread (the spread of one trial's mean over the slope).
+    """
+    import dataclasses
+
+    from scipy.optimize import brentq
+
+    tr = ver.tracker
+    x_true = ver.readings()
+    x_nom = tr.to_tracker(ver.model.machine.tool_position(ver.q))
+    z = np.random.default_rng(np.random.SeedSequence(seed)).standard_normal((n, *x_true.shape))
+
+    def per_trial(urad: float) -> Any:
+        noise = dataclasses.replace(tr.noise, azimuth=urad * 1e-6, elevation=urad * 1e-6)
+        return np.linalg.norm(noise.perturb(x_true, z) - x_nom, axis=-1).mean(axis=1) * 1e3
+
+    def f(urad: float) -> float:
+        return float(per_trial(urad).mean()) - target_um
+
+    a = float(brentq(f, 0.0, 1000.0, xtol=1e-9))
+    h = 0.05
+    slope = (f(a + h) - f(a - h)) / (2.0 * h)
+    return a, float(per_trial(a).std(ddof=1)) / slope
 
 
 def aguado2016(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
-    """Aguado et al. 2016: Tables I-IV (3 point sets x 4 tracker positions) and Fig. 9."""
-    from mtmc.verification.identify import ve_stats
-    from mtmc.verification.simulate import reference_identification, simulate
+    """Aguado et al. 2016: Tables I-IV (3 point sets x 4 tracker positions) and Fig. 9.
 
-    study = load("aguado2016").study
-    n = max(50, int(study.trials * scale))
+    Besides the tables: the Euler readings of Table I against our visibility limits, the
+    results of the study's reading against the old one, and the angular noise each
+    position's initial error of Table II implies.
+    """
+    import dataclasses
+
+    import mtmc
+    from mtmc.geometry.transforms import matrix_from_euler
+    from mtmc.verification.identify import ve_stats
+    from mtmc.verification.simulate import (
+        VerificationModel,
+        reference_identification,
+        simulate,
+    )
+    from mtmc.verification.study import load_verification_study
+
+    vs = load_verification_study(STUDIES / "aguado2016.toml")
+    n = max(50, int(vs.trials * scale))
     n9 = max(20, int(100 * scale))
-    seed = study.seed
+    seed = int(vs.seed or 0)
     values: dict[str, Any] = {}
     data: dict[str, Any] = {}
     for pts in ("mesh96", "cloud96", "mesh5408"):
-        ref = reference_identification(study.verification(points=pts, tracker="pos1"))
+        ref = reference_identification(vs.verification(points=pts, tracker="pos1"))
         stats = np.concatenate([ve_stats(ref.initial_ve)[0], ve_stats(ref.residual_ve)[0]])
         for name, x in zip(STATS, stats, strict=True):
             values[f"{pts}.none.{name}"] = exact(1e3 * x)
-        for pos in ("pos1", "pos2", "pos3", "pos4"):
-            ver = study.verification(points=pts, tracker=pos)
+        for pos in POSITIONS:
+            ver = vs.verification(points=pts, tracker=pos)
             sim = simulate(ver, n, seed)
-            for name in (*STATS, "compensated.mean"):
+            for name in (*STATS, *FINAL):
                 est, u = sim.ve(name)
                 values[f"{pts}.{pos}.{name}"] = mc(1e3 * est, 1e3 * u, n)
+            for which in ("initial", "compensated"):
+                for k, (est, u) in sim.point_mean_ve(which).items():
+                    values[f"{pts}.{pos}.point.{which}.{k}"] = mc(1e3 * est, 1e3 * u, n)
             pu = np.asarray(sim.point_u) * 1e3
             values[f"{pts}.{pos}.point_u.mean"] = mc(pu.mean(), pu.mean() / math.sqrt(2.0), n)
             values[f"{pts}.{pos}.point_u_gum.mean"] = exact(1e3 * float(np.mean(sim.gum.point_u)))
+            if pts == "mesh96":
+                values["fit.parameters"] = exact(len(sim.names))
+                values["fit.readings"] = exact(3 * ver.n_points)
+                # the old reading of Table I's angles, the rest unchanged
+                R = matrix_from_euler(np.radians(AGUADO2016_T1[pos][1]), AGUADO2016_OLD_EULER)
+                old = dataclasses.replace(ver.tracker, rotation=R)
+                sim_old = simulate(dataclasses.replace(ver, tracker=old), n, seed)
+                for name in ("initial.mean", "residual.mean", "compensated.mean"):
+                    est, u = sim_old.ve(name)
+                    values[f"{pts}.{pos}.old.{name}"] = mc(1e3 * est, 1e3 * u, n)
+                L = np.linalg.norm(ver.readings(), axis=-1) * 1e-3
+                values[f"distance.{pos}.min_m"] = exact(L.min())
+                values[f"distance.{pos}.max_m"] = exact(L.max())
+                a, sd = implied_angle_urad(ver, AGUADO2016[(pts, pos)][1], n, seed)
+                values[f"implied.{pos}.angle_urad"] = mc(a, sd, n)
             if pts == "mesh5408" and pos in ("pos1", "pos4"):
-                res, _ = per_point(ver, n9, seed)
-                e0 = np.asarray(res["initial"].samples).reshape(n9, -1, 3)
-                e1 = np.asarray(res["residual"].samples).reshape(n9, -1, 3)
-                data[pos] = (
-                    np.linalg.norm(e0, axis=-1) * 1e3,
-                    np.linalg.norm(e1, axis=-1) * 1e3,
-                )
+                vm = VerificationModel.build(ver, reference_identification(ver))
+                keep = ["point_initial", "point_compensated"]
+                res = mtmc.monte_carlo(vm, vm.inputs(), n9, seed, keep=keep)
+                data[pos] = tuple(np.asarray(res[k].samples) * 1e3 for k in keep)
     data["none"] = (ref.initial_ve[0] * 1e3, ref.residual_ve[0] * 1e3)
-    settings = {"aguado2016": {"trials": n, "seed": seed, "fig9_trials": n9}}
+    # Table I's angles read every way: the elevation of the beam over the 5408 points
+    p = vs.machine.tool_position(vs.points["mesh5408"].q)
+    for seq, tr in euler_readings(vs.euler):
+        for pos, (t, ang) in AGUADO2016_T1.items():
+            R = matrix_from_euler(np.radians(ang), seq)
+            x = (p - np.asarray(t)) @ (R.T if tr else R)
+            el = np.degrees(np.arctan2(x[:, 2], np.hypot(x[:, 0], x[:, 1])))
+            key = f"reading.{reading_name(seq, tr)}.{pos}"
+            values[f"{key}.elevation_min_deg"] = exact(el.min())
+            values[f"{key}.elevation_max_deg"] = exact(el.max())
+            values[f"{key}.tilt_deg"] = exact(math.degrees(math.acos(min(1.0, R[2, 2]))))
+    lim = vs.limits
+    assert lim is not None
+    settings = {
+        "aguado2016": {
+            "trials": n,
+            "seed": seed,
+            "fig9_trials": n9,
+            "euler": vs.euler,
+            "elevation_deg": [math.degrees(x) for x in lim.elevation],
+        }
+    }
     return {"settings": settings, "values": values}, data
 
 
@@ -761,7 +875,8 @@ def aguado2016_figures(data: dict[str, Any], out: Path) -> list[Path]:
     """Fig. 9: initial and final errors on the 5408-point mesh, no noise and pos 1 and 4."""
     fig = new_figure(8.4, 3.0)
     fig.subplots_adjust(left=0.05, right=0.98, bottom=0.17, top=0.88, wspace=0.15)
-    for i, (title, idx) in enumerate((("initial error", 0), ("final error (eq. 17)", 1))):
+    titles = (("initial error", 0), ("final error (after compensation)", 1))
+    for i, (title, idx) in enumerate(titles):
         ax = fig.add_subplot(1, 2, i + 1)
         hi = max(float(np.percentile(data[k][idx], 99.5)) for k in ("none", "pos1", "pos4"))
         bins = np.linspace(0.0, hi, 60)
@@ -792,48 +907,195 @@ def printed(x: float) -> str:
     return f"{x:.1f}" if abs(10 * x - round(10 * x)) < 1e-9 else f"{x:.2f}"
 
 
+def _pct(new: float, old: float) -> str:
+    """The relative change from ``old`` to ``new``, signed, in per cent."""
+    return f"{100.0 * (new / old - 1.0):+.1f} %"
+
+
 def aguado2016_tables(nb: Numbers) -> dict[str, str]:
-    """The generated tables of ``aguado2016.md``: Table I, and II-IV one per point set."""
+    """The generated blocks of ``aguado2016.md``: Tables I-IV and the analyses beside them."""
     out = {}
+    s = nb["settings"]["aguado2016"]
     header = ["", "initial max", "mean", "min", "final max", "mean", "min"]
-    extra = ["mtmc after compensation, mean", "calibration u mean, MC / GUM"]
+    extra = ["residual of eq. 17, max / mean / min", "calibration u mean, MC / GUM"]
     for pts in ("mesh96", "cloud96", "mesh5408"):
         paper = AGUADO2016.get((pts, "none"))
+        none = [fmt(v(nb, f"{pts}.none.{k}")) for k in STATS]
         rows = [
             ["paper, no noise", *(printed(x) for x in paper)] if paper else None,
-            ["mtmc, no noise", *(fmt(v(nb, f"{pts}.none.{k}")) for k in STATS)],
+            ["mtmc, no noise", *none],
         ]
         if pts == "mesh96":
             out["table1"] = table(header, [r for r in rows if r])
             trows = []
         else:
             trows = [[*r, "—", "—"] for r in rows if r]
-        for pos in ("pos1", "pos2", "pos3", "pos4"):
+        for pos in POSITIONS:
             p = AGUADO2016[(pts, pos)]
+            k = f"{pts}.{pos}"
             trows.append([f"paper, {pos}", *(printed(x) for x in p), "—", "—"])
             trows.append(
                 [
-                    f"mtmc, {pos}",
-                    *(fmt(v(nb, f"{pts}.{pos}.{k}")) for k in STATS),
-                    fmt(v(nb, f"{pts}.{pos}.compensated.mean")),
-                    (
-                        f"{fmt(v(nb, f'{pts}.{pos}.point_u.mean'))} / "
-                        f"{fmt(v(nb, f'{pts}.{pos}.point_u_gum.mean'))}"
-                    ),
+                    f"mtmc, {pos}: each point's mean",
+                    *(fmt(v(nb, f"{k}.point.initial.{x}")) for x in ("max", "mean", "min")),
+                    *(fmt(v(nb, f"{k}.point.compensated.{x}")) for x in ("max", "mean", "min")),
+                    "—",
+                    f"{fmt(v(nb, f'{k}.point_u.mean'))} / {fmt(v(nb, f'{k}.point_u_gum.mean'))}",
+                ]
+            )
+            trows.append(
+                [
+                    f"mtmc, {pos}: each verification's",
+                    *(fmt(v(nb, f"{k}.{x}")) for x in STATS[:3]),
+                    *(fmt(v(nb, f"{k}.{x}")) for x in FINAL),
+                    " / ".join(fmt(v(nb, f"{k}.{x}")) for x in STATS[3:]),
+                    "—",
                 ]
             )
         out[f"table.{pts}"] = table(header + extra, trows)
-    s = nb["settings"]["aguado2016"]
     out["settings"] = (
         f"{s['trials']} verifications per row, seed {s['seed']}; Fig. 9 pools "
         f"{s['fig9_trials']} verifications per position."
+    )
+    # "final": the compensated error, not the residual of eq. 17
+    p_, n3 = v(nb, "fit.parameters"), v(nb, "fit.readings")
+    keep = math.sqrt(1.0 - p_ / n3)
+    pos4 = AGUADO2016[("mesh96", "pos4")]
+    out["final"] = (
+        f"The identification fits {p_:.0f} parameters (the tracker's pose among them) to "
+        f"{n3:.0f} readings (96 points × 3); a least-squares fit leaves "
+        f"√(1 − {p_:.0f}/{n3:.0f}) = {keep:.3f} of the noise in its residual. At pos4 the "
+        f"paper's Table II gives {printed(pos4[1])} µm initial and {printed(pos4[4])} µm final "
+        f"(mean): as a residual, {printed(pos4[4])} µm would need a noise of at most "
+        f"{pos4[4] / keep:.1f} µm, while the initial mean needs one that brings "
+        f"{fmt(v(nb, 'mesh96.none.initial.mean'))} µm of machine error to {printed(pos4[1])} µm. "
+        f"Ours at pos4: initial {fmt(v(nb, 'mesh96.pos4.initial.mean'))} µm, residual "
+        f"{fmt(v(nb, 'mesh96.pos4.residual.mean'))} µm, after compensation "
+        f"{fmt(v(nb, 'mesh96.pos4.compensated.mean'))} µm. With more points (Tables II → IV, "
+        f"pos4) the paper's final mean goes {printed(pos4[4])} → "
+        f"{printed(AGUADO2016[('mesh5408', 'pos4')][4])} µm; ours after compensation "
+        f"{fmt(v(nb, 'mesh96.pos4.compensated.mean'))} → "
+        f"{fmt(v(nb, 'mesh5408.pos4.compensated.mean'))} µm, our residual "
+        f"{fmt(v(nb, 'mesh96.pos4.residual.mean'))} → "
+        f"{fmt(v(nb, 'mesh5408.pos4.residual.mean'))} µm."
+    )
+    t4 = AGUADO2016[("mesh5408", "pos2")]
+    out["mixed"] = (
+        f"Table IV, pos2: final mean {printed(t4[4])} µm against initial {printed(t4[1])} µm "
+        f"(ratio {t4[4] / t4[1]:.2f}), final minimum {printed(t4[5])} µm. Ours on that mesh "
+        f"at pos2: residual / initial = {fmt(v(nb, 'mesh5408.pos2.residual.mean'))} / "
+        f"{fmt(v(nb, 'mesh5408.pos2.initial.mean'))} µm (ratio "
+        f"{v(nb, 'mesh5408.pos2.residual.mean') / v(nb, 'mesh5408.pos2.initial.mean'):.2f}), "
+        f"after compensation {fmt(v(nb, 'mesh5408.pos2.compensated.mean'))} µm."
+    )
+    mx = [AGUADO2016[(p, "pos1")][0] for p in ("mesh96", "cloud96", "mesh5408")]
+    out["maxima"] = (
+        f"The paper's initial maximum at pos1 is {' / '.join(printed(x) for x in mx)} µm in "
+        f"Tables II / III / IV, at pos3 {printed(AGUADO2016[('cloud96', 'pos3')][0])} and "
+        f"{printed(AGUADO2016[('mesh5408', 'pos3')][0])} µm and at pos4 "
+        f"{printed(AGUADO2016[('cloud96', 'pos4')][0])} and "
+        f"{printed(AGUADO2016[('mesh5408', 'pos4')][0])} µm in Tables III and IV. The mean over "
+        f"the verifications of each one's maximum grows with the points: ours at pos1 "
+        f"{fmt(v(nb, 'mesh96.pos1.initial.max'))} µm (96 points) → "
+        f"{fmt(v(nb, 'mesh5408.pos1.initial.max'))} µm (5408 points); the maximum over the "
+        f"points of each point's mean error does not: "
+        f"{fmt(v(nb, 'mesh96.pos1.point.initial.max'))} → "
+        f"{fmt(v(nb, 'mesh5408.pos1.point.initial.max'))} µm."
+    )
+    # the readings of Table I's angles
+    lo, hi = s["elevation_deg"]
+    rrows = []
+    for seq, tr in euler_readings(s["euler"]):
+        name = reading_name(seq, tr)
+        cells, seen = [], 0
+        for pos in POSITIONS:
+            k = f"reading.{name}.{pos}"
+            a, b = v(nb, f"{k}.elevation_min_deg"), v(nb, f"{k}.elevation_max_deg")
+            ok = lo <= a and b <= hi
+            seen += ok
+            cells.append(f"{a:.1f} … {b:.1f}{'' if ok else ' ✗'} ({v(nb, f'{k}.tilt_deg'):.0f}°)")
+        label = "extrinsic" if seq.islower() else "intrinsic"
+        note = " (the study's)" if (seq, tr) == (s["euler"], False) else ""
+        note = " (before)" if (seq, tr) == (AGUADO2016_OLD_EULER, False) else note
+        rrows.append([f"`{name}`{note}", label, *cells, str(seen)])
+    out["readings"] = table(["reading", "", *POSITIONS, "positions seen"], rrows)
+    crows = []
+    for pos in POSITIONS:
+        row = [pos]
+        for name in ("initial.mean", "residual.mean", "compensated.mean"):
+            old, new = v(nb, f"mesh96.{pos}.old.{name}"), v(nb, f"mesh96.{pos}.{name}")
+            row.append(f"{fmt(old)} → {fmt(new)} ({_pct(new, old)})")
+        crows.append(row)
+    out["reading_change"] = table(
+        [
+            f"mesh of 96, `{AGUADO2016_OLD_EULER}` → `{s['euler']}`",
+            "initial mean / µm",
+            "residual mean / µm",
+            "after compensation, mean / µm",
+        ],
+        crows,
+    )
+    e, o = s["euler"], AGUADO2016_OLD_EULER
+    out["reading_summary"] = (
+        f"Under `{e}`, position 4 is tilted {v(nb, f'reading.{e}.pos4.tilt_deg'):.0f}° from "
+        f"upright, the least of the four, and sees the points between "
+        f"{v(nb, f'reading.{e}.pos4.elevation_min_deg'):.1f}° and "
+        f"{v(nb, f'reading.{e}.pos4.elevation_max_deg'):.1f}°; under `{o}` its beam goes down "
+        f"to {v(nb, f'reading.{o}.pos4.elevation_min_deg'):.1f}°. Position 3, "
+        f"{v(nb, 'distance.pos3.min_m'):.2f} m from the nearest of the 96 points, reaches "
+        f"{v(nb, f'reading.{e}.pos3.elevation_min_deg'):.1f}° under `{e}`."
+    )
+
+    def change(pos: str, name: str) -> float:
+        return 100.0 * (v(nb, f"mesh96.{pos}.{name}") / v(nb, f"mesh96.{pos}.old.{name}") - 1.0)
+
+    others = ("residual.mean", "compensated.mean")
+    out["reading_change_summary"] = (
+        f"The initial means change by at most "
+        f"{max(abs(change(p, 'initial.mean')) for p in POSITIONS[:3]):.1f} % at positions 1–3 "
+        f"and by {change('pos4', 'initial.mean'):+.1f} % at position 4, where the paper's "
+        f"Table II gives {printed(AGUADO2016[('mesh96', 'pos4')][1])} µm; the residual and the "
+        f"error after compensation by at most "
+        f"{max(abs(change(p, n)) for p in POSITIONS for n in others):.1f} %."
+    )
+    d = [v(nb, f"distance.{p}.{k}_m") for p in ("pos1", "pos2") for k in ("min", "max")]
+    out["distances"] = (
+        f"Positions 1 and 2 stand {min(d):.2f} to {max(d):.2f} m from the 96 points, where "
+        f"{AGUADO2016_ANGLE_URAD:g} µrad on an angle (§5) moves a reading by "
+        f"{AGUADO2016_ANGLE_URAD * min(d):.0f} to {AGUADO2016_ANGLE_URAD * max(d):.0f} µm "
+        f"across the beam:"
+    )
+    irows = []
+    for pos in POSITIONS:
+        a, b = v(nb, f"distance.{pos}.min_m"), v(nb, f"distance.{pos}.max_m")
+        irows.append(
+            [
+                pos,
+                f"{a:.2f} … {b:.2f}",
+                f"{AGUADO2016_ANGLE_URAD * a:.0f} … {AGUADO2016_ANGLE_URAD * b:.0f}",
+                printed(AGUADO2016[("mesh96", pos)][1]),
+                fmt(v(nb, f"mesh96.{pos}.initial.mean")),
+                fmt(v(nb, f"implied.{pos}.angle_urad")),
+            ]
+        )
+    out["implied"] = table(
+        [
+            "",
+            "distance to the 96 points / m",
+            f"{AGUADO2016_ANGLE_URAD:g} µrad × distance / µm",
+            "paper's initial mean (Table II) / µm",
+            f"ours at {AGUADO2016_ANGLE_URAD:g} µrad / µm",
+            "angular noise that gives the paper's / µrad",
+        ],
+        irows,
     )
     return out
 
 
 # ---------------------------------------------------------------------------- Wang et al.
 
-#: Wang, Cheung and Kong 2022 Table 2: (b, c) -> measured r_max, r_avg, model r_max, r_avg.
+#: Wang, Cheung and Kong 2022 Table 2, keyed by the printed (b, c) in degrees (the paper's
+#: sign of b; mtmc's b is the negative): measured r_max, r_avg, model r_max, r_avg (µm).
 WANG2022_T2 = {
     (0, 0): (0.9, 0.4, 0.8, 0.4),
     (0, 5): (5.5, 1.3, 5.1, 1.2),

@@ -108,3 +108,48 @@ def test_same_seed_same_numbers(setup) -> None:  # type: ignore[no-untyped-def]
     bare = LaserTracker(s["tracker"].rotation, s["tracker"].position)
     with pytest.raises(InputError, match="noise"):
         Verification(s["model"], s["q"], bare, {})
+
+
+def test_point_mean_statistics_against_numpy_on_kept_samples(setup) -> None:  # type: ignore[no-untyped-def]
+    from mtmc.uncertainty import monte_carlo
+
+    s = setup
+    ver = _ver(s)
+    trials, seed = 80, 31
+    sim = simulate(ver, trials, seed)
+    # the same trials, the noise and the compensated errors kept, the statistics by NumPy
+    vm = VerificationModel.build(ver, reference_identification(ver))
+
+    def model(noise):  # type: ignore[no-untyped-def]
+        return {**vm(noise), "z": noise}
+
+    kept = monte_carlo(model, vm.inputs(), trials, seed, keep=["z", "comp"])
+    z = np.asarray(kept["z"].samples).reshape(trials, -1, 3)
+    x_nom = s["tracker"].to_tracker(s["machine"].tool_position(s["q"]))
+    reading = vm.noise.perturb(np.broadcast_to(ver.readings(), z.shape), z)
+    errors = {
+        "initial": np.linalg.norm(reading - x_nom, axis=-1),
+        "compensated": np.linalg.norm(
+            np.asarray(kept["comp"].samples).reshape(trials, -1, 3), axis=-1
+        ),
+    }
+    for which, e in errors.items():
+        got = sim.point_mean_ve(which)
+        per_point = e.mean(axis=0)
+        i, j = int(np.argmax(per_point)), int(np.argmin(per_point))
+        want = {
+            "max": (per_point[i], e[:, i].std(ddof=1)),
+            "mean": (per_point.mean(), e.mean(axis=1).std(ddof=1)),
+            "min": (per_point[j], e[:, j].std(ddof=1)),
+        }
+        for k in ("max", "mean", "min"):
+            assert np.allclose(got[k], want[k], rtol=1e-9, atol=0.0), (which, k, got[k], want[k])
+        # not the mean over the verifications of each one's max and min
+        assert got["max"][0] < sim.ve(f"{which}.max")[0]
+        assert got["min"][0] > sim.ve(f"{which}.min")[0]
+    with pytest.raises(InputError, match="initial"):
+        sim.point_mean_ve("residual")
+    # the same numbers in blocks on two workers
+    par = simulate(ver, trials, seed, workers=2)
+    assert np.array_equal(par.initial_point_mean, sim.initial_point_mean)
+    assert np.array_equal(par.compensated_point_u, sim.compensated_point_u)

@@ -23,6 +23,7 @@ from mtmc.cli.common import (
     fail,
     parallel_options,
     progress_bar,
+    warn,
 )
 from mtmc.errors import MtmcError
 
@@ -112,6 +113,7 @@ def run_cmd(
         )
     except (MtmcError, OSError) as exc:
         fail(exc)
+    warn(result.extra.get("warnings", ()))
     if not quiet:
         Console().print(summary_table(result))
     typer.echo(f"report: {out / 'report.html'}")

@@ -20,6 +20,7 @@ from mtmc.cli.common import (
     parallel_options,
     print_json,
     progress_bar,
+    warn,
     with_u,
 )
 from mtmc.errors import MtmcError
@@ -109,6 +110,17 @@ def _stats_um(est: Any, u: Any, base: int) -> dict[str, dict[str, float]]:
     }
 
 
+def _point_stats_um(r: Any) -> dict[str, dict[str, dict[str, float]]]:
+    """``point_mean_ve_um``: max, mean, min over the points of each point's mean error."""
+    return {
+        which: {
+            k: {"estimate": est * 1e3, "u": u * 1e3}
+            for k, (est, u) in r.point_mean_ve(which).items()
+        }
+        for which in ("initial", "compensated")
+    }
+
+
 def _coef_unit(model: Any, name: str) -> tuple[str, float]:
     """File unit of a parameter: µm for lengths, µrad for angles (pose: µrad and µm)."""
     from mtmc.verification.identify import parameter_unit
@@ -132,10 +144,15 @@ def simulate_cmd(
     """Monte Carlo of the whole verification: volumetric errors, coefficients, point u."""
     from mtmc.verification.simulate import simulate
     from mtmc.verification.study import load_verification_study
+    from mtmc.verification.visibility import study_visibility, visibility_warnings
 
     try:
         st = load_verification_study(study)
         ver = st.verification(points, tracker)
+        warnings = visibility_warnings(
+            study_visibility(st, points, [tracker or st.default_tracker]), st.machine.axes
+        )
+        warn(warnings)
         par = parallel_options(workers, executor, scheduler)
         m = st.trials if trials is None else trials
         s = st.seed if seed is None else seed
@@ -165,6 +182,7 @@ def simulate_cmd(
         "initial_ve_um": _stats_um(r.ve_estimate, r.ve_u, 0),
         "residual_ve_um": _stats_um(r.ve_estimate, r.ve_u, 3),
         "compensated_ve_um": _stats_um(r.ve_estimate, r.ve_u, 6),
+        "point_mean_ve_um": _point_stats_um(r),
         "coefficients": coefs,
         "gum": gum_u,
         "point_u_um": {"max": float(r.point_u.max()) * 1e3, "mean": float(r.point_u.mean()) * 1e3},
@@ -172,6 +190,7 @@ def simulate_cmd(
             "max": float(r.gum.point_u.max()) * 1e3,
             "mean": float(r.gum.point_u.mean()) * 1e3,
         },
+        "warnings": warnings,
     }
     if as_json:
         print_json(out)
@@ -190,6 +209,18 @@ def simulate_cmd(
         ("compensated_ve_um", "after compensation"),
     ):
         d = out[key]
+        typer.echo(
+            f"{label:>18}: "
+            + ", ".join(
+                f"{s} {with_u(d[s]['estimate'], d[s]['u'])}" for s in ("max", "mean", "min")
+            )
+        )
+    typer.echo(
+        "each point's error averaged over the verifications, µm: max, mean, min over the "
+        "points (u: the spread of one verification there)"
+    )
+    for which, label in (("initial", "initial"), ("compensated", "after compensation")):
+        d = out["point_mean_ve_um"][which]
         typer.echo(
             f"{label:>18}: "
             + ", ".join(
@@ -308,12 +339,15 @@ def place_cmd(
 
     from mtmc.verification.placement import place
     from mtmc.verification.study import load_verification_study
+    from mtmc.verification.visibility import study_visibility, visibility_warnings
 
     try:
         st = load_verification_study(study)
         if st.limits is None:
             fail(f"{study}: placement needs [tracker.limits] with height_mm")
         ver = st.verification(points, None)
+        warnings = visibility_warnings(study_visibility(st, points), st.machine.axes)
+        warn(warnings)
         r = place(
             ver,
             st.limits,
@@ -332,13 +366,15 @@ def place_cmd(
             "x": float(p[0]),
             "y": float(p[1]),
             "z": float(p[2]),
-            "euler_deg": [math.degrees(a) for a in r.best.euler("xyz")],
+            "euler": st.euler,
+            "euler_deg": [math.degrees(a) for a in r.best.euler(st.euler)],
             "u_um": r.u_best * 1e3,
             "u_mc_um": None if r.u_best_mc is None else r.u_best_mc * 1e3,
         },
         "reference": {n: {"u_um": u * 1e3} for n, u in r.reference.items()},
         "candidates": r.candidates,
         "rejected": r.rejected,
+        "warnings": warnings,
     }
     if as_json:
         print_json(out)
@@ -346,7 +382,7 @@ def place_cmd(
     b = out["best"]
     typer.echo(
         f"best of {r.candidates} candidates ({r.rejected} out of the limits): "
-        f"({b['x']:.0f}, {b['y']:.0f}, {b['z']:.0f}) mm, Euler xyz "
+        f"({b['x']:.0f}, {b['y']:.0f}, {b['z']:.0f}) mm, Euler {b['euler']} "
         f"({', '.join(f'{a:.1f}' for a in b['euler_deg'])}) deg: mean point u "
         f"{b['u_um']:.2f} um (GUM)"
         + ("" if b["u_mc_um"] is None else f", {b['u_mc_um']:.2f} um (MC)")

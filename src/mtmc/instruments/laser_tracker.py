@@ -458,6 +458,10 @@ class LaserTracker:
 class TrackerLimits:
     """Where a tracker can stand and what it can see (Aguado et al. 2016 §4.4, Fig. 8).
 
+    The paper names these limits but prints no values; the defaults are ours: elevation
+    −60…77°, typical of a tracker's head; azimuth unlimited; acceptance 0…30°, a
+    reflector's cone; height unlimited.
+
     Parameters
     ----------
     azimuth : (float, float)

@@ -4,8 +4,8 @@ The file is a verification study (``docs/verification.md``), read by
 :func:`mtmc.verification.study.loads_verification_study` and run by
 :func:`mtmc.verification.simulate.simulate`: the tracker noise is drawn by Monte Carlo, each
 trial identifies the machine's error functions from its readings, and the result gives
-the volumetric error before and after compensation (Aguado et al. 2017 §3) and the
-calibration uncertainty at every point (Aguado et al. 2017 Fig. 5–6, 2016 Fig. 9). The
+the volumetric error before and after compensation (Aguado et al. 2017 §3, Fig. 5–6) and
+the calibration uncertainty at every point, drawn as our own map. The
 volumetric-error statistics become quantities (Monte Carlo, no GUM: they are maxima and
 means over the points), the identified coefficients a table with their GUM ``u``, and the
 calibration uncertainty a map over the workspace.
@@ -41,10 +41,14 @@ class VerificationKindStudy(Study):
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Simulate the verification and tabulate it (module docstring)."""
         from mtmc.verification.identify import parameter_unit
-        from mtmc.verification.simulate import VE_NAMES, simulate
+        from mtmc.verification.simulate import POINT_STATS, VE_NAMES, simulate
+        from mtmc.verification.visibility import study_visibility, visibility_warnings
 
         s = self.study
         ver = s.verification()
+        warnings = visibility_warnings(
+            study_visibility(s, None, [s.default_tracker]), s.machine.axes
+        )
         mc = simulate(
             ver,
             settings.trials,
@@ -79,6 +83,16 @@ class VerificationKindStudy(Study):
             )
             for i, name in enumerate(mc.names)
         )
+        errors, stats = POINT_STATS
+        point_um = {
+            w: {k: {"estimate": 1e3 * e, "u": 1e3 * u} for k, (e, u) in mc.point_mean_ve(w).items()}
+            for w in errors
+        }
+        point_rows = tuple(
+            (w, k, "µm", point_um[w][k]["estimate"], point_um[w][k]["u"])
+            for w in errors
+            for k in stats
+        )
         tables = (
             Table(
                 "coefficients",
@@ -86,13 +100,21 @@ class VerificationKindStudy(Study):
                 ("parameter", "unit", "noise-free", "MC mean", "MC u", "GUM u"),
                 coef_rows,
             ),
+            Table(
+                "point_mean_volumetric_error",
+                "Each point's error averaged over the verifications: max, mean and min over "
+                "the points (u: the standard deviation over the verifications of the error at "
+                "the point of the max or min, and of the mean over the points)",
+                ("error", "statistic", "unit", "estimate", "u"),
+                point_rows,
+            ),
         )
         q = ver.q if ver.eval_q is None else ver.eval_q
         points = s.machine.tool_position(q)
         field = PointField(
             name="calibration_u",
-            title="Calibration uncertainty at each point, √(u²x + u²y + u²z) (Aguado et al. 2017 "
-            "Fig. 5–6)",
+            title="Calibration uncertainty at each point, √(u²x + u²y + u²z): the standard "
+            "deviation over the verifications of the error left after compensation",
             points=np.asarray(points, dtype=np.float64),
             values=np.asarray(mc.point_u, dtype=np.float64),
             unit="mm",
@@ -110,7 +132,14 @@ class VerificationKindStudy(Study):
             quantities=quantities,
             tables=tables,
             fields=(field, bias),
-            extra={"verification": {"note": s.note, "machine": str(s.machine.topology)}},
+            extra={
+                "verification": {
+                    "note": s.note,
+                    "machine": str(s.machine.topology),
+                    "point_mean_ve_um": point_um,
+                },
+                "warnings": warnings,
+            },
         )
 
 

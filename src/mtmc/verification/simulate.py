@@ -52,6 +52,19 @@ Outputs (named, mm and the coefficients' units):
   (zero when the model represents the machine), its standard deviation the calibration
   uncertainty of the point. In the tracker frame, the rigid motion that the tracker pose
   absorbs (constant terms, turns) does not count.
+- ``point_initial`` ``(m, N)`` and ``point_compensated`` ``(m, Ne)``: the length of the
+  initial error at each measured point and of the compensated error at each evaluation
+  point, whose means over the trials give the statistics of :data:`POINT_STATS`.
+
+Two statistics of the volumetric error
+--------------------------------------
+``ve`` takes the max, mean and min over the points of **one** verification, and its
+estimate is their mean over the verifications (the maximum of one verification grows
+with the number of points: more readings, more chances of a large noise). The
+**per-point** statistics (:meth:`VerificationMC.point_mean_ve`) first take, at each
+point, the mean over the verifications of the length of its error, then the max, mean
+and min of these means over the points: the error map of an average verification. The
+two means coincide; the maxima and minima do not.
 """
 
 from __future__ import annotations
@@ -84,6 +97,7 @@ from mtmc.verification.identify import (
 )
 
 __all__ = [
+    "POINT_STATS",
     "VE_NAMES",
     "Verification",
     "VerificationModel",
@@ -99,6 +113,12 @@ _F = NDArray[np.float64]
 #: Columns of the ``ve`` output.
 VE_NAMES: tuple[str, ...] = tuple(
     f"{a}.{b}" for a in ("initial", "residual", "compensated") for b in ("max", "mean", "min")
+)
+
+#: The errors and statistics of :meth:`VerificationMC.point_mean_ve`.
+POINT_STATS: tuple[tuple[str, ...], tuple[str, ...]] = (
+    ("initial", "compensated"),
+    ("max", "mean", "min"),
 )
 
 
@@ -427,7 +447,13 @@ class VerificationModel:
         comp = (pe - t[:, None, :]) @ R - self.xe_true
         ce = np.sqrt(np.sum(comp * comp, axis=-1))
         ve = np.concatenate([ve_stats(init), ve_stats(res), ve_stats(ce)], axis=1)
-        return {"ve": ve, "coef": est, "comp": comp.reshape(m, -1)}
+        return {
+            "ve": ve,
+            "coef": est,
+            "comp": comp.reshape(m, -1),
+            "point_initial": init,
+            "point_compensated": ce,
+        }
 
 
 #: Default exact steps of :meth:`VerificationModel.solve`, and the most points for them.
@@ -531,6 +557,11 @@ class VerificationMC:
     gum : VerificationGUM
     reference : Identification
         The noise-free identification.
+    initial_point_mean, initial_point_u : ndarray, shape (N,)
+        Mean and standard deviation over the trials of the length of the initial error at
+        each measured point.
+    compensated_point_mean, compensated_point_u : ndarray, shape (Ne,)
+        The same for the error left after compensation at each evaluation point.
     """
 
     trials: int
@@ -548,11 +579,56 @@ class VerificationMC:
     point_u: _F = field(repr=False)
     gum: VerificationGUM = field(repr=False)
     reference: Identification = field(repr=False)
+    initial_point_mean: _F = field(repr=False)
+    initial_point_u: _F = field(repr=False)
+    compensated_point_mean: _F = field(repr=False)
+    compensated_point_u: _F = field(repr=False)
 
     def ve(self, which: str) -> tuple[float, float]:
         """``(estimate, u)`` of one of :data:`VE_NAMES`."""
         i = VE_NAMES.index(which)
         return float(self.ve_estimate[i]), float(self.ve_u[i])
+
+    def point_mean_ve(self, which: str) -> dict[str, tuple[float, float]]:
+        """Max, mean and min over the points of each point's mean error, with their ``u``.
+
+        At each point the length of the error is averaged over the trials; the max, mean
+        and min of these averages over the points are the estimates (module notes: not
+        the statistics of :meth:`ve`, which average the max and min of each verification).
+        The ``u`` of the max (min) is the standard deviation over the trials (divisor
+        ``M − 1``, JCGM 101 eq. 13) of the error at the point where it is attained: the
+        spread of one verification's reading there. The ``u`` of the mean is that of the
+        mean over the points of one verification (the ``u`` of ``ve(which + ".mean")``).
+
+        Parameters
+        ----------
+        which : {"initial", "compensated"}
+            The error before identification (readings against the nominal machine, at the
+            measured points) or the error left after compensation (at the evaluation
+            points).
+
+        Returns
+        -------
+        dict
+            ``{"max": (estimate, u), "mean": (...), "min": (...)}``, mm.
+
+        Raises
+        ------
+        InputError
+            For another ``which``.
+        """
+        if which == "initial":
+            mean, u = self.initial_point_mean, self.initial_point_u
+        elif which == "compensated":
+            mean, u = self.compensated_point_mean, self.compensated_point_u
+        else:
+            raise InputError(f"expected 'initial' or 'compensated', got {which!r}", field="which")
+        i_max, i_min = int(np.argmax(mean)), int(np.argmin(mean))
+        return {
+            "max": (float(mean[i_max]), float(u[i_max])),
+            "mean": (float(np.mean(mean)), self.ve(f"{which}.mean")[1]),
+            "min": (float(mean[i_min]), float(u[i_min])),
+        }
 
 
 def reference_identification(ver: Verification, *, max_iter: int = 100) -> Identification:
@@ -653,6 +729,10 @@ def simulate(
         point_u=frozen_floats(np.sqrt(np.sum(cu * cu, axis=1))),
         gum=gum_verification(vm),
         reference=ref,
+        initial_point_mean=frozen_floats(res["point_initial"].estimate_vector),
+        initial_point_u=frozen_floats(res["point_initial"].u_vector),
+        compensated_point_mean=frozen_floats(res["point_compensated"].estimate_vector),
+        compensated_point_u=frozen_floats(res["point_compensated"].u_vector),
     )
 
 

@@ -132,6 +132,7 @@ class VerificationStudy:
     repeatability: float = 0.0
     reflector_u: float = 0.0
     pose_u: tuple[float, ...] = (0.0,) * 6
+    euler: str = "xyz"
 
     def verification(self, points: str | None = None, tracker: str | None = None) -> Verification:
         """The :class:`Verification` of one point set with one tracker position.
@@ -523,6 +524,7 @@ def loads_verification_study(
         trackers=trackers,
         limits=limits,
         points=points,
+        euler=tf.text("euler", "xyz"),
         **_run(top, points, trackers),
     )
 

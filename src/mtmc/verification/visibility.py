@@ -22,10 +22,10 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -43,7 +43,16 @@ from mtmc.study.spec import Fields
 from mtmc.verification.tomlfile import parse_study, read_study_file
 from mtmc.verification.workspace import MeasurementPlan
 
-__all__ = ["PlanVisibility", "limit_points", "plan_visibility"]
+__all__ = [
+    "PlanVisibility",
+    "limit_points",
+    "plan_visibility",
+    "study_visibility",
+    "visibility_warnings",
+]
+
+if TYPE_CHECKING:
+    from mtmc.verification.study import VerificationStudy
 
 _F = NDArray[np.float64]
 
@@ -234,3 +243,95 @@ def load_plan_visibility(
     return plan_visibility(
         machine, plan.points, trackers, limits or TrackerLimits(), reflector + plan.offsets
     )
+
+
+def study_visibility(
+    study: VerificationStudy,
+    points: str | None = None,
+    trackers: Sequence[str] | None = None,
+) -> dict[str, PlanVisibility]:
+    """Visibility of a point set of a verification study from its tracker positions.
+
+    The check of :func:`plan_visibility` (the nine limit points of Aguado et al. 2016
+    §4.4, eqs. 19–21) on the axis positions of one point set, with the reflector of the
+    study's machine and the study's ``[tracker.limits]`` (the defaults of
+    :class:`~mtmc.instruments.TrackerLimits` where it has none). ``mtmc verify simulate``,
+    ``mtmc verify place`` and ``mtmc run`` print :func:`visibility_warnings` of it.
+
+    Parameters
+    ----------
+    study : VerificationStudy
+    points : str, optional
+        A point set of the study (default: its ``[run] points``).
+    trackers : sequence of str, optional
+        Tracker positions of the study (default: all of them).
+
+    Returns
+    -------
+    dict of str to PlanVisibility
+        In the order of ``trackers``.
+
+    Raises
+    ------
+    InputError
+        For an unknown point set or tracker position.
+    """
+    from mtmc.errors import InputError
+
+    pn = study.default_points if points is None else points
+    if pn not in study.points:
+        raise InputError(
+            f"no point set {pn!r}; the study has {', '.join(study.points)}", field="points"
+        )
+    names = list(study.trackers) if trackers is None else list(trackers)
+    for n in names:
+        if n not in study.trackers:
+            raise InputError(
+                f"no tracker position {n!r}; the study has {', '.join(study.trackers)}",
+                field="tracker",
+            )
+    return plan_visibility(
+        study.machine,
+        study.points[pn].q,
+        {n: study.trackers[n] for n in names},
+        study.limits or TrackerLimits(),
+    )
+
+
+def visibility_warnings(vis: Mapping[str, PlanVisibility], axes: tuple[str, ...]) -> list[str]:
+    """One line per tracker position that does not see every limit point.
+
+    Parameters
+    ----------
+    vis : mapping of str to PlanVisibility
+        As :func:`study_visibility` or :func:`plan_visibility` return it.
+    axes : tuple of str
+        The machine's axis letters (to name the points).
+
+    Returns
+    -------
+    list of str
+        Empty when every position sees every point. A line names the position and each
+        failing point with its axis positions, the limit,
+        the value and the range (degrees, or mm for the height).
+    """
+    out = []
+    for name, v in vis.items():
+        if v.ok:
+            continue
+        parts = []
+        for f in v.failures(axes):
+            where = (
+                "the tracker"
+                if f["point"] == "tracker"
+                else f"{f['point']} ({', '.join(f'{a} {x:g}' for a, x in f['axes'].items())})"
+            )
+            parts.append(
+                f"{where}: {f['limit']} {f['value']:.2f} {f['unit']} outside "
+                f"[{f['low']:g}, {f['high']:g}] {f['unit']}"
+            )
+        out.append(
+            f"tracker position {name} cannot see every limit point of the measured points "
+            "(Aguado et al. 2016 eqs. 19-21): " + "; ".join(parts)
+        )
+    return out
