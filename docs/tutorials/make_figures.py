@@ -809,10 +809,23 @@ def aguado2016(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     values: dict[str, Any] = {}
     data: dict[str, Any] = {}
     for pts in ("mesh96", "cloud96", "mesh5408"):
-        ref = reference_identification(vs.verification(points=pts, tracker="pos1"))
+        ver0 = vs.verification(points=pts, tracker="pos1")
+        ref = reference_identification(ver0)
         stats = np.concatenate([ve_stats(ref.initial_ve)[0], ve_stats(ref.residual_ve)[0]])
+        # the residual of the noise-free fit is a small difference of readings of up to
+        # L = 4.5 m: one rounding of a reading is EPS * L (1e-9 µm), and the fit adds up
+        # many; observed across BLAS kernels: 2.7e-10 µm at most
+        reach_um = 1e3 * float(np.abs(np.asarray(ver0.readings())).max())
         for name, x in zip(STATS, stats, strict=True):
-            values[f"{pts}.none.{name}"] = exact(1e3 * x)
+            values[f"{pts}.none.{name}"] = (
+                exact(1e3 * x)
+                if name.startswith("initial")
+                else exact(
+                    1e3 * x,
+                    tol=100.0 * EPS * reach_um,
+                    why="a least-squares residual: 100 roundings of readings of 4.5 m",
+                )
+            )
         for pos in POSITIONS:
             ver = vs.verification(points=pts, tracker=pos)
             sim = simulate(ver, n, seed)

@@ -260,3 +260,22 @@ def test_the_histogram_draws_the_pdf_the_gum_interval_is_of():
     normal = html(load_study(STUDIES / "mass_calibration.toml").run(trials=2000, seed=1).to_dict())
     assert "GUM: normal PDF" in normal
     assert "the PDF of the GUM (normal)" in normal
+
+
+def test_the_histogram_draws_lengths_in_micrometres_about_the_estimate():
+    # a length in mm is drawn in µm as a deviation from the estimate: with u = 2 µm the
+    # ticks of the x axis are a few µm (a factor of 1e6 would put them in the thousands)
+    from mtmc.report.plots import histogram_svg
+    from mtmc.study import loads_study
+
+    text = (
+        'kind = "propagate"\ntitle = "t"\nmodel = "a"\noutput = "y"\nunit = "mm"\n'
+        '[inputs]\na = "normal(10, 0.002)"\n'
+    )
+    q = loads_study(text).run(trials=4000, seed=1).to_dict()["quantities"][0]
+    svg = histogram_svg(q)
+    assert "y − estimate / µm" in svg
+    ticks = [float(t.replace("−", "-")) for t in re.findall(r">(−?\d+(?:\.\d+)?)</text>", svg)]
+    assert ticks
+    assert max(abs(t) for t in ticks) <= 10.0
+    assert max(abs(t) for t in ticks) >= 4.0
