@@ -21,8 +21,9 @@ from mtmc import (
     validate,
 )
 from mtmc.study import load_study
-from mtmc.study.base import convergence, endpoint_std_error
 from mtmc.study.graph import normal_plane_basis
+from mtmc.uncertainty.gum import endpoint_std_error
+from mtmc.uncertainty.results import convergence
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDIES = ROOT / "examples" / "studies"

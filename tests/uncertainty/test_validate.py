@@ -10,7 +10,7 @@ import pytest
 from scipy import stats
 
 from mtmc import InputError, MonteCarloResult, Normal, Uniform, expression, monte_carlo
-from mtmc.uncertainty.gum import Validation, gum, validate
+from mtmc.uncertainty.gum import NOISE_MARGIN, Validation, endpoint_std_error, gum, validate
 
 
 def _normal_quantile_samples(mu, sigma, m):
@@ -123,3 +123,23 @@ def test_bad_arguments():
     gv = gum(lambda x: np.stack([x, x], axis=1), {"x": Normal(0, 1)})
     with pytest.raises(InputError, match="scalar output"):
         validate(gv, mc)
+
+
+@pytest.mark.parametrize(
+    ("excess", "expected"),
+    [
+        (0.0, "not validated within Monte Carlo noise"),
+        (2.9, "not validated within Monte Carlo noise"),
+        (3.1, "not validated"),
+        (10.0, "not validated"),
+    ],
+)
+def test_the_verdict_allows_three_endpoint_errors_of_monte_carlo_noise(excess, expected):
+    # d_high exceeds delta by `excess` endpoint standard errors; three of them, the
+    # 99.7 % of a normal endpoint, may still be sampling noise
+    noise = endpoint_std_error(0.01, 10_000, 0.95)
+    v = Validation(d_low=0.0, d_high=0.005 + 1e-6 + excess * noise, delta=0.005, passed=False)
+    assert v.verdict(noise) == expected
+    assert NOISE_MARGIN == 3.0
+    passed = Validation(d_low=0.0, d_high=0.004, delta=0.005, passed=True)
+    assert passed.verdict(noise) == "validated"

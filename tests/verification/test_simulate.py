@@ -153,3 +153,22 @@ def test_point_mean_statistics_against_numpy_on_kept_samples(setup) -> None:  # 
     par = simulate(ver, trials, seed, workers=2)
     assert np.array_equal(par.initial_point_mean, sim.initial_point_mean)
     assert np.array_equal(par.compensated_point_u, sim.compensated_point_u)
+
+
+def test_the_initial_error_is_the_reading_against_the_nominal_machine(setup) -> None:  # type: ignore[no-untyped-def]
+    # The "initial" error of Aguado et al.: a reading of the true machine against
+    # the reading the nominal machine would give at the nominal tracker pose. Without
+    # noise it is the machine's own error, which identify() computes on its own route;
+    # with noise the noise is added to it (measured against the truth it would vanish).
+    s = setup
+    ver = _ver(s)
+    ref = reference_identification(ver)
+    vm = VerificationModel.build(ver, ref)
+    n = ver.n_points
+    out = vm(np.zeros((1, 3 * n)))
+    assert ref.initial_ve.max() > 1e-3  # some µm of machine error
+    np.testing.assert_allclose(out["point_initial"][0], ref.initial_ve[0], rtol=1e-9, atol=1e-12)
+    z = np.random.default_rng(np.random.SeedSequence(5)).normal(size=(3, 3 * n))
+    noisy = vm(z)["point_initial"]
+    x_meas = vm.noise.perturb(np.broadcast_to(vm.x_true, (3, n, 3)), z.reshape(3, n, 3))
+    np.testing.assert_allclose(noisy, np.linalg.norm(x_meas - vm.x_nom, axis=-1), rtol=1e-12)

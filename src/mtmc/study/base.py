@@ -26,8 +26,8 @@ from numpy.typing import NDArray
 from mtmc.frozen import frozen_floats
 from mtmc.io import to_jsonable
 from mtmc.study.spec import RunSettings, Source
-from mtmc.uncertainty.gum import GumResult, validate
-from mtmc.uncertainty.results import MonteCarloResult
+from mtmc.uncertainty.gum import GumResult, endpoint_std_error, validate
+from mtmc.uncertainty.results import MonteCarloResult, convergence
 from mtmc.uncertainty.sampling import resolve_seed
 from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
 
@@ -39,8 +39,6 @@ __all__ = [
     "Study",
     "StudyResult",
     "Table",
-    "convergence",
-    "endpoint_std_error",
     "quantity",
     "region",
 ]
@@ -65,67 +63,6 @@ def _plain(obj: Any) -> Any:
 def _plain_dict(obj: dict[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = _plain(obj)
     return out
-
-
-def convergence(
-    samples: NDArray[np.float64], points: int = CONVERGENCE_POINTS
-) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
-    """The estimate and ``u`` from the first ``m`` trials, for ``m`` up to ``M``.
-
-    Parameters
-    ----------
-    samples : ndarray, shape (M,)
-        Model values in trial order.
-    points : int
-        Number of values of ``m``, spaced evenly on a log scale from 10 (or 2) to ``M``.
-
-    Returns
-    -------
-    m : ndarray of int, shape (n,)
-    estimate, u : ndarray, shape (n,)
-        Mean and standard deviation (divisor ``m - 1``, JCGM 101 eq. (13)) of the first
-        ``m`` values. Running sums of the deviations from the first value's neighbourhood
-        keep the cancellation small.
-
-    Examples
-    --------
-    >>> m, est, u = convergence(np.arange(1.0, 101.0), points=3)
-    >>> m.tolist(), est.tolist()
-    ([10, 32, 100], [5.5, 16.5, 50.5])
-    >>> bool(np.isclose(u[-1], np.arange(1.0, 101.0).std(ddof=1)))
-    True
-    """
-    x = np.asarray(samples, dtype=np.float64)
-    big_m = x.shape[0]
-    start = min(10, big_m)
-    m = np.unique(np.round(np.geomspace(max(start, 2), big_m, points)).astype(np.int64))
-    shift = float(np.mean(x[: min(big_m, 100)]))
-    d = x - shift
-    s1 = np.cumsum(d)[m - 1]
-    s2 = np.cumsum(d * d)[m - 1]
-    est = shift + s1 / m
-    var = np.clip((s2 - s1 * s1 / m) / (m - 1), 0.0, None)
-    return m, est, np.sqrt(var)
-
-
-def endpoint_std_error(u: float, m: int, p: float) -> float:
-    """Standard error of an endpoint of a Monte Carlo ``100p %`` interval, normal output.
-
-    The ``α = (1 - p)/2`` quantile of ``M`` draws from a PDF ``g`` has the asymptotic
-    variance ``α(1 - α) / (M g(η_α)²)`` (order statistics); for a normal output of
-    standard deviation ``u``, ``g(η_α) = φ(z_α)/u``. The JCGM 101 §8 comparison is only
-    as sharp as this: where ``d_low`` or ``d_high`` exceeds δ by less than three of
-    these, the verdict may be Monte Carlo noise.
-
-    Examples
-    --------
-    >>> round(endpoint_std_error(1.0, 10**6, 0.95), 5)
-    0.00267
-    """
-    from scipy.stats import norm
-
-    a = (1.0 - p) / 2.0
-    return float(u * math.sqrt(a * (1.0 - a) / m) / norm.pdf(norm.ppf(a)))
 
 
 @dataclass(frozen=True)
@@ -283,12 +220,7 @@ def quantity(
         }
         v = validate(gum_result, mc, p=p, ndig=settings.ndig, kind=settings.interval)  # type: ignore[arg-type]
         noise = endpoint_std_error(u, mc.m, p)
-        if v.passed:
-            verdict = "validated"
-        elif max(v.d_low, v.d_high) > v.delta + 3.0 * noise:
-            verdict = "not validated"
-        else:
-            verdict = "not validated within Monte Carlo noise"
+        verdict = v.verdict(noise)
         val_d = {
             "d_low": v.d_low,
             "d_high": v.d_high,
@@ -315,7 +247,7 @@ def quantity(
                 }
             )
     hist = mc.histogram(bins=HISTOGRAM_BINS)
-    m, est, us = convergence(np.asarray(mc.samples))
+    m, est, us = convergence(np.asarray(mc.samples), CONVERGENCE_POINTS)
     late = m >= m[-1] / 2  # the curves over the last half of the trials
     if big_u > 0:
         y_txt, u_txt = round_to_uncertainty(mc.estimate, big_u, settings.ndig)

@@ -45,7 +45,9 @@ __all__ = [
     "BudgetEntry",
     "GumResult",
     "Validation",
+    "NOISE_MARGIN",
     "coverage_factor",
+    "endpoint_std_error",
     "gum",
     "validate",
     "welch_satterthwaite",
@@ -348,6 +350,52 @@ class Validation:
     p: float = 0.95
     kind: str = "symmetric"
     ndig: int = 2
+
+    def verdict(self, noise: float) -> str:
+        """The verdict of the comparison, with the Monte Carlo noise of its endpoints.
+
+        ``"validated"`` where it passed; ``"not validated"`` where ``d_low`` or ``d_high``
+        exceeds δ by more than :data:`NOISE_MARGIN` times ``noise``, the standard error
+        of a Monte Carlo endpoint (:func:`endpoint_std_error`); otherwise
+        ``"not validated within Monte Carlo noise"``: more trials could still pass it.
+
+        Examples
+        --------
+        >>> v = Validation(d_low=0.001, d_high=0.007, delta=0.005, passed=False)
+        >>> v.verdict(noise=0.001), v.verdict(noise=0.0005)
+        ('not validated within Monte Carlo noise', 'not validated')
+        """
+        if self.passed:
+            return "validated"
+        if max(self.d_low, self.d_high) > self.delta + NOISE_MARGIN * noise:
+            return "not validated"
+        return "not validated within Monte Carlo noise"
+
+
+#: How many endpoint standard errors (:func:`endpoint_std_error`) a ``d`` of the JCGM 101
+#: §8 comparison must exceed δ by for the GUM to be "not validated" outright.
+NOISE_MARGIN = 3.0
+
+
+def endpoint_std_error(u: float, m: int, p: float) -> float:
+    """Standard error of an endpoint of a Monte Carlo ``100p %`` interval, normal output.
+
+    The ``α = (1 - p)/2`` quantile of ``M`` draws from a PDF ``g`` has the asymptotic
+    variance ``α(1 - α) / (M g(η_α)²)`` (order statistics); for a normal output of
+    standard deviation ``u``, ``g(η_α) = φ(z_α)/u``. The JCGM 101 §8 comparison is only
+    as sharp as this: where ``d_low`` or ``d_high`` exceeds δ by less than
+    :data:`NOISE_MARGIN` of these, the verdict may be Monte Carlo noise
+    (:meth:`Validation.verdict`).
+
+    Examples
+    --------
+    >>> round(endpoint_std_error(1.0, 10**6, 0.95), 5)
+    0.00267
+    """
+    from scipy.stats import norm
+
+    a = (1.0 - p) / 2.0
+    return float(u * math.sqrt(a * (1.0 - a) / m) / norm.pdf(norm.ppf(a)))
 
 
 def coverage_factor(p: float, dof: float) -> float:

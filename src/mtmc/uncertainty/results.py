@@ -43,6 +43,7 @@ from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.sketch import QuantileSketch
 
 __all__ = [
+    "convergence",
     "MAX_COV_DIM",
     "CoverageEllipsoid",
     "Moments",
@@ -961,3 +962,44 @@ class MonteCarloResults(Mapping[str, MonteCarloResult]):
 
     def __len__(self) -> int:
         return len(self.outputs)
+
+
+def convergence(
+    samples: npt.ArrayLike, points: int = 60
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """The estimate and ``u`` from the first ``m`` trials, for ``m`` up to ``M``.
+
+    Parameters
+    ----------
+    samples : ndarray, shape (M,)
+        Model values in trial order.
+    points : int
+        Number of values of ``m``, spaced evenly on a log scale from 10 (or 2) to ``M``.
+
+    Returns
+    -------
+    m : ndarray of int, shape (n,)
+    estimate, u : ndarray, shape (n,)
+        Mean and standard deviation (divisor ``m - 1``, JCGM 101 eq. (13)) of the first
+        ``m`` values. Running sums of the deviations from the first value's neighbourhood
+        keep the cancellation small.
+
+    Examples
+    --------
+    >>> m, est, u = convergence(np.arange(1.0, 101.0), points=3)
+    >>> m.tolist(), est.tolist()
+    ([10, 32, 100], [5.5, 16.5, 50.5])
+    >>> bool(np.isclose(u[-1], np.arange(1.0, 101.0).std(ddof=1)))
+    True
+    """
+    x = np.asarray(samples, dtype=np.float64)
+    big_m = x.shape[0]
+    start = min(10, big_m)
+    m = np.unique(np.round(np.geomspace(max(start, 2), big_m, points)).astype(np.int64))
+    shift = float(np.mean(x[: min(big_m, 100)]))
+    d = x - shift
+    s1 = np.cumsum(d)[m - 1]
+    s2 = np.cumsum(d * d)[m - 1]
+    est = shift + s1 / m
+    var = np.clip((s2 - s1 * s1 / m) / (m - 1), 0.0, None)
+    return m, est, np.sqrt(var)
