@@ -99,6 +99,14 @@ def test_axis_angle_typed_in_radians_in_a_degree_place_is_refused(tmp_path, caps
 
 
 def test_axis_angle_within_the_tolerance_passes():
+    # 0.5° off the angle of the ball positions is within the check's tolerance: the graph
+    # is read, checked without a message, and carries the typed angle
     text = (EXAMPLES / "axis_c.toml").read_text()
     ok = text.replace('value = 60.0\nunit = "deg"', 'value = 60.5\nunit = "deg"')
-    loads_graph(ok, file="axis_c.toml")
+    assert ok != text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        graph = loads_graph(ok, file="axis_c.toml")
+        plan = check(graph)
+    assert plan.warnings == ()
+    assert graph.place("alpha_c").value == pytest.approx(60.5)
