@@ -1123,10 +1123,103 @@ WANG2022_T2 = {
 #: Table 3: per sphere, the residuals x, y, z after the best fit (µm); Fig. 7: mean 4.5 µm.
 WANG2022_T3 = ((0.4, 0.9, 0.2), (0.5, 0.8, 0.4), (0.7, 0.8, 0.3), (0.7, 1.0, 0.3), (0.6, 0.7, 0.2))
 WANG2022_FIG7 = 4.5
+#: §2.3: "the Cartesian repeatability ranges contributed by the pooled standard deviation"
+#: (x, y, z, µm), and "the best fitted standard deviations of the sphere center coordinates".
+WANG2022_REPEAT = (0.36, 0.41, 0.25)
+WANG2022_CENTRE_SD = (0.18, 0.21, 0.24)
+
+
+def _wang2022_paper_b(b_deg: float) -> int:
+    """The paper's printed b of one of our poses (ISO 841: the paper's b is our -b)."""
+    return round(-b_deg) + 0  # + 0: no "-0"
+
+
+def _wang2022_noise_free(study: Any, errors: Mapping[str, Any], setup: Any) -> tuple[Any, Any, Any]:
+    """Noise-free ① ``r_max``, ``r_avg`` per pose (µm) and the distance errors (P, 10), µm."""
+    from mtmc.artefact.analysis import analyse
+
+    s = study.setup
+    meas = s.measure(study.poses, errors, setup, free_radius=study.free_radius)
+    pinv = np.linalg.pinv(s.setup_jacobian(study.poses))
+    a = analyse(
+        meas.centres[None, None], s.artefact.mounted_centres(), pinv, s.probe_jacobian(study.poses)
+    )
+    P = study.poses.shape[0]
+    return (
+        a.r_max_measured[0] * 1e3,
+        a.r_avg_measured[0] * 1e3,
+        a.distance_error_measured[0].reshape(P, -1) * 1e3,
+    )
+
+
+def _wang2022_row_floor(study: Any) -> float:
+    """The least ``r_avg / r_max`` of one row of balls shifted against the other in-plane.
+
+    The balls of Table 1 stand in two rows along y (1, 2 at y ≈ 0; 3, 4, 5 at y ≈ 60 mm):
+    a displacement ``δ`` of one row against the other changes the distance ``ij`` of a pair
+    across the rows by ``δ · u_ij``. Over the directions of ``δ`` in the artefact's xy plane
+    (0.01° steps), the least mean over the 10 pairs of ``|δ · u_ij|`` over its maximum.
+    """
+    c = np.asarray(study.setup.artefact.centres, dtype=np.float64)
+    row = (c[:, 1] > 0.5 * (c[:, 1].min() + c[:, 1].max())).astype(np.float64)
+    i, j = np.triu_indices(len(c), 1)
+    u = (c[j] - c[i]) / np.linalg.norm(c[j] - c[i], axis=1)[:, None]
+    across = (row[j] - row[i])[:, None] * u  # (10, 3); 0 for pairs within a row
+    th = np.radians(np.arange(0.0, 180.0, 0.01))
+    d = np.stack([np.cos(th), np.sin(th), np.zeros_like(th)], axis=1)
+    r = np.abs(d @ across.T)  # (directions, 10)
+    return float((r.mean(axis=1) / r.max(axis=1)).min())
+
+
+def _wang2022_centre_sd(study: Any) -> dict[str, Any]:
+    """§2.3's two readings: the centre s.d. of the study's 30-point fit, both ways (µm)."""
+    from mtmc.artefact.probing import fit_sensitivity, patch_points
+
+    art = study.setup.artefact
+    pts = patch_points(np.zeros(3), art.radius, (0.0, 0.0, 1.0), study.setup.offsets)
+    out: dict[str, Any] = {}
+    var_point = np.tile(np.square(WANG2022_REPEAT), len(pts))
+    for radius, free in (("cal", False), ("free", True)):
+        K = fit_sensitivity(pts, np.zeros(3), free)[0]  # (3, 3n): d centre / d points
+        sd = np.sqrt((K * K) @ var_point)
+        iso = np.sqrt((K * K).sum(axis=1))  # centre s.d. per unit isotropic point s.d.
+        for a, ax in enumerate("xyz"):
+            out[f"rep.point.{radius}.{ax}"] = exact(sd[a])
+            out[f"rep.iso.{radius}.{ax}"] = exact(WANG2022_CENTRE_SD[a] / iso[a])
+    return out
+
+
+def _wang2022_gum_tolerance(res: Any) -> tuple[float, str]:
+    """The reproducibility of the artefact's GUM u across BLAS kernels (µm), and why.
+
+    ``r_max`` is not analytic (a maximum of norms), so the sensitivities are central
+    differences with the step ``h_j = 1e-3 u_j`` (:func:`mtmc.uncertainty.gum`). Each
+    difference is of outputs computed from ball centres of size ``L`` (mm) through GEMMs
+    whose order of summation depends on the BLAS kernel: a rounding of ``EPS·L`` in each,
+    so ``|δc_j| ≤ EPS·L/(2 h_j)`` and ``|δu| ≤ √N · max_j |δc_j| u_j = 500·EPS·L·√N`` over
+    the ``N`` input components.
+    """
+    budget = next(iter(res.gum.values())).result.budget
+    n_inputs = sum(np.asarray(e.u).size for e in budget)
+    big_l = float(np.abs(np.asarray(res.measurement.centres)).max())
+    tol = 1e3 * 500.0 * EPS * big_l * math.sqrt(n_inputs)
+    why = (
+        f"central differences (h = 1e-3 u) of outputs of {big_l:.0f} mm centres through "
+        f"BLAS, {n_inputs} inputs: 500 EPS L sqrt(N)"
+    )
+    return tol, why
 
 
 def wang2022(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
-    """Wang, Cheung and Kong 2022: Table 2, Table 3 and Fig. 7 of the shipped study."""
+    """Wang, Cheung and Kong 2022: Table 2, Table 3 and Fig. 7 of the shipped study.
+
+    Also: the noise-free Table 2 ① with each chosen machine error alone (what drives each
+    row), the share of ``r_avg`` in ``r_max``, §2.3's two readings of the probing
+    repeatability, Table 2 ① under the second one and without the CMM's uncertainty, and
+    the identified setup errors.
+    """
+    from dataclasses import replace
+
     from mtmc.artefact.study import simulate
 
     study = load("wang2022").study
@@ -1134,16 +1227,67 @@ def wang2022(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     seed = study.seed
     res = simulate(study, trials=n, seed=seed)
     j = res.to_json()
+    gum_tol = _wang2022_gum_tolerance(res)
     values: dict[str, Any] = {}
+    keys = []
     for pose in j["poses"]:
-        b, c = round(pose["b_deg"]), round(pose["c_deg"])
+        b, c = _wang2022_paper_b(pose["b_deg"]), round(pose["c_deg"])
+        keys.append(f"[{b},{c}]")
         for key in ("r_max_um", "r_avg_um", "r_max_model_um", "r_avg_model_um"):
             e = pose[key]
             k = f"t2[{b},{c}].{key[:-3]}"
             values[f"{k}.noise_free"] = exact(e["noise_free"])
             values[f"{k}.mc"] = mc(e["estimate"], e["u"], n)
             values[f"{k}.mc_u"] = mc(e["u"], e["u"] / math.sqrt(2.0), n)
-            values[f"{k}.gum_u"] = exact(e["gum_u"])
+            values[f"{k}.gum_u"] = exact(e["gum_u"], *gum_tol)
+    # what drives each row: every chosen machine error alone, and the setup errors alone
+    zero = np.zeros_like(study.setup_errors)
+    alone = {name: ({name: f}, zero) for name, f in study.errors.items()}
+    alone["setup"] = ({}, study.setup_errors)
+    for name, (errs, setup) in alone.items():
+        rm, ra, _ = _wang2022_noise_free(study, errs, setup)
+        for p, k in enumerate(keys):
+            values[f"drive.{name}{k}.r_max"] = exact(rm[p])
+            values[f"drive.{name}{k}.r_avg"] = exact(ra[p])
+    # r_avg against r_max: what turning C adds to the distance errors, and the least share
+    # a shift of one row of balls against the other can give
+    _, _, dist = _wang2022_noise_free(study, study.errors, study.setup_errors)
+    c_deg = np.round(np.degrees(study.poses[:, 1]))
+    for p, k in enumerate(keys):
+        if c_deg[p] != 0:
+            ref = next(
+                q
+                for q in range(len(keys))
+                if c_deg[q] == 0 and study.poses[q, 0] == study.poses[p, 0]
+            )
+            dr = np.abs(dist[p] - dist[ref])
+            values[f"share{k}.c_part"] = exact(dr.mean() / dr.max())
+    values["share.row_floor"] = exact(_wang2022_row_floor(study))
+    # §2.3 read two ways
+    values.update(_wang2022_centre_sd(study))
+    um = 1e-3
+    other = replace(
+        study,
+        repeatability=np.zeros(3),
+        machine_repeatability=np.asarray(WANG2022_CENTRE_SD) * um,
+    )
+    res_b = simulate(other, trials=n, seed=seed, gum_too=False)
+    for pose, k in zip(res_b.to_json()["poses"], keys, strict=True):
+        for key in ("r_max_um", "r_avg_um"):
+            e = pose[key]
+            values[f"t2centre{k}.{key[:-3]}.mc"] = mc(e["estimate"], e["u"], n)
+            values[f"t2centre{k}.{key[:-3]}.mc_u"] = mc(e["u"], e["u"] / math.sqrt(2.0), n)
+    res_p = simulate(replace(study, cmm=False), trials=n, seed=seed, gum_too=False)
+    for pose, k in zip(res_p.to_json()["poses"], keys, strict=True):
+        for key in ("r_max_um", "r_avg_um"):
+            e = pose[key]
+            values[f"t2probing{k}.{key[:-3]}.mc"] = mc(e["estimate"], e["u"], n)
+            values[f"t2probing{k}.{key[:-3]}.mc_u"] = mc(e["u"], e["u"] / math.sqrt(2.0), n)
+    for name, e in j["setup_errors"].items():
+        values[f"setup.{name}.injected"] = exact(e["injected"])
+        values[f"setup.{name}.noise_free"] = exact(e["noise_free"])
+        values[f"setup.{name}.mc"] = mc(e["estimate"], e["u"], n)
+        values[f"setup.{name}.gum_u"] = exact(e["gum_u"], *gum_tol)
     t3 = np.asarray(j["table3_um"], dtype=np.float64)
     t3_mean = np.asarray(res.mc_mean["table3"]).reshape(t3.shape) * 1e3
     t3_u = np.asarray(res.mc_u["table3"]).reshape(t3.shape) * 1e3
@@ -1154,7 +1298,8 @@ def wang2022(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     vol = np.linalg.norm(np.asarray(j["volumetric_um"]), axis=-1)
     values["fig7.mean_um"] = exact(j["volumetric_mean_um"])
     values["fig7.max_um"] = exact(vol.max())
-    return {"settings": {"wang2022": {"trials": n, "seed": seed}}, "values": values}, {"res": res}
+    settings = {"trials": n, "seed": seed, "errors": list(study.errors)}
+    return {"settings": {"wang2022": settings}, "values": values}, {"res": res}
 
 
 def wang2022_figures(data: dict[str, Any], out: Path) -> list[Path]:
@@ -1169,36 +1314,71 @@ def wang2022_figures(data: dict[str, Any], out: Path) -> list[Path]:
     return [path]
 
 
+def wang2022_order(ours: Mapping[tuple[int, int], float], col: int) -> tuple[int, int]:
+    """Pairs of Table 2's poses ordered as the paper orders them: (agreeing, pairs).
+
+    Only the pairs whose printed column ``col`` (0: ① ``r_max``, 1: ① ``r_avg``) differs
+    by more than the printed resolution, 0.1 µm; ``ours`` keyed by the paper's (b, c).
+    """
+    poses = list(WANG2022_T2)
+    agree = total = 0
+    for i, p in enumerate(poses):
+        for q in poses[i + 1 :]:
+            d = WANG2022_T2[p][col] - WANG2022_T2[q][col]
+            if abs(d) > 0.15:  # printed to 0.1 µm: 0.2 µm or more apart
+                total += 1
+                agree += d * (ours[p] - ours[q]) > 0
+    return agree, total
+
+
+def _wang2022_pattern(nb: Numbers) -> str:
+    """The sentence on the pattern of Table 2 ①: pairs of poses ordered as the paper's."""
+    parts = []
+    for col, name in ((0, "r_max"), (1, "r_avg")):
+        counts = []
+        for kind in ("noise_free", "mc"):
+            ours = {bc: v(nb, f"t2[{bc[0]},{bc[1]}].{name}.{kind}") for bc in WANG2022_T2}
+            counts.append(wang2022_order(ours, col))
+        parts.append(
+            f"`{name}`: {counts[0][0]} of {counts[0][1]} noise-free, "
+            f"{counts[1][0]} of {counts[1][1]} as MC means"
+        )
+    return (
+        "Pairs of poses whose printed ① values differ by 0.2 µm or more, ordered as the "
+        "paper orders them: " + "; ".join(parts) + "."
+    )
+
+
 def wang2022_tables(nb: Numbers) -> dict[str, str]:
     """The generated tables of ``wang2022.md``."""
     s = nb["settings"]["wang2022"]
+
+    def pair(k: str, a: str = "r_max", b: str = "r_avg", nd: int = 2) -> str:
+        return f"{fmt(v(nb, f'{k}.{a}'), nd)} / {fmt(v(nb, f'{k}.{b}'), nd)}"
+
+    def mcu(k: str) -> str:
+        return f"{fmt(v(nb, f'{k}.mc'), 2)} ± {fmt(v(nb, f'{k}.mc_u'), 2)}"
+
     rows = []
     for (b, c), p in WANG2022_T2.items():
         k = f"t2[{b},{c}]"
         rows.append(
             [
                 f"{b}°",
+                f"{-b + 0}°",
                 f"{c}°",
                 f"{p[0]:.1f} / {p[1]:.1f}",
-                (
-                    f"{fmt(v(nb, f'{k}.r_max.noise_free'), 2)} / "
-                    f"{fmt(v(nb, f'{k}.r_avg.noise_free'), 2)}"
-                ),
-                (
-                    f"{fmt(v(nb, f'{k}.r_max.mc'), 2)} ± {fmt(v(nb, f'{k}.r_max.mc_u'), 2)} / "
-                    f"{fmt(v(nb, f'{k}.r_avg.mc'), 2)} ± {fmt(v(nb, f'{k}.r_avg.mc_u'), 2)}"
-                ),
-                f"{fmt(v(nb, f'{k}.r_max.gum_u'), 2)} / {fmt(v(nb, f'{k}.r_avg.gum_u'), 2)}",
+                pair(k, "r_max.noise_free", "r_avg.noise_free"),
+                f"{mcu(f'{k}.r_max')} / {mcu(f'{k}.r_avg')}",
+                pair(k, "r_max.gum_u", "r_avg.gum_u"),
                 f"{p[2]:.1f} / {p[3]:.1f}",
-                (
-                    f"{fmt(v(nb, f'{k}.r_max_model.noise_free'), 2)} / "
-                    f"{fmt(v(nb, f'{k}.r_avg_model.noise_free'), 2)}"
-                ),
+                pair(k, "r_max_model.noise_free", "r_avg_model.noise_free"),
             ]
         )
     t2 = table(
         [
-            "b",
+            "b (paper)",
+            "b (mtmc)",
             "c",
             "paper ① r_max / r_avg",
             "mtmc ① noise-free",
@@ -1209,6 +1389,119 @@ def wang2022_tables(nb: Numbers) -> dict[str, str]:
         ],
         rows,
     )
+    names = [*s["errors"], "setup"]
+    rows = []
+    for (b, c), p in WANG2022_T2.items():
+        k = f"[{b},{c}]"
+        rows.append(
+            [
+                f"{b}°, {c}°",
+                f"{p[0]:.1f} / {p[1]:.1f}",
+                pair(f"t2{k}", "r_max.noise_free", "r_avg.noise_free"),
+            ]
+            + [pair(f"drive.{n}{k}") for n in names]
+        )
+    drive = table(
+        ["b, c (paper)", "paper ①", "all"]
+        + [f"{n} alone" for n in s["errors"]]
+        + ["setup errors alone"],
+        rows,
+    )
+    rows = []
+    for (b, c), p in WANG2022_T2.items():
+        if c == 0:
+            continue
+        k = f"[{b},{c}]"
+        rows.append(
+            [
+                f"{b}°, {c}°",
+                f"{p[1] / p[0]:.2f}",
+                fmt(v(nb, f"t2{k}.r_avg.mc") / v(nb, f"t2{k}.r_max.mc"), 2),
+                fmt(v(nb, f"share{k}.c_part"), 2),
+                fmt(v(nb, f"t2{k}.r_avg.mc") / p[1], 2),
+            ]
+        )
+    share = table(
+        [
+            "b, c (paper)",
+            "paper r_avg / r_max",
+            "mtmc r_avg / r_max (MC means)",
+            "mtmc, the part C adds",
+            "mtmc r_avg / paper r_avg",
+        ],
+        rows,
+    )
+    share += (
+        "\n\nThe least `r_avg / r_max` that a shift of one row of balls against the other, "
+        f"in the artefact's plane, can give: {fmt(v(nb, 'share.row_floor'), 2)}."
+    )
+    rows = [
+        [
+            "printed: the best-fit centre s.d.",
+            " / ".join(f"{x:.2f}" for x in WANG2022_CENTRE_SD),
+            "—",
+        ],
+        [
+            "per-point s.d. (0.36 / 0.41 / 0.25), calibrated radius (the study)",
+            " / ".join(fmt(v(nb, f"rep.point.cal.{a}"), 2) for a in "xyz"),
+            "—",
+        ],
+        [
+            "per-point s.d. (0.36 / 0.41 / 0.25), free radius",
+            " / ".join(fmt(v(nb, f"rep.point.free.{a}"), 2) for a in "xyz"),
+            "—",
+        ],
+        [
+            "isotropic per-point s.d. that gives the printed centre s.d., calibrated radius",
+            " / ".join(f"{x:.2f}" for x in WANG2022_CENTRE_SD),
+            " / ".join(fmt(v(nb, f"rep.iso.cal.{a}"), 2) for a in "xyz"),
+        ],
+        [
+            "the same, free radius",
+            " / ".join(f"{x:.2f}" for x in WANG2022_CENTRE_SD),
+            " / ".join(fmt(v(nb, f"rep.iso.free.{a}"), 2) for a in "xyz"),
+        ],
+    ]
+    repeat = table(["reading (§2.3)", "centre s.d. x / y / z", "per-point s.d. x / y / z"], rows)
+    rows = []
+    for (b, c), p in WANG2022_T2.items():
+        k = f"[{b},{c}]"
+        rows.append(
+            [
+                f"{b}°, {c}°",
+                f"{p[0]:.1f} / {p[1]:.1f}",
+                f"{mcu(f't2{k}.r_max')} / {mcu(f't2{k}.r_avg')}",
+                f"{mcu(f't2centre{k}.r_max')} / {mcu(f't2centre{k}.r_avg')}",
+                f"{mcu(f't2probing{k}.r_max')} / {mcu(f't2probing{k}.r_avg')}",
+            ]
+        )
+    t2centre = table(
+        [
+            "b, c (paper)",
+            "paper ①",
+            "mtmc ①, per-point reading (the study)",
+            "mtmc ①, centre reading",
+            "mtmc ①, per-point reading, CMM calibration exact",
+        ],
+        rows,
+    )
+    rows = []
+    for name in (
+        k[len("setup.") : -len(".injected")]
+        for k in nb["values"]
+        if k.startswith("setup.") and k.endswith(".injected")
+    ):
+        k = f"setup.{name}"
+        rows.append(
+            [
+                name,
+                fmt(v(nb, f"{k}.injected"), 2),
+                fmt(v(nb, f"{k}.noise_free"), 3),
+                f"{fmt(v(nb, f'{k}.mc'), 3)} ± {fmt(nb['values'][f'{k}.mc']['sd'], 3)}",
+                fmt(v(nb, f"{k}.gum_u"), 3),
+            ]
+        )
+    setup = table(["name", "injected", "identified, noise-free", "MC mean ± u", "GUM u"], rows)
     rows = []
     for i, p3 in enumerate(WANG2022_T3):
         k = f"t3[{i + 1}]"
@@ -1228,7 +1521,18 @@ def wang2022_tables(nb: Numbers) -> dict[str, str]:
         f"{fmt(v(nb, 'fig7.mean_um'), 2)} µm (largest {fmt(v(nb, 'fig7.max_um'), 2)} µm)."
     )
     head = f"{s['trials']} trials, seed {s['seed']}; µm."
-    return {"settings": head, "table2": t2, "table3": t3, "fig7": fig7}
+    return {
+        "settings": head,
+        "table2": t2,
+        "pattern": _wang2022_pattern(nb),
+        "drivers": drive,
+        "share": share,
+        "repeatability": repeat,
+        "table2_centre": t2centre,
+        "setup": setup,
+        "table3": t3,
+        "fig7": fig7,
+    }
 
 
 # ---------------------------------------------------------------------------- driver

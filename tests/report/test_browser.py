@@ -125,7 +125,7 @@ def test_the_artefact_report_draws_a_histogram_per_quantity(chromium, artefact_p
     assert sum(n.startswith("r_max.") for n in names) == 9
     assert sum(n.startswith("r_avg.") for n in names) == 9
     assert sum(n.startswith("setup.") for n in names) == 18
-    assert "r_max.b10_c5" in names
+    assert "r_max.b-10_c5" in names
     assert "setup.dw5z" in names
     for name, body in hists:
         # the bars (one path of the stairs), the interval band and the GUM curve

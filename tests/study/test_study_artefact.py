@@ -68,9 +68,9 @@ def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them
     ref = simulate(loads_artefact_study(text, str(STUDY), STUDY.parent), 300, 4)
     q = {x.name: x for x in r.quantities}
     assert len(q) == 9 + 9 + 18
-    # pose (b, c) = (5°, -5°) is the fifth of the plan
-    i = [tuple(p.values()) for p in ref.pose_labels()].index((5.0, -5.0))
-    rm = q["r_max.b5_c-5"]
+    # pose (b, c) = (-5°, -5°) in mtmc's sign (the paper's b = 5°) is the sixth of the plan
+    i = [tuple(p.values()) for p in ref.pose_labels()].index((-5.0, -5.0))
+    rm = q["r_max.b-5_c-5"]
     # the kept samples give the engine's moments again (to rounding) and the GUM its u
     assert rm.mc["estimate"] == pytest.approx(ref.mc_mean["r_max_measured"][i], rel=1e-12)
     assert rm.mc["u"] == pytest.approx(ref.mc_u["r_max_measured"][i], rel=1e-9)

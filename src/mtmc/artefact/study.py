@@ -241,8 +241,14 @@ def study_model(
         raise InputError("an exact fit needs the noise of the points", field="noise")
     per = k * 3 if noise == "points" else 3
     inputs: dict[str, Any] = {"probe": IID(Normal(0.0, 1.0), R * P * N * per)}
-    # centres: the Cholesky factor of each fit's centre covariance K' K'^T (same law)
-    L = np.linalg.cholesky(np.matmul(pr.Kp, pr.Kp.transpose(0, 2, 1)))
+    # centres: the Cholesky factor of each fit's centre covariance K' K'^T (same law); only
+    # for that noise, so that a study with no per-point noise (a per-probing repeatability
+    # alone, ``repeatability_um = [0, 0, 0]``) runs with the noise of the points
+    L = (
+        np.linalg.cholesky(np.matmul(pr.Kp, pr.Kp.transpose(0, 2, 1)))
+        if noise == "centres"
+        else None
+    )
     if study.cmm:
         inputs["cmm"] = MultivariateNormal(np.zeros(3 * N), art.centre_covariance())
     if study.machine_repeatability is not None:
@@ -262,7 +268,7 @@ def study_model(
     ) -> dict[str, _F]:
         m = probe.shape[0]
         z = probe.reshape(m, R * P * N, per)
-        if noise == "centres":
+        if L is not None:
             dc = np.matmul(z.transpose(1, 0, 2), L.transpose(0, 2, 1))  # (RPN, m, 3)
             centres = c0[None, None] + dc.transpose(1, 0, 2).reshape(m, R, P, N, 3)
         elif exact_fit:

@@ -129,7 +129,7 @@ def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
 
     Their Monte Carlo values (the measured centres, ①) with the GUM beside them.
 
-    Names: ``r_max.b5_c-5`` (the pose's rotary positions in degrees), ``setup.dpx``.
+    Names: ``r_max.b-5_c-5`` (the pose's rotary positions in degrees), ``setup.dpx``.
     """
     out = []
     labels = ["_".join(f"{k[0]}{v:g}" for k, v in lab.items()) for lab in res.pose_labels()]
