@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mtmc.errors import GraphError, ParseError
+from mtmc.errors import GraphError, InputError, ParseError
 from mtmc.graph import check_graph, dumps_graph, load_graph, loads_graph
 from mtmc.graph.places import Place, Transition
 
@@ -203,7 +203,8 @@ def test_not_toml():
 
 
 def test_missing_file(tmp_path):
-    with pytest.raises(GraphError, match="cannot read"):
+    # an unreadable file is an input error (as for every file mtmc reads), not a graph error
+    with pytest.raises(InputError, match="cannot read the graph file"):
         load_graph(tmp_path / "nope.toml")
 
 

@@ -12,8 +12,8 @@ import tomllib
 
 import pytest
 
+from mtmc.document import key_lines
 from mtmc.errors import MtmcError
-from mtmc.graph.toml_format import key_lines
 from mtmc.study import loads_study
 
 TEXT = "\n".join(

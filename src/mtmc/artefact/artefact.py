@@ -22,7 +22,6 @@ sum (0.47 µm instead of 0.65 µm at L = 120 mm).
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -32,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.errors import InputError, ParseError
+from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
 
 __all__ = [
@@ -250,14 +249,10 @@ def loads_artefact(text: str, file: str = "<artefact>") -> Artefact:
     InputError
         On a missing or malformed field, naming the file, line and field.
     """
-    from mtmc.study.spec import Fields, Source
+    from mtmc.document import Fields, parse_toml
 
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ParseError(f"not valid TOML: {exc}", file=file) from None
-    src = Source.from_text(text, file=file)
-    top = Fields(src, data)
+    top = parse_toml(text, file)
+    src, data = top.source, top.data
     top.only(("name", "description", "diameter", "cmm", "ball"))
     diameter = top.number("diameter", low=0.0, open_low=True)
     cmm = top.table("cmm", required=False)
@@ -291,7 +286,7 @@ def loads_artefact(text: str, file: str = "<artefact>") -> Artefact:
 
 
 def _triple(f: Any, key: str) -> list[float]:
-    """Three finite numbers from field ``key`` of a :class:`~mtmc.study.spec.Fields`."""
+    """Three finite numbers from field ``key`` of a :class:`~mtmc.document.Fields`."""
     v = f._get(key, None) if f.has(key) else None
     if not (
         isinstance(v, list)
@@ -311,12 +306,10 @@ def load_artefact(path: str | Path) -> Artefact:
     InputError
         If the file cannot be read, or on a bad field (file, line, field named).
     """
+    from mtmc.document import read_text
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read the artefact file: {exc.strerror}", file=str(p)) from None
-    return loads_artefact(text, file=str(p))
+    return loads_artefact(read_text(p, "artefact file"), file=str(p))
 
 
 SHIPPED = ("wang2022_five_ball",)

@@ -35,7 +35,6 @@ they are linear in the inputs) and of the calibration through the same analysis.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,7 +47,7 @@ from mtmc.artefact.analysis import ANALYSIS_OUTPUTS, Analysis, analyse
 from mtmc.artefact.artefact import SHIPPED, Artefact, load_artefact, pairs, shipped_artefact
 from mtmc.artefact.model import FiducialSetup, Measurement, identify, setup_error_names
 from mtmc.artefact.probing import PAPER_REPEATABILITY_UM, patch_offsets
-from mtmc.errors import InputError, ParseError
+from mtmc.errors import InputError
 from mtmc.geometry.fits import fit_sphere
 from mtmc.kinematics import Machine
 from mtmc.kinematics.functions import PolynomialFunction
@@ -787,14 +786,9 @@ def loads_artefact_study(
         On a missing, unknown or malformed field: the message names the file, the line
         and the field, and says what was expected.
     """
-    from mtmc.study.spec import Fields, Source
+    from mtmc.document import parse_toml
 
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ParseError(f"not valid TOML: {exc}", file=file) from None
-    src = Source.from_text(text, file=file, folder=folder)
-    top = Fields(src, data)
+    top = parse_toml(text, file, folder)
     top.only(
         (
             "kind",
@@ -846,9 +840,7 @@ def load_artefact_study(path: str | Path) -> ArtefactStudy:
     InputError
         If the file cannot be read, or on a bad field (file, line and field named).
     """
+    from mtmc.document import read_text
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read the study file: {exc.strerror}", file=str(p)) from None
-    return loads_artefact_study(text, str(p), p.parent)
+    return loads_artefact_study(read_text(p, "study file"), str(p), p.parent)

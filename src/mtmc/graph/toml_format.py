@@ -1,9 +1,9 @@
 """The TOML graph file: reading (with file and line in every error) and writing.
 
 The format is documented in ``docs/graph-format.md``. Reading is in two steps kept apart:
-:mod:`tomllib` parses the text, then :func:`loads` turns the tables into :class:`Place`,
-:class:`Transition` and :class:`Graph` objects, checking every key; nothing is skipped
-silently. TOML does not report lines, so the text is scanned for the ``[[place]]`` /
+:func:`mtmc.document.parse_toml` parses the text, then :func:`loads` turns the tables into
+:class:`Place`, :class:`Transition` and :class:`Graph` objects, checking every key; nothing
+is skipped silently. TOML does not report lines, so the text is scanned for the ``[[place]]`` /
 ``[[transition]]`` headers and ``key =`` lines, and each entry and field keeps its line for
 the messages (``ball_centre.toml:23: field op: transition t5: ...``).
 
@@ -14,151 +14,27 @@ from __future__ import annotations
 
 import json
 import math
-import re
-import tomllib
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from mtmc.errors import GraphError, MtmcError, ParseError
+from mtmc.document import KeyPath, parse_toml, read_text
+from mtmc.errors import GraphError, MtmcError
 from mtmc.graph.model import Graph, check
 from mtmc.graph.places import Place, ProbeDefaults, Transition
-from mtmc.io import decode_utf8, write_text_atomic
+from mtmc.io import write_text_atomic
 
-__all__ = ["KeyPath", "key_lines", "load", "loads", "dump", "dumps"]
+__all__ = ["load", "loads", "dump", "dumps"]
 
 _TOP_KEYS = ("title", "units", "probe", "place", "transition")
 _PLACE_KEYS = ("name", "type", "value", "u", "dist", "unit", "pos")
 _PROBE_KEYS = ("u_axis", "u_probe", "u_perp")
-_HEADER = re.compile(r"""^\s*(\[\[?)\s*([A-Za-z0-9_\-."' ]+?)\s*\]\]?\s*(#.*)?$""")
-_KEY = re.compile(
-    r"^\s*((?:[A-Za-z0-9_\-]+|\"[^\"]*\")(?:\s*\.\s*(?:[A-Za-z0-9_\-]+|\"[^\"]*\"))*)\s*="
-)
-_PART = re.compile(r'"([^"]*)"|([A-Za-z0-9_\-]+)')
-
-#: A key path of a TOML document: table and key names, with the 0-based index of an
-#: entry of an array of tables, e.g. ``("place", 2, "name")``.
-KeyPath = tuple[str | int, ...]
-
-
-def _parts(text: str) -> list[str]:
-    return [m.group(1) if m.group(1) is not None else m.group(2) for m in _PART.finditer(text)]
-
-
-def key_lines(text: str) -> dict[KeyPath, int]:
-    """The 1-based line of every table header and key of a TOML text, by key path.
-
-    :mod:`tomllib` gives no lines, so the text is scanned: ``[a.b]`` headers, ``[[name]]``
-    entries (numbered from 0 in order) and ``key =`` lines (dotted and quoted keys
-    included); the lines inside a multi-line array are skipped. The first line wins
-    when a path repeats.
-
-    Parameters
-    ----------
-    text : str
-        The TOML text (valid or not: what cannot be read is left out).
-
-    Returns
-    -------
-    dict
-        Key path (a tuple of names, with an ``int`` for the entry of an array of
-        tables) to line number.
-
-    Examples
-    --------
-    >>> text = chr(10).join(['title = "x"', '[run]', 'trials = 10', '[[place]]', 'name = "a"'])
-    >>> lines = key_lines(text)
-    >>> lines[("run", "trials")], lines[("place", 0)], lines[("place", 0, "name")]
-    (3, 4, 5)
-    """
-    out: dict[KeyPath, int] = {}
-    counts: dict[tuple[str, ...], int] = {}
-    prefix: KeyPath = ()
-    state = _Value()
-    for n, raw in enumerate(text.splitlines(), start=1):
-        if state.open:  # inside a multi-line array or string
-            state.scan(raw)
-            continue
-        h = _HEADER.match(raw)
-        if h:
-            names = tuple(_parts(h.group(2)))
-            if h.group(1) == "[[":
-                i = counts.get(names, 0)
-                counts[names] = i + 1
-                prefix = (*names, i)
-            else:
-                prefix = names
-            out.setdefault(prefix, n)
-            continue
-        k = _KEY.match(raw)
-        if k:
-            out.setdefault((*prefix, *_parts(k.group(1))), n)
-            state = _Value()
-            state.scan(raw[k.end() :])
-    return out
-
-
-class _Value:
-    """Where a TOML value stands after the lines scanned so far.
-
-    The depth of its open brackets and braces, and the multi-line string it is inside
-    (``\"\"\"`` or ``'''``). Brackets inside strings and comments do not count: after
-    ``a = ["x[", "y"]`` the value is closed, and a multi-line string that holds ``[`` opens
-    no array.
-    """
-
-    def __init__(self) -> None:
-        self.depth = 0
-        self.string = ""
-
-    @property
-    def open(self) -> bool:
-        return self.depth > 0 or bool(self.string)
-
-    def scan(self, line: str) -> None:
-        i, n = 0, len(line)
-        while i < n:
-            if self.string:  # inside a multi-line string: only its closing quotes end it
-                end = line.find(self.string, i)
-                while end > 0 and self.string == '"""' and _escaped(line, end):
-                    end = line.find(self.string, end + 1)
-                if end < 0:
-                    return
-                i = end + 3
-                self.string = ""
-                continue
-            c = line[i]
-            if c == "#":
-                return
-            if line.startswith(('"""', "'''"), i):
-                self.string = line[i : i + 3]
-                i += 3
-            elif c in "\"'":  # a one-line string: skip to its closing quote
-                j = i + 1
-                while j < n and (line[j] != c or (c == '"' and _escaped(line, j))):
-                    j += 1
-                i = j + 1
-            else:
-                if c in "[{":
-                    self.depth += 1
-                elif c in "]}":
-                    self.depth = max(0, self.depth - 1)
-                i += 1
-
-
-def _escaped(line: str, i: int) -> bool:
-    """Whether the character at ``i`` follows an odd number of backslashes."""
-    k = i
-    while k > 0 and line[k - 1] == "\\":
-        k -= 1
-    return (i - k) % 2 == 1
 
 
 class _Lines:
     """Lines of the headers and keys of a graph file, by table (from :func:`key_lines`)."""
 
-    def __init__(self, text: str) -> None:
-        lines = key_lines(text)
+    def __init__(self, lines: dict[KeyPath, int]) -> None:
         self.top: dict[str, int] = {}
         for p, n in lines.items():  # the first line of each top-level key or table
             if isinstance(p[0], str) and n < self.top.get(p[0], n + 1):
@@ -179,11 +55,6 @@ class _Lines:
                 entries.append((lines[(table, i)], keys.get((table, i), {})))
                 i += 1
             self.entries[table] = entries
-
-
-def _where(e: tomllib.TOMLDecodeError) -> tuple[int | None, int | None]:
-    m = re.search(r"line (\d+), column (\d+)", str(e))
-    return (int(m.group(1)), int(m.group(2))) if m else (None, None)
 
 
 def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
@@ -227,8 +98,8 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
     >>> g.transitions[0].inputs
     ('a', 'a')
     """
-    data = _parse_toml(text, file)
-    lines = _Lines(text)
+    top = parse_toml(text, file)
+    data, lines = top.data, _Lines(top.source.lines)
 
     def err(msg: str, line: int | None, fld: str | None) -> GraphError:
         return GraphError(msg, file=file, line=line, field=fld)
@@ -243,21 +114,6 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
 
 
 _Err = Callable[[str, int | None, str | None], GraphError]
-
-
-def _parse_toml(text: str, file: str | None) -> dict[str, Any]:
-    """The TOML table of ``text``; a :class:`ParseError` with line and column if it is not TOML."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        line, col = _where(exc)
-        msg = re.split(r" \(at (?:line|end of document)", str(exc))[0]
-        if line is None:  # "at end of document": the last line
-            lines_ = text.splitlines() or [""]
-            line, col = len(lines_), len(lines_[-1]) + 1
-            msg += " at the end of the file"
-        raise ParseError(f"not valid TOML: {msg}", file=file, line=line, column=col) from None
-    return data
 
 
 def _header(data: dict[str, Any], lines: _Lines, err: _Err) -> tuple[str, str, ProbeDefaults]:
@@ -384,11 +240,7 @@ def load(path: str | Path, *, validate: bool = True) -> Graph:
         As :func:`loads`.
     """
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise GraphError(f"cannot read the graph file: {exc.strerror}", file=str(path)) from None
-    return loads(decode_utf8(data, p.name), file=p.name, validate=validate)
+    return loads(read_text(p, "graph file"), file=p.name, validate=validate)
 
 
 def _fmt(v: Any) -> str:

@@ -15,9 +15,7 @@ from mtmc.study import propagate as _propagate  # noqa: F401  (registers propaga
 from mtmc.study import verification as _verification  # noqa: F401  (registers verification)
 from mtmc.study.base import Quantity, Region, Study, StudyResult, Table
 from mtmc.study.spec import (
-    Fields,
     RunSettings,
-    Source,
     StudyKind,
     load_study,
     loads_study,
@@ -27,11 +25,9 @@ from mtmc.study.spec import (
 from mtmc.study.write import provenance, write_result
 
 __all__ = [
-    "Fields",
     "Quantity",
     "Region",
     "RunSettings",
-    "Source",
     "Study",
     "StudyKind",
     "StudyResult",

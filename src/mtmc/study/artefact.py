@@ -16,8 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Quantity, Study, StudyResult, Table, quantity
-from mtmc.study.spec import Fields, RunSettings, register_kind
+from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = ["ArtefactKindStudy"]

@@ -23,9 +23,10 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import Source
 from mtmc.frozen import frozen_floats
 from mtmc.io import to_jsonable
-from mtmc.study.spec import RunSettings, Source
+from mtmc.study.spec import RunSettings
 from mtmc.uncertainty.gum import GumResult, endpoint_std_error, validate
 from mtmc.uncertainty.results import MonteCarloResult, convergence
 from mtmc.uncertainty.sampling import resolve_seed

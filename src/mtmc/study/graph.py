@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import Fields, check_number
 from mtmc.errors import MtmcError
 from mtmc.graph.model import Graph, Plan, check
 from mtmc.graph.places import SCALAR_TYPES
@@ -38,7 +39,7 @@ from mtmc.study.base import (
     quantity,
     region,
 )
-from mtmc.study.spec import Fields, RunSettings, check_number, register_kind
+from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.montecarlo import monte_carlo
 from mtmc.uncertainty.results import MonteCarloResult

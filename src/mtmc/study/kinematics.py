@@ -18,13 +18,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import Fields, check_number
 from mtmc.errors import InputError, MtmcError
 from mtmc.kinematics.library import library_machine, library_names
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import is_rotary
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
 from mtmc.study.propagate import read_inputs
-from mtmc.study.spec import Fields, RunSettings, check_number, register_kind
+from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.montecarlo import monte_carlo

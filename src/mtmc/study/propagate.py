@@ -12,9 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from mtmc.document import Fields
 from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import ProgressFn, Study, StudyResult, quantity
-from mtmc.study.spec import Fields, RunSettings, register_kind
+from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.distributions import Distribution, as_distribution, parse_distribution
 from mtmc.uncertainty.expression import Expression, check_variables, expression
 from mtmc.uncertainty.gum import gum
@@ -43,7 +44,7 @@ def read_inputs(table: Fields) -> dict[str, Distribution]:
         text nor a finite number, or a distribution with bad parameters (a negative or
         non-finite standard deviation, ``low >= high``...).
     """
-    from mtmc.study.spec import check_number
+    from mtmc.document import check_number
 
     out: dict[str, Distribution] = {}
     if not table.data:

@@ -35,11 +35,10 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from mtmc.document import Fields, Source, check_number, parse_toml, read_text
 from mtmc.errors import InputError, TopologyError
 from mtmc.io import write_text_atomic
 from mtmc.kinematics.topology import is_linear, is_rotary
-from mtmc.study.spec import Fields, Source, check_number
-from mtmc.verification.tomlfile import parse_study, read_study_file
 from mtmc.verification.workspace import MeasurementPlan, read_workspace
 
 __all__ = [
@@ -716,7 +715,7 @@ def read_nc(nc: Fields, axes: Sequence[str] | None = None) -> NCSettings:
 
     Parameters
     ----------
-    nc : mtmc.study.spec.Fields
+    nc : mtmc.document.Fields
         The table.
     axes : sequence of str, optional
         The plan's axes, to check the per-axis tables.
@@ -863,7 +862,7 @@ def loads_plan_study(text: str, file: str = "<study>") -> tuple[MeasurementPlan,
     InputError
         On any wrong field, naming the file, the line and the field.
     """
-    top = parse_study(text, file)
+    top = parse_toml(text, file)
     axes = _machine_axes(top)
     ws = top.table("workspace")
     nc = top.table("nc")
@@ -881,4 +880,4 @@ def load_plan_study(path: str | Path) -> tuple[MeasurementPlan, NCSettings]:
     InputError
         If the file cannot be read, or as :func:`loads_plan_study`.
     """
-    return loads_plan_study(read_study_file(path), str(path))
+    return loads_plan_study(read_text(path, "study file"), str(path))

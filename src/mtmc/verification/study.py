@@ -1,7 +1,7 @@
 """Verification study files (TOML): machine, models, tracker, point sets, run settings.
 
 A plain loader returning frozen objects; every error names the file, the line and the
-field (lines from :class:`mtmc.study.spec.Source`). The format (``docs/verification.md``):
+field (lines from :class:`mtmc.document.Source`). The format (``docs/verification.md``):
 
 .. code-block:: toml
 
@@ -70,6 +70,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import Fields, parse_toml, read_text
 from mtmc.errors import InputError, MtmcError
 from mtmc.instruments.laser_tracker import LaserTracker, TrackerLimits, TrackerNoise
 from mtmc.kinematics.functions import (
@@ -80,9 +81,7 @@ from mtmc.kinematics.functions import (
 )
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.parameters import ErrorModel
-from mtmc.study.spec import Fields
 from mtmc.verification.simulate import Verification
-from mtmc.verification.tomlfile import parse_study, read_study_file
 
 __all__ = ["PointSet", "VerificationStudy", "load_verification_study", "loads_verification_study"]
 
@@ -482,7 +481,7 @@ def loads_verification_study(
     InputError, ParseError
         Naming the file, line and field of the first bad entry.
     """
-    top = parse_study(text, file, folder)
+    top = parse_toml(text, file, folder)
     top.only(
         (
             "title",
@@ -545,4 +544,6 @@ def load_verification_study(path: str | Path) -> VerificationStudy:
     InputError
         If the file cannot be read, or as :func:`loads_verification_study`.
     """
-    return loads_verification_study(read_study_file(path), file=str(path), folder=Path(path).parent)
+    return loads_verification_study(
+        read_text(path, "study file"), file=str(path), folder=Path(path).parent
+    )

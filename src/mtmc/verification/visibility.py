@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from mtmc.document import Fields, parse_toml, read_text
 from mtmc.errors import MtmcError
 from mtmc.instruments.laser_tracker import (
     LaserTracker,
@@ -39,8 +40,6 @@ from mtmc.instruments.laser_tracker import (
     visibility,
 )
 from mtmc.kinematics.machine import Machine
-from mtmc.study.spec import Fields
-from mtmc.verification.tomlfile import parse_study, read_study_file
 from mtmc.verification.workspace import MeasurementPlan
 
 __all__ = [
@@ -233,7 +232,7 @@ def load_plan_visibility(
     """
     from mtmc.verification.study import read_trackers
 
-    top = parse_study(read_study_file(path), str(path), Path(path).parent)
+    top = parse_toml(read_text(path, "study file"), str(path), Path(path).parent)
     if "tracker" not in top.data:
         return None
     tf = top.table("tracker")

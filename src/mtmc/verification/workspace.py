@@ -44,10 +44,10 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from mtmc.document import Fields, Source
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_array
 from mtmc.kinematics.topology import AXIS_DIRECTION, is_rotary
-from mtmc.study.spec import Fields, Source
 
 __all__ = [
     "DISTRIBUTIONS",
@@ -663,7 +663,7 @@ def read_workspace(ws: Fields, machine_axes: Sequence[str] | None = None) -> Mea
 
     Parameters
     ----------
-    ws : mtmc.study.spec.Fields
+    ws : mtmc.document.Fields
         The table (it knows its file and the line of each key).
     machine_axes : sequence of str, optional
         The machine's axes in its order (``Machine.axes``): every one needs a table, and
