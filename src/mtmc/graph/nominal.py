@@ -39,15 +39,19 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.errors import ConditioningWarning, DegenerateGeometryError, GraphError, MtmcError
 from mtmc.frozen import frozen_floats
-from mtmc.graph.model import Plan, Step
 from mtmc.graph.places import VECTOR_TYPES
+from mtmc.graph.units import place_dimension
+from mtmc.graph.values import PARTS, flatten, marked_value, unflatten
+
+if TYPE_CHECKING:
+    from mtmc.graph.model import Plan, Step
 
 __all__ = [
     "ANGLE_RTOL",
@@ -76,7 +80,7 @@ class NominalReport:
     ----------
     values : mapping of str to ndarray
         The nominal value of every place, flattened (``(k,)``, layout of
-        :data:`mtmc.graph.run.PARTS`), mm and rad.
+        :data:`mtmc.graph.values.PARTS`), mm and rad.
     condition : mapping of str to float
         The relative condition number κ of every transition other than ``meas``.
     warnings : tuple of str
@@ -110,9 +114,6 @@ def _nominal_samples(plan: Plan) -> dict[str, Any]:
 
 def _length_powers(plan: Plan, name: str) -> NDArray[np.float64]:
     """The power of length of each flattened component of place ``name``."""
-    from mtmc.graph.run import PARTS
-    from mtmc.graph.units import place_dimension
-
     out: list[float] = []
     for part, size in PARTS[plan.types[name]]:
         out += [float(place_dimension(plan, name, part)[0])] * size
@@ -151,8 +152,6 @@ def _condition(
     plan: Plan, step: Step, inputs: list[NDArray[np.float64]], out: NDArray[np.float64]
 ) -> float:
     """κ of one transition by central differences, all steps in one batch of ``2K``."""
-    from mtmc.graph.run import flatten, unflatten
-
     t = step.transition
     types = [plan.types[p] for p in t.inputs]
     x = np.concatenate(inputs)
@@ -233,14 +232,13 @@ def check_nominal(plan: Plan, *, max_condition: float = MAX_CONDITION) -> Nomina
         ``axis`` angle α does not match the angle between its nominal ball centres.
     """
     from mtmc.graph import probe as _probe
-    from mtmc.graph.run import _marked_value, flatten
 
     g = plan.graph
     samples = _nominal_samples(plan)
     values: dict[str, NDArray[np.float64]] = {}
     for p in g.places:
         if p.marked:
-            values[p.name] = flatten(p.type, _marked_value(p, g.factor, samples), 1)[0]
+            values[p.name] = flatten(p.type, marked_value(p, g.factor, samples), 1)[0]
     condition: dict[str, float] = {}
     notes: list[str] = []
     for step in plan.steps:
@@ -295,6 +293,5 @@ def check_nominal(plan: Plan, *, max_condition: float = MAX_CONDITION) -> Nomina
 
 
 def _unflat(type_: str, flat: NDArray[np.float64]) -> Any:
-    from mtmc.graph.run import unflatten
 
     return unflatten(type_, flat[None, :])

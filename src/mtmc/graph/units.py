@@ -8,7 +8,10 @@ in the file's unit, and the library's results stay in mm and rad.
 
 from __future__ import annotations
 
-from mtmc.graph.model import Plan
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from mtmc.graph.model import Plan
 
 __all__ = ["place_dimension"]
 

@@ -25,10 +25,11 @@ from mtmc.document import Fields, check_number
 from mtmc.errors import MtmcError
 from mtmc.graph.model import Graph, Plan, check
 from mtmc.graph.places import SCALAR_TYPES
-from mtmc.graph.run import PARTS, graph_model, random_inputs
+from mtmc.graph.run import graph_model, random_inputs
 from mtmc.graph.sweep import Surrogate, apply_setting, sweep
 from mtmc.graph.toml_format import load
 from mtmc.graph.units import place_dimension
+from mtmc.graph.values import PARTS
 from mtmc.study.base import (
     ProgressFn,
     Quantity,

@@ -1,0 +1,156 @@
+"""The layers of docs/architecture.md hold: no import circle, no upward import.
+
+The imports of every module of ``src/mtmc`` are read from its source (``ast``), at module
+level and inside functions alike; an import under ``if TYPE_CHECKING:`` runs nothing and is
+left out. From them: the graph of modules has no cycle, and each package imports only the
+packages below it in :data:`ALLOWED` (the table of docs/architecture.md).
+"""
+
+from __future__ import annotations
+
+import ast
+from collections import defaultdict
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PKG = SRC / "mtmc"
+
+#: The bottom: imported by every layer, importing nothing of mtmc but each other.
+BASE = {"errors", "frozen", "io", "document", "parallel"}
+
+#: What each package may import besides :data:`BASE` (docs/architecture.md).
+ALLOWED: dict[str, set[str]] = {
+    "errors": set(),
+    "frozen": set(),
+    "io": set(),
+    "document": set(),
+    "parallel": set(),
+    "uncertainty": set(),
+    "geometry": set(),
+    "kinematics": {"geometry"},
+    "instruments": {"geometry"},
+    "graph": {"geometry", "uncertainty"},
+    "verification": {"geometry", "instruments", "kinematics", "uncertainty"},
+    "artefact": {"geometry", "kinematics", "uncertainty"},
+    "positioning": {"geometry", "uncertainty", "verification"},
+    "report": {"graph", "kinematics", "uncertainty"},
+    "study": {
+        "artefact",
+        "graph",
+        "kinematics",
+        "positioning",
+        "report",
+        "uncertainty",
+        "verification",
+        "version",
+    },
+    "workbench": {"graph", "report", "study", "uncertainty"},
+    "demo": {"report", "study"},
+    "cli": {
+        "artefact",
+        "demo",
+        "graph",
+        "kinematics",
+        "positioning",
+        "report",
+        "study",
+        "uncertainty",
+        "verification",
+        "version",
+        "workbench",
+    },
+}
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for p in PKG.rglob("*.py"):
+        parts = list(p.relative_to(SRC).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(parts)] = p
+    return out
+
+
+def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skip.update(id(n) for b in node.body for n in ast.walk(b))
+    package = path.name == "__init__.py"
+    found = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                here = name.split(".") if package else name.split(".")[:-1]
+                here = here[: len(here) - node.level + 1]
+                base = ".".join([*here, *([node.module] if node.module else [])])
+            targets = [f"{base}.{a.name}" for a in node.names] + [base]
+        elif isinstance(node, ast.Import):
+            targets = [a.name for a in node.names]
+        else:
+            continue
+        for t in targets:
+            if t in modules and t != name:
+                found.add(t)
+                break
+    return found
+
+
+def _package(module: str) -> str:
+    parts = module.split(".")
+    if len(parts) == 1:
+        return "version"  # the package itself: mtmc.__version__
+    return parts[1]
+
+
+def _graph() -> dict[str, set[str]]:
+    modules = _modules()
+    return {m: _imports(m, p, modules) for m, p in modules.items()}
+
+
+def test_no_module_imports_in_a_circle() -> None:
+    graph = _graph()
+    state: dict[str, int] = {}
+    stack: list[str] = []
+    cycles: list[list[str]] = []
+
+    def visit(m: str) -> None:
+        state[m] = 1
+        stack.append(m)
+        for n in sorted(graph.get(m, ())):
+            if state.get(n) == 1:
+                cycles.append([*stack[stack.index(n) :], n])
+            elif n not in state:
+                visit(n)
+        stack.pop()
+        state[m] = 2
+
+    for m in sorted(graph):
+        if m not in state and m != "mtmc":  # the package's lazy top-level names
+            visit(m)
+    assert not cycles, "\n".join(" -> ".join(c) for c in cycles)
+
+
+def test_every_package_imports_only_the_layers_below_it() -> None:
+    bad = defaultdict(set)
+    for m, targets in _graph().items():
+        if m == "mtmc":
+            continue
+        pkg = _package(m)
+        assert pkg in ALLOWED, f"{pkg} is not in the table of layers"
+        for t in targets:
+            other = _package(t)
+            if other != pkg and other not in BASE and other not in ALLOWED[pkg]:
+                bad[f"{pkg} -> {other}"].add(f"{m} imports {t}")
+    assert not bad, "\n".join(f"{k}: {sorted(v)}" for k, v in sorted(bad.items()))
+
+
+def test_the_base_imports_nothing_above_it() -> None:
+    for m, targets in _graph().items():
+        if _package(m) in BASE:
+            assert {_package(t) for t in targets} <= BASE | {_package(m)}, m
