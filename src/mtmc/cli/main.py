@@ -13,7 +13,7 @@ import warnings
 import typer
 
 from mtmc import __version__
-from mtmc.cli import artefact, graph, kinematics, propagate, run, verify
+from mtmc.cli import artefact, graph, kinematics, positioning, propagate, run, verify
 
 app = typer.Typer(
     name="mtmc",
@@ -30,6 +30,7 @@ app.add_typer(graph.app, name="graph")
 app.add_typer(kinematics.app, name="kinematics")
 app.add_typer(verify.app, name="verify")
 app.add_typer(artefact.app, name="artefact")
+app.add_typer(positioning.app, name="positioning")
 
 
 def _version(value: bool) -> None:

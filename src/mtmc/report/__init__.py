@@ -148,6 +148,10 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
         figs["machine"] = plots.machine_svg(machine["name"])
     if result.get("sweep"):
         figs["sweep"] = plots.sweep_svg(result["sweep"])
+    if result.get("positioning"):
+        from mtmc.report.positioning import positioning_svg
+
+        figs["positioning"] = positioning_svg(result["positioning"])
     template = _env().get_template("report.html.j2")
     # the units of the inputs, where the result gives them (a kinematics study: mm, rad)
     units = {x["name"]: x["unit"] for x in result.get("inputs", []) if x.get("unit")}

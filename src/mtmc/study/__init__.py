@@ -5,12 +5,14 @@ A study file names its ``kind`` and its parameters (``docs/study-format.md``);
 file, the line and the field. ``load_study(path).run()`` returns a frozen
 :class:`StudyResult`; :func:`write_result` writes the result folder
 (``docs/results-format.md``) with its HTML report. Kinds register themselves with
-:func:`register_kind`: ``propagate``, ``graph``, ``sweep``, ``kinematics``, ``artefact``.
+:func:`register_kind`: ``propagate``, ``graph``, ``sweep``, ``kinematics``, ``artefact``,
+``positioning``.
 """
 
 from mtmc.study import artefact as _artefact  # noqa: F401  (registers artefact)
 from mtmc.study import graph as _graph  # noqa: F401  (registers graph and sweep)
 from mtmc.study import kinematics as _kinematics  # noqa: F401  (registers kinematics)
+from mtmc.study import positioning as _positioning  # noqa: F401  (registers positioning)
 from mtmc.study import propagate as _propagate  # noqa: F401  (registers propagate)
 from mtmc.study import verification as _verification  # noqa: F401  (registers verification)
 from mtmc.study.base import Quantity, Region, Study, StudyResult, Table

@@ -1,0 +1,170 @@
+"""``mtmc positioning``: evaluate an ISO 230-2 positioning test with its uncertainty.
+
+A thin shell over :mod:`mtmc.study.positioning` (the route ``mtmc run`` takes for a
+``positioning`` study) and :mod:`mtmc.positioning`: it parses the arguments, runs the
+study, prints the parameters (or one JSON object with ``--json``) and writes the
+compensation table and the result folder where asked. Errors print one line naming the
+file, the line and the field, and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path
+from typing import Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from mtmc.cli.common import (
+    EXECUTOR_OPTION,
+    PROGRESS_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    fail,
+    parallel_options,
+    print_json,
+    progress_bar,
+)
+from mtmc.errors import InputError, MtmcError
+
+__all__ = ["app", "evaluate_cmd", "parse_columns"]
+
+app = typer.Typer(
+    help="Positioning tests of an axis (ISO 230-2): parameters with U by GUM and Monte Carlo.",
+    no_args_is_help=True,
+)
+
+
+def parse_columns(text: str | None) -> dict[str, str] | None:
+    """``"target=Pos,deviation=Error"`` as ``{"target": "Pos", "deviation": "Error"}``."""
+    if not text:
+        return None
+    out: dict[str, str] = {}
+    for part in text.split(","):
+        key, sep, name = part.partition("=")
+        if not sep or not key.strip() or not name.strip():
+            raise InputError(
+                f"expected --columns as OURS=THEIRS pairs, e.g. target=Position, got {part!r}",
+                field="columns",
+            )
+        out[key.strip()] = name.strip()
+    return out
+
+
+def _study(
+    data: Path,
+    study_file: Path | None,
+    units: str,
+    columns: dict[str, str] | None,
+    axis: str | None,
+    type_a: str | None,
+) -> Any:
+    from mtmc.positioning import UncertaintyModel, read_positioning_csv
+    from mtmc.study import load_study
+    from mtmc.study.positioning import PositioningStudy, positioning_study
+
+    if study_file is None:
+        model = {} if type_a is None else {"type_a": type_a}
+        return positioning_study(data, units=units, columns=columns, axis=axis or "X", model=model)
+    s = load_study(study_file)
+    if not isinstance(s, PositioningStudy):
+        raise InputError(
+            f"expected a positioning study, got kind {s.kind!r}", file=str(study_file), field="kind"
+        )
+    test = read_positioning_csv(data, columns=columns, units=units)
+    model = s.model if type_a is None else dataclasses.replace(s.model, type_a=type_a)
+    if not isinstance(model, UncertaintyModel):  # pragma: no cover - the study's own type
+        raise InputError("not an uncertainty model", field="model")
+    return dataclasses.replace(s, test=test, model=model, axis=axis or s.axis)
+
+
+@app.command("evaluate")
+def evaluate_cmd(
+    ctx: typer.Context,
+    data: Path = typer.Argument(..., help="CSV file: target,run,direction,deviation per row."),
+    study_file: Path | None = typer.Option(
+        None,
+        "--study",
+        help="A positioning study whose environment, instrument, tolerances and [run] apply "
+        "to DATA (default: the Type A evaluation of the readings alone).",
+    ),
+    units: str = typer.Option(
+        "mm,um", "--units", help="TARGET,DEVIATION units: mm,um  mm,mm  deg,arcsec  deg,urad."
+    ),
+    columns: str | None = typer.Option(
+        None, "--columns", help="The file's column names: target=Position,deviation=Error,..."
+    ),
+    axis: str | None = typer.Option(
+        None, "--axis", help="Axis letter (default X, or the study's)."
+    ),
+    type_a: str | None = typer.Option(
+        None, "--type-a", help="means, means-and-s or none (default: means, or the study's)."
+    ),
+    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
+    seed: int | None = typer.Option(None, "--seed", min=0, help="Seed (default: the study's)."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    compensation: Path | None = typer.Option(
+        None, "--compensation", help="Write the pitch-error compensation table here."
+    ),
+    fmt: str = typer.Option("isg", "--format", help="Its format: isg, etalon or csv."),
+    sign: str = typer.Option("error", "--sign", help="Its values: error or correction."),
+    outdir: Path | None = typer.Option(
+        None, "-o", "--outdir", help="Also write the result folder with its HTML report."
+    ),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
+) -> None:
+    """Evaluate DATA: the parameters of ISO 230-2, each with U by Monte Carlo and the GUM."""
+    from mtmc.positioning import pitch_compensation
+    from mtmc.study import write_result
+    from mtmc.study.positioning import summary
+    from mtmc.verification.compensation import write_compensation
+
+    try:
+        s = _study(data, study_file, units, parse_columns(columns), axis, type_a)
+        with progress_bar(f"{data.name}: Monte Carlo", progress) as bar:
+            result = s.run(
+                trials=trials,
+                seed=seed,
+                progress=bar,
+                **parallel_options(workers, executor, scheduler),
+            )
+        if compensation is not None:
+            write_compensation(pitch_compensation(s.test, s.axis, sign=sign), compensation, fmt)
+        if outdir is not None:
+            argv = (ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]])
+            write_result(result, outdir, study_text=s.source.text, argv=argv)
+    except (MtmcError, OSError) as exc:
+        fail(exc)
+    out = summary(result)
+    if as_json:
+        print_json(out)
+        return
+    unit = out["unit"]
+    table = Table(title=f"{result.title} ({result.trials} trials, seed {result.seed})")
+    for col in ("parameter", "estimate", "U (MC)", "MC interval", "U (GUM)", "GUM §8"):
+        table.add_column(col, justify="left" if col == "parameter" else "right")
+    for q in result.quantities:
+        p = out["parameters"][q.name]
+        lo, hi = p["interval"]
+        table.add_row(
+            q.name,
+            f"{p['estimate']:.3f} {unit}",
+            q.reported["U"],
+            f"[{lo:.3f}, {hi:.3f}]",
+            "" if p["gum"]["U"] is None else f"{p['gum']['U']:.3g}",
+            (q.validation or {}).get("verdict", ""),
+        )
+    console = Console()
+    console.print(table)
+    for note in out["notes"]:
+        typer.echo(f"note: {note}")
+    if compensation is not None:
+        typer.echo(f"compensation table: {compensation}")
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")

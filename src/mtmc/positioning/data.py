@@ -1,0 +1,366 @@
+"""A positioning test of ISO 230-2: targets, runs in both directions, deviations; the CSV reader.
+
+A test approaches each target position ``P_i`` (``i = 1 … m``) ``n`` times in each
+direction (runs ``j = 1 … n``, ↑ the positive and ↓ the negative direction) and records
+the positional deviation ``x_ij = P_ij - P_i``: the actual position reached minus the
+target. :class:`PositioningTest` holds them as an array of shape ``(m, n, 2)``, the last
+axis the direction (0: ↑, 1: ↓).
+
+Units: the deviations stay in the unit of the test (``unit``: µm by default, or mm for a
+linear axis; arcseconds or µrad for a rotary axis), since every parameter of ISO 230-2 is
+stated in it; targets are in mm (deg for a rotary axis).
+
+The CSV file (:func:`read_positioning_csv`) has one row per reading under the header
+``target,run,direction,deviation`` (``columns`` maps other names, a vendor's export);
+``direction`` is ``+``/``up``/``↑`` or ``-``/``down``/``↓``; other columns are ignored;
+lines starting with ``#`` are comments; the separator is a comma, a semicolon or a tab.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mtmc.errors import InputError
+from mtmc.io import decode_utf8
+
+__all__ = [
+    "COLUMNS",
+    "DEVIATION_UNITS",
+    "PositioningTest",
+    "parse_positioning_csv",
+    "parse_units",
+    "read_positioning_csv",
+    "reading_times",
+]
+
+#: The columns of a positioning CSV file, as :func:`read_positioning_csv` names them.
+COLUMNS = ("target", "run", "direction", "deviation")
+#: Deviation units by the unit of the targets: mm (linear axis), deg (rotary axis).
+DEVIATION_UNITS: Mapping[str, tuple[str, ...]] = {
+    "mm": ("um", "mm"),
+    "deg": ("arcsec", "urad"),
+}
+_DIRECTIONS = {"+": 0, "up": 0, "↑": 0, "-": 1, "down": 1, "↓": 1, "−": 1}
+
+
+def parse_units(text: str) -> tuple[str, str]:
+    """The units ``(target, deviation)`` of ``"mm,um"``, ``"um"``, ``"deg,arcsec"``, ``"urad"``.
+
+    One unit alone is that of the deviations; the targets are then in mm (``um``,
+    ``mm``) or deg (``arcsec``, ``urad``).
+
+    Examples
+    --------
+    >>> parse_units("um"), parse_units("deg,urad")
+    (('mm', 'um'), ('deg', 'urad'))
+
+    Raises
+    ------
+    InputError
+        On an unknown unit or a deviation unit that does not go with the target unit.
+    """
+    parts = [p.strip() for p in str(text).split(",")]
+    known = ", ".join(f"{t},{d}" for t, ds in DEVIATION_UNITS.items() for d in ds)
+    if len(parts) == 1:
+        for t, ds in DEVIATION_UNITS.items():
+            if parts[0] in ds:
+                return t, parts[0]
+    elif len(parts) == 2 and parts[1] in DEVIATION_UNITS.get(parts[0], ()):
+        return parts[0], parts[1]
+    raise InputError(
+        f"expected units TARGET,DEVIATION among {known} (or the deviation unit alone), "
+        f"got {text!r}",
+        field="units",
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class PositioningTest:
+    """The readings of a positioning test (ISO 230-2): ``m`` targets, ``n`` runs, ↑ and ↓.
+
+    Parameters
+    ----------
+    targets : array_like, shape (m,)
+        Target positions ``P_i``, strictly increasing, in ``target_unit``.
+    deviations : array_like, shape (m, n, 2)
+        Positional deviations ``x_ij`` (actual minus target) in ``unit``:
+        ``deviations[i, j, 0]`` of run ``j`` in the positive direction (↑),
+        ``deviations[i, j, 1]`` in the negative direction (↓).
+    unit : str, default "um"
+        Unit of the deviations (``um``, ``mm``; ``arcsec``, ``urad`` for a rotary axis).
+    target_unit : str, default "mm"
+        Unit of the targets (``mm``; ``deg`` for a rotary axis).
+    runs : tuple of int, optional
+        The labels of the runs as the file gives them (default ``1 … n``).
+    source : str, default "<test>"
+        Where the readings come from (a file name), for messages.
+
+    Raises
+    ------
+    InputError
+        On shapes that do not fit, fewer than two targets or two runs, targets not
+        strictly increasing, values that are not finite, units that do not go together.
+    """
+
+    targets: NDArray[np.float64]
+    deviations: NDArray[np.float64]
+    unit: str = "um"
+    target_unit: str = "mm"
+    runs: tuple[int, ...] = ()
+    source: str = "<test>"
+
+    def __post_init__(self) -> None:
+        if self.unit not in DEVIATION_UNITS.get(self.target_unit, ()):
+            parse_units(f"{self.target_unit},{self.unit}")  # raises, naming the known units
+        p = np.array(self.targets, dtype=np.float64)
+        x = np.array(self.deviations, dtype=np.float64)
+        if p.ndim != 1 or p.size < 2:
+            raise InputError(
+                f"expected at least two target positions, shape (m,), got shape {p.shape}",
+                file=self.source,
+                field="target",
+            )
+        if x.ndim != 3 or x.shape[0] != p.size or x.shape[2] != 2 or x.shape[1] < 2:
+            raise InputError(
+                f"expected deviations of shape (m, n, 2) with m = {p.size} targets and "
+                f"n >= 2 runs, got shape {x.shape}",
+                file=self.source,
+                field="deviation",
+            )
+        if not (np.all(np.isfinite(p)) and np.all(np.isfinite(x))):
+            raise InputError("expected finite targets and deviations", file=self.source)
+        if np.any(np.diff(p) <= 0):
+            raise InputError(
+                "expected strictly increasing target positions", file=self.source, field="target"
+            )
+        runs = tuple(int(r) for r in self.runs) or tuple(range(1, x.shape[1] + 1))
+        if len(runs) != x.shape[1]:
+            raise InputError(
+                f"expected {x.shape[1]} run labels, got {len(runs)}", file=self.source, field="run"
+            )
+        p.setflags(write=False)
+        x.setflags(write=False)
+        object.__setattr__(self, "targets", p)
+        object.__setattr__(self, "deviations", x)
+        object.__setattr__(self, "runs", runs)
+
+    @property
+    def m(self) -> int:
+        """Number of target positions ``m``."""
+        return int(self.targets.size)
+
+    @property
+    def n(self) -> int:
+        """Number of runs ``n`` in each direction."""
+        return int(self.deviations.shape[1])
+
+    @property
+    def rotary(self) -> bool:
+        """Whether the axis is rotary (targets in degrees)."""
+        return self.target_unit == "deg"
+
+
+def reading_times(m: int, n: int) -> NDArray[np.float64]:
+    """When each reading of the standard test cycle is taken, as a fraction of the test.
+
+    The standard test cycle of ISO 230-2 runs up through the targets ``P_1 … P_m``, then
+    down through ``P_m … P_1``, ``n`` times. The reading at target ``i`` of run ``j`` is
+    the ``k``-th of the ``2 m n`` readings, ``k = 2 m j + i`` up and
+    ``k = 2 m j + m + (m - 1 - i)`` down (0-based ``i``, ``j``), at the fraction
+    ``τ = k / (2 m n - 1)`` of the test.
+
+    Returns
+    -------
+    ndarray, shape (m, n, 2)
+        ``τ`` in [0, 1], laid out as :attr:`PositioningTest.deviations`.
+
+    Examples
+    --------
+    >>> reading_times(2, 1)[:, 0, :].tolist()
+    [[0.0, 1.0], [0.3333333333333333, 0.6666666666666666]]
+    """
+    i = np.arange(m)[:, None]
+    j = np.arange(n)[None, :]
+    up = 2 * m * j + i
+    down = 2 * m * j + m + (m - 1 - i)
+    return np.stack([up, down], axis=-1).astype(np.float64) / (2 * m * n - 1)
+
+
+def _delimiter(line: str) -> str:
+    for d in (",", ";", "\t"):
+        if d in line:
+            return d
+    return ","
+
+
+def _cells(line: str, delim: str) -> list[str]:
+    return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delim))]
+
+
+def _header(
+    head: tuple[int, str], delim: str, file: str, columns: Mapping[str, str] | None
+) -> tuple[dict[str, int], int]:
+    """The index of each of :data:`COLUMNS` in the header line, and the number of columns."""
+    names = {c: c for c in COLUMNS}
+    for key, name in (columns or {}).items():
+        if key not in COLUMNS:
+            raise InputError(
+                f"unknown column {key!r}; expected one of {', '.join(COLUMNS)}",
+                file=file,
+                field="columns",
+            )
+        names[key] = str(name)
+    cells = _cells(head[1], delim)
+    header = [h.lower() for h in cells]
+    where: dict[str, int] = {}
+    for key in COLUMNS:
+        want = names[key].lower()
+        if want not in header:
+            raise InputError(
+                f"no column {names[key]!r} (the {key}) in the header; it has {', '.join(cells)}",
+                file=file,
+                line=head[0],
+                field=key,
+            )
+        where[key] = header.index(want)
+    return where, len(header)
+
+
+def _reading(
+    cells: list[str], where: Mapping[str, int], width: int, file: str, k: int
+) -> tuple[tuple[float, int, int], float]:
+    """``((target, run, direction), deviation)`` of one row; errors name line ``k``."""
+    if len(cells) < width:
+        raise InputError(f"expected {width} fields, got {len(cells)}", file=file, line=k)
+
+    def number(key: str) -> float:
+        text = cells[where[key]]
+        try:
+            v = float(text)
+        except ValueError:
+            v = math.nan
+        if not math.isfinite(v):
+            raise InputError(
+                f"expected a finite number, got {text!r}", file=file, line=k, field=key
+            ) from None
+        return v
+
+    target = number("target")
+    deviation = number("deviation")
+    run_text = cells[where["run"]]
+    try:
+        run = int(run_text)
+    except ValueError:
+        raise InputError(
+            f"expected a whole run number, got {run_text!r}", file=file, line=k, field="run"
+        ) from None
+    d_text = cells[where["direction"]]
+    if d_text.lower() not in _DIRECTIONS:
+        raise InputError(
+            f"expected a direction +, -, up or down, got {d_text!r}",
+            file=file,
+            line=k,
+            field="direction",
+        )
+    return (target, run, _DIRECTIONS[d_text.lower()]), deviation
+
+
+def parse_positioning_csv(
+    text: str,
+    file: str = "<csv>",
+    *,
+    columns: Mapping[str, str] | None = None,
+    units: str | tuple[str, str] = ("mm", "um"),
+) -> PositioningTest:
+    """Read a positioning test from CSV text (see :func:`read_positioning_csv`)."""
+    t_unit, d_unit = parse_units(units if isinstance(units, str) else ",".join(units))
+    lines = [(k, raw.strip()) for k, raw in enumerate(text.splitlines(), start=1)]
+    lines = [(k, s) for k, s in lines if s and not s.startswith("#")]
+    if not lines:
+        raise InputError("expected a header line and readings, the file has none", file=file)
+    delim = _delimiter(lines[0][1])
+    where, width = _header(lines[0], delim, file, columns)
+    seen: dict[tuple[float, int, int], tuple[float, int]] = {}
+    for k, line in lines[1:]:
+        key3, deviation = _reading(_cells(line, delim), where, width, file, k)
+        if key3 in seen:
+            raise InputError(
+                f"a second reading at target {key3[0]:g}, run {key3[1]}, direction "
+                f"{'up' if key3[2] == 0 else 'down'} (the first is on line {seen[key3][1]})",
+                file=file,
+                line=k,
+            )
+        seen[key3] = (deviation, k)
+    targets = sorted({t for t, _, _ in seen})
+    runs = sorted({r for _, r, _ in seen})
+    x = np.empty((len(targets), len(runs), 2))
+    for i, t in enumerate(targets):
+        for j, r in enumerate(runs):
+            for d in (0, 1):
+                if (t, r, d) not in seen:
+                    raise InputError(
+                        f"no reading at target {t:g} {t_unit}, run {r}, direction "
+                        f"{'up' if d == 0 else 'down'}: every target needs every run in both "
+                        "directions",
+                        file=file,
+                    )
+                x[i, j, d] = seen[(t, r, d)][0]
+    return PositioningTest(
+        targets=np.asarray(targets),
+        deviations=x,
+        unit=d_unit,
+        target_unit=t_unit,
+        runs=tuple(runs),
+        source=file,
+    )
+
+
+def read_positioning_csv(
+    path: str | Path,
+    *,
+    columns: Mapping[str, str] | None = None,
+    units: str | tuple[str, str] = ("mm", "um"),
+) -> PositioningTest:
+    """Read a positioning test from a CSV file: one reading per row.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file: a header line naming at least the columns ``target``, ``run``,
+        ``direction`` and ``deviation`` (case-insensitive, in any order, other columns
+        ignored), then one row per reading. Comments start with ``#``.
+    columns : mapping, optional
+        The file's name of each column: ``{"target": "Position", "deviation": "Error"}``.
+    units : str or (str, str), default ("mm", "um")
+        Units of the targets and the deviations (:func:`parse_units`): ``"mm,um"``,
+        ``"mm,mm"``, ``"deg,arcsec"``, ``"deg,urad"``.
+
+    Returns
+    -------
+    PositioningTest
+        Targets sorted, runs sorted by label.
+
+    Raises
+    ------
+    InputError
+        Naming the file, the line and the column: a missing column, a field that is not a
+        number, an unknown direction, a reading given twice, a target without every run
+        in both directions, an unreadable file.
+    """
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise InputError(
+            f"cannot read the positioning file: {exc.strerror or exc}", file=str(path)
+        ) from None
+    text = decode_utf8(data, str(path)).lstrip("\ufeff")
+    return parse_positioning_csv(text, str(path), columns=columns, units=units)

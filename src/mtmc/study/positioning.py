@@ -1,0 +1,583 @@
+"""Study kind ``positioning``: an ISO 230-2 positioning test with its uncertainty.
+
+The study names the CSV file of the readings (:func:`mtmc.positioning.read_positioning_csv`)
+and the influences on the test (:class:`mtmc.positioning.UncertaintyModel`): the air and
+material in ``[environment]``, the laser in ``[instrument]``, the Type A evaluation in
+``[uncertainty]``, tolerances in ``[tolerances]`` (``docs/positioning.md``). The run is
+:func:`mtmc.positioning.evaluate_uncertainty`: each of the twelve parameters of the axis
+(``A`` … ``B_mean``) becomes a quantity with its Monte Carlo values, the GUM beside them
+and its budget; the tables give the parameters (from the readings, the GUM, the Monte
+Carlo), the statistics at each target, the decision against each tolerance with its
+conformance probability, and the pitch-error compensation table with the residual it
+leaves; ``positioning`` in ``result.json`` holds the readings for the report's plot and
+the notes on where the GUM and the Monte Carlo disagree and why.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mtmc.document import Fields, Source
+from mtmc.errors import InputError, MtmcError
+from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
+from mtmc.study.spec import RunSettings, register_kind
+
+__all__ = ["PositioningStudy", "positioning_study", "summary", "unit_label"]
+
+#: How the units of the deviations are printed.
+_LABELS = {"um": "µm", "mm": "mm", "arcsec": "arcsec", "urad": "µrad", "deg": "deg"}
+
+_ENV_KEYS = {
+    "air_temperature_C": "air_temperature",
+    "air_pressure_hPa": "air_pressure",
+    "humidity_pct": "humidity",
+    "co2_ppm": "co2",
+    "material_temperature_C": "material_temperature",
+    "expansion_ppm_per_K": "expansion",
+    "air_temperature_change_C": "air_temperature_change",
+    "air_pressure_change_hPa": "air_pressure_change",
+    "drift": "drift",
+}
+_INSTRUMENT_KEYS = {
+    "equation_error_ppm": "equation_error",
+    "wavelength_error_ppm": "wavelength_error",
+    "misalignment_urad": "misalignment",
+}
+
+
+def unit_label(unit: str) -> str:
+    """The printed form of a unit of :mod:`mtmc.positioning` (``um`` → ``µm``)."""
+    return _LABELS.get(unit, unit)
+
+
+@dataclass(frozen=True)
+class PositioningStudy(Study):
+    """A positioning test and the model of its uncertainty (kind ``positioning``).
+
+    Attributes
+    ----------
+    test : PositioningTest
+        The readings.
+    model : UncertaintyModel
+        The influences.
+    axis : str
+        The axis letter (names the compensation table, ``EXX``).
+    tolerances : mapping of str to float
+        Upper limits of parameters, by symbol, in the deviation unit.
+    guard_band : float or "U"
+        The guard band ``w`` in the deviation unit, or ``"U"``: each parameter's ``U``.
+    """
+
+    kind = "positioning"
+    test: Any
+    model: Any
+    axis: str = "X"
+    tolerances: Mapping[str, float] = field(default_factory=dict)
+    guard_band: float | str = 0.0
+
+    def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
+        """Run the model by Monte Carlo and the GUM and tabulate it (module docstring)."""
+        from mtmc.positioning import (
+            SYMBOLS,
+            apply_compensation,
+            conformity,
+            disagreement_notes,
+            evaluate,
+            evaluate_uncertainty,
+            pitch_compensation,
+        )
+        from mtmc.positioning.parameters import NAMES
+        from mtmc.positioning.uncertainty import INPUT_UNITS
+
+        test = self.test
+        unit = unit_label(test.unit)
+        res = evaluate_uncertainty(
+            test,
+            self.model,
+            settings.trials,
+            settings.seed,
+            p=settings.p,
+            progress=progress,
+            **settings.parallel,
+        )
+        quantities: list[Quantity] = []
+        samples: dict[str, Any] = {}
+        for sym in SYMBOLS:
+            mc = res.monte_carlo(sym)
+            quantities.append(quantity(sym, unit, mc, res.gum_result(sym), settings))
+            if settings.samples:
+                samples[sym] = mc.samples
+        validated = {q.name: bool((q.validation or {}).get("passed", True)) for q in quantities}
+        notes = disagreement_notes(res, validated)
+        readings = res.readings
+        param_rows = tuple(
+            (
+                q.name,
+                NAMES[q.name],
+                unit,
+                float(getattr(readings, q.name)),
+                q.gum["estimate"] if q.gum else "",
+                q.gum["U"] if q.gum else "",
+                q.mc["estimate"],
+                q.mc["U"],
+                q.mc[q.mc["interval"]][0],
+                q.mc[q.mc["interval"]][1],
+                (q.validation or {}).get("verdict", ""),
+            )
+            for q in quantities
+        )
+        tables = [
+            Table(
+                "parameters",
+                f"Parameters of ISO 230-2 ({unit}): from the readings, GUM, Monte Carlo",
+                (
+                    "symbol",
+                    "parameter",
+                    "unit",
+                    "from the readings",
+                    "GUM y",
+                    "GUM U",
+                    "MC y",
+                    "MC U",
+                    "MC interval low",
+                    "MC interval high",
+                    "GUM by JCGM 101 §8",
+                ),
+                param_rows,
+            ),
+            _targets_table(test, readings, unit),
+        ]
+        conform = self._conformity(res, quantities, settings, conformity)
+        if conform:
+            tables.append(conform)
+        tables.extend(
+            _compensation_tables(test, self.axis, unit, pitch_compensation, apply_compensation)
+        )
+        inputs = []
+        for name, d in res.inputs.items():
+            u = float(np.max(np.asarray(d.std)))
+            entry: dict[str, Any] = {
+                "name": name,
+                "distribution": str(d),
+                "estimate": float(np.asarray(d.mean).ravel()[0]),
+                "u": u if math.isfinite(u) else None,
+            }
+            entry["unit"] = INPUT_UNITS.get(
+                name, unit if name in ("drift", "resolution") or name.startswith("typeA") else "1"
+            )
+            inputs.append(entry)
+        means = evaluate(test)
+        extra = {
+            "positioning": {
+                "axis": self.axis,
+                "data": test.source,
+                "unit": unit,
+                "target_unit": unit_label(test.target_unit),
+                "targets": test.targets,
+                "deviations": test.deviations,
+                "mean_up": means.mean_up,
+                "mean_down": means.mean_down,
+                "s_up": means.s_up,
+                "s_down": means.s_down,
+                "runs": list(test.runs),
+                "type_a": self.model.type_a,
+                "notes": notes,
+            }
+        }
+        return self._result(
+            settings,
+            quantities=tuple(quantities),
+            tables=tuple(tables),
+            inputs=tuple(inputs),
+            extra=extra,
+            samples=samples,
+        )
+
+    def _conformity(
+        self, res: Any, quantities: list[Quantity], settings: RunSettings, conformity: Any
+    ) -> Table | None:
+        if not self.tolerances:
+            return None
+        rows = []
+        by_name = {q.name: q for q in quantities}
+        for sym, tol in self.tolerances.items():
+            q = by_name[sym]
+            w = q.mc["U"] if self.guard_band == "U" else float(self.guard_band)
+            c = conformity(res.monte_carlo(sym), res.gum_result(sym), tol, w, p=settings.p)
+            rows.append(
+                (
+                    sym,
+                    unit_label(self.test.unit),
+                    c["tolerance"],
+                    c["guard_band"],
+                    c["acceptance_limit"],
+                    c["estimate"],
+                    c["U"],
+                    "pass" if c["passed"] else "fail",
+                    c["probability"],
+                    c["probability_gum"] if c["probability_gum"] is not None else "",
+                )
+            )
+        return Table(
+            "conformity",
+            "Conformity with the tolerances (JCGM 106): accepted when the Monte Carlo estimate "
+            "is at or below the acceptance limit T - w; the conformance probability is "
+            "Pr(Y <= T)",
+            (
+                "parameter",
+                "unit",
+                "tolerance T",
+                "guard band w",
+                "acceptance limit",
+                "MC y",
+                "MC U",
+                "decision",
+                "conformance probability (MC)",
+                "conformance probability (GUM)",
+            ),
+            tuple(rows),
+        )
+
+
+def _targets_table(test: Any, p: Any, unit: str) -> Table:
+    rows = tuple(
+        (
+            float(test.targets[i]),
+            float(p.mean_up[i]),
+            float(p.mean_down[i]),
+            float(p.mean[i]),
+            float(p.reversal[i]),
+            float(p.s_up[i]),
+            float(p.s_down[i]),
+            float(p.R_i_up[i]),
+            float(p.R_i_down[i]),
+            float(p.R_i[i]),
+        )
+        for i in range(test.m)
+    )
+    t_unit = unit_label(test.target_unit)
+    return Table(
+        "targets",
+        f"Statistics at each target from the readings ({unit})",
+        (
+            f"P_i / {t_unit}",
+            "x̄_i↑",
+            "x̄_i↓",
+            "x̄_i",
+            "B_i",
+            "s_i↑",
+            "s_i↓",
+            "R_i↑",
+            "R_i↓",
+            "R_i",
+        ),
+        rows,
+    )
+
+
+def _compensation_tables(test: Any, axis: str, unit: str, pitch: Any, apply: Any) -> list[Table]:
+    from mtmc.positioning import SYMBOLS, evaluate
+
+    table = pitch(test, axis)
+    curve = table.curves[0]
+    residual = apply(test, table, axis)
+    before, after = evaluate(test), evaluate(residual)
+    rows = tuple(
+        (
+            float(test.targets[i]),
+            float(before.mean[i]),
+            -float(before.mean[i]),
+            float(after.mean_up[i]),
+            float(after.mean_down[i]),
+        )
+        for i in range(test.m)
+    )
+    t_unit = unit_label(test.target_unit)
+    comp = Table(
+        "compensation",
+        f"Pitch-error compensation table {curve.name}: the mean bidirectional deviation at "
+        f"each target ({unit}; write it with mtmc positioning evaluate --compensation), and "
+        "the residual means after it",
+        (
+            f"position / {t_unit}",
+            f"error {curve.name}",
+            "correction",
+            "residual x̄_i↑",
+            "residual x̄_i↓",
+        ),
+        rows,
+    )
+    res_rows = tuple(
+        (s, unit, float(getattr(before, s)), float(getattr(after, s))) for s in SYMBOLS
+    )
+    resid = Table(
+        "compensation_residual",
+        "The parameters before and after the compensation table (from the readings): what is "
+        "left is the reversal and the scatter",
+        ("symbol", "unit", "before", "after"),
+        res_rows,
+    )
+    return [comp, resid]
+
+
+def _distribution(fields: Fields, key: str) -> Any:
+    from mtmc.uncertainty.distributions import as_distribution
+
+    v = fields.data[key]
+    if isinstance(v, bool) or not isinstance(v, str | int | float):
+        raise fields.error(
+            f"expected a distribution text or a number, got {type(v).__name__} {v!r}", key
+        )
+    if isinstance(v, int | float) and not math.isfinite(float(v)):
+        raise fields.error(f"expected a finite number, got {v!r}", key)
+    try:
+        return as_distribution(v if isinstance(v, str) else float(v), field=key)
+    except MtmcError as exc:
+        raise fields.error(exc.message, key) from None
+
+
+def _read_model(top: Fields) -> tuple[dict[str, Any], str]:
+    """The keywords of :class:`UncertaintyModel` from the study's tables, and the data units."""
+    kw: dict[str, Any] = {}
+    env = top.table("environment", required=False)
+    if env is not None:
+        env.only((*_ENV_KEYS, "material_compensated"))
+        for key, name in _ENV_KEYS.items():
+            if env.has(key):
+                kw[name] = _distribution(env, key)
+        if env.has("material_compensated"):
+            kw["material_compensated"] = env.flag("material_compensated")
+    ins = top.table("instrument", required=False)
+    if ins is not None:
+        ins.only(
+            (
+                *_INSTRUMENT_KEYS,
+                "equation",
+                "wavelength_nm",
+                "dead_path_mm",
+                "resolution",
+                "datum_mm",
+            )
+        )
+        for key, name in _INSTRUMENT_KEYS.items():
+            if ins.has(key):
+                kw[name] = _distribution(ins, key)
+        if ins.has("equation"):
+            from mtmc.positioning import EQUATIONS
+
+            kw["equation"] = ins.text("equation", choices=EQUATIONS)
+        if ins.has("wavelength_nm"):
+            kw["wavelength_nm"] = ins.number("wavelength_nm", low=350.0, high=1700.0)
+        for key in ("dead_path_mm", "resolution"):
+            if ins.has(key):
+                kw[key] = ins.number(key, low=0.0)
+        if ins.has("datum_mm"):
+            kw["datum_mm"] = ins.number("datum_mm")
+    unc = top.table("uncertainty", required=False)
+    if unc is not None:
+        from mtmc.positioning import TYPE_A
+
+        unc.only(("type_a",))
+        kw["type_a"] = unc.text("type_a", "means", choices=TYPE_A)
+    return kw, top.text("units", "mm,um")
+
+
+def _read_tolerances(top: Fields) -> tuple[dict[str, float], float | str]:
+    from mtmc.positioning import SYMBOLS
+
+    tol = top.table("tolerances", required=False)
+    if tol is None:
+        return {}, 0.0
+    tol.only((*SYMBOLS, "guard_band"))
+    out = {s: float(tol.number(s, low=0.0)) for s in SYMBOLS if tol.has(s)}
+    guard: float | str = 0.0
+    if tol.has("guard_band"):
+        g = tol.data["guard_band"]
+        if isinstance(g, str):
+            guard = tol.text("guard_band", choices=("U",))
+        else:
+            guard = float(tol.number("guard_band", low=0.0))
+    return out, guard
+
+
+def _model_error(top: Fields, exc: InputError) -> InputError:
+    """An error of :class:`UncertaintyModel` at the study key that gave the field."""
+    name = exc.field or ""
+    for table, mapping in (("environment", _ENV_KEYS), ("instrument", _INSTRUMENT_KEYS)):
+        inv = {v: k for k, v in mapping.items()}
+        if name in inv:
+            return top.source.error(exc.message, (table, inv[name]))
+    if name == "dead_path_mm":  # the one other check of the model: a dead path needs air
+        return top.source.error(exc.message, ("instrument", name))
+    return top.source.error(exc.message, ())
+
+
+def positioning_study(
+    data: str | Path,
+    *,
+    source: Source | None = None,
+    settings: RunSettings | None = None,
+    model: Mapping[str, Any] | None = None,
+    units: str = "mm,um",
+    columns: Mapping[str, str] | None = None,
+    axis: str = "X",
+    title: str | None = None,
+    tolerances: Mapping[str, float] | None = None,
+    guard_band: float | str = 0.0,
+) -> PositioningStudy:
+    """A positioning study from a CSV file and the keywords of its model.
+
+    The one route from readings to results: ``mtmc run`` builds it from a study file,
+    ``mtmc positioning evaluate`` from the command line.
+
+    Parameters
+    ----------
+    data : path-like
+        The CSV file of the readings.
+    source : Source, optional
+        The study file it comes from (default: a study of the CSV file alone).
+    settings : RunSettings, optional
+        Trials, seed, p (default: :class:`RunSettings`'s defaults).
+    model : mapping, optional
+        Keywords of :class:`~mtmc.positioning.UncertaintyModel` (default: the Type A
+        inputs alone).
+    units, columns, axis, title, tolerances, guard_band
+        As the study file's keys.
+
+    Returns
+    -------
+    PositioningStudy
+    """
+    from mtmc.positioning import UncertaintyModel, read_positioning_csv
+
+    test = read_positioning_csv(data, columns=columns, units=units)
+    if source is None:
+        text = f'kind = "positioning"\ndata = {Path(data).as_posix()!r}\n'
+        source = Source.from_text(text, str(data), None)
+    return PositioningStudy(
+        title=title or f"Positioning test of axis {axis} (ISO 230-2)",
+        source=source,
+        settings=settings or RunSettings(),
+        test=test,
+        model=UncertaintyModel(**dict(model or {})),
+        axis=axis,
+        tolerances=dict(tolerances or {}),
+        guard_band=guard_band,
+    )
+
+
+@register_kind("positioning", "an ISO 230-2 positioning test: parameters with U by GUM and MC")
+def load_positioning(top: Fields) -> PositioningStudy:
+    """Validate a ``positioning`` study file (``docs/positioning.md``)."""
+    top.only(
+        (
+            "kind",
+            "title",
+            "data",
+            "units",
+            "columns",
+            "axis",
+            "environment",
+            "instrument",
+            "uncertainty",
+            "tolerances",
+            "run",
+        )
+    )
+    from mtmc.positioning import parse_units
+
+    path = top.source.resolve(top.text("data"), ("data",))
+    kw, units = _read_model(top)
+    try:
+        parse_units(units)
+    except InputError as exc:
+        raise top.error(exc.message, "units") from None
+    cols = top.table("columns", required=False)
+    columns: dict[str, str] | None = None
+    if cols is not None:
+        from mtmc.positioning import COLUMNS
+
+        cols.only(COLUMNS)
+        columns = {k: cols.text(k) for k in COLUMNS if cols.has(k)}
+    axis = top.text("axis", "X", choices=tuple("XYZUVWABC"))
+    tolerances, guard = _read_tolerances(top)
+    settings = RunSettings.read(top)
+    try:
+        return positioning_study(
+            path,
+            source=top.source,
+            settings=settings,
+            model=kw,
+            units=units,
+            columns=columns,
+            axis=axis,
+            title=top.text("title", None),
+            tolerances=tolerances,
+            guard_band=guard,
+        )
+    except InputError as exc:
+        if exc.file is not None:
+            raise
+        raise _model_error(top, exc) from None
+
+
+def summary(result: StudyResult) -> dict[str, Any]:
+    """The parameters of a positioning result as ``mtmc positioning evaluate --json`` prints them.
+
+    Parameters
+    ----------
+    result : StudyResult
+        Of a ``positioning`` study.
+
+    Returns
+    -------
+    dict
+        ``unit``, ``target_unit``, ``axis``, ``data``, ``trials``, ``seed``, ``p``,
+        ``type_a``, ``notes``, and ``parameters``: by symbol (``A``, ``A_up``, …,
+        ``B_mean``), ``estimate`` (the GUM's: the definitions applied to the readings
+        corrected by the expected corrections), ``U`` (Monte Carlo: half the length of
+        its coverage interval), ``u``, ``interval``, ``mc_estimate``, ``readings`` (the
+        definitions applied to the readings as they are), ``gum`` (``u``, ``U``, ``k``),
+        ``validated`` (JCGM 101 §8), all in the deviation unit; ``conformity`` by symbol
+        where the study gives tolerances.
+    """
+    pos = result.extra["positioning"]
+    tables = {t.name: t for t in result.tables}
+    readings = {row[0]: row[3] for row in tables["parameters"].rows}
+    params: dict[str, Any] = {}
+    for q in result.quantities:
+        mc, g = q.mc, q.gum or {}
+        params[q.name] = {
+            "estimate": g.get("estimate", mc["estimate"]),
+            "U": mc["U"],
+            "u": mc["u"],
+            "interval": mc[mc["interval"]],
+            "mc_estimate": mc["estimate"],
+            "readings": readings[q.name],
+            "gum": {"u": g.get("u"), "U": g.get("U"), "k": g.get("k")},
+            "validated": bool((q.validation or {}).get("passed", False)),
+        }
+    out: dict[str, Any] = {
+        "data": pos["data"],
+        "axis": pos["axis"],
+        "unit": pos["unit"],
+        "target_unit": pos["target_unit"],
+        "type_a": pos["type_a"],
+        "trials": result.trials,
+        "seed": result.seed,
+        "p": result.p,
+        "parameters": params,
+        "notes": list(pos["notes"]),
+    }
+    if "conformity" in tables:
+        t = tables["conformity"]
+        out["conformity"] = {
+            row[0]: dict(zip(t.columns[1:], row[1:], strict=True)) for row in t.rows
+        }
+    return out

@@ -1,0 +1,94 @@
+"""The CSV reader of positioning tests: layout, column mapping, units, and errors with lines."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mtmc.errors import InputError
+from mtmc.positioning import parse_positioning_csv, parse_units, read_positioning_csv, reading_times
+
+GOOD = """# a comment
+target,run,direction,deviation,temperature
+0,1,+,0.0,20.1
+100,1,+,1.5,20.1
+100,1,-,0.5,20.1
+0,1,-,-1.0,20.1
+0,2,up,0.2,20.2
+100,2,up,1.7,20.2
+100,2,down,0.7,20.2
+0,2,down,-0.8,20.2
+"""
+
+
+def test_reads_the_layout_whatever_the_order():
+    t = parse_positioning_csv(GOOD, "g.csv")
+    assert t.targets.tolist() == [0.0, 100.0]
+    assert t.runs == (1, 2)
+    assert (t.unit, t.target_unit, t.m, t.n, t.rotary) == ("um", "mm", 2, 2, False)
+    np.testing.assert_array_equal(t.deviations[1, :, 0], [1.5, 1.7])
+    np.testing.assert_array_equal(t.deviations[0, :, 1], [-1.0, -0.8])
+
+
+def test_column_mapping_semicolons_and_units():
+    text = "Pos;Lauf;Richtung;Abw\n0;1;+;1\n5;1;+;2\n5;1;-;3\n0;1;-;4\n"
+    text += "0;2;+;1\n5;2;+;2\n5;2;-;3\n0;2;-;4\n"
+    cols = {"target": "pos", "run": "Lauf", "direction": "Richtung", "deviation": "Abw"}
+    t = parse_positioning_csv(text, columns=cols, units="deg,arcsec")
+    assert (t.target_unit, t.unit, t.rotary) == ("deg", "arcsec", True)
+    assert t.deviations[:, 0, :].tolist() == [[1.0, 4.0], [2.0, 3.0]]
+
+
+def test_units():
+    assert parse_units("mm,mm") == ("mm", "mm")
+    assert parse_units("arcsec") == ("deg", "arcsec")
+    for bad in ("m,um", "deg,um", "mm,urad", "inch", "a,b,c"):
+        with pytest.raises(InputError, match="TARGET,DEVIATION"):
+            parse_units(bad)
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "field", "match"),
+    [
+        (GOOD.replace("100,1,+,1.5", "100,1,+,x"), 4, "deviation", "expected a finite number"),
+        (GOOD.replace("100,1,+,1.5", "100,1,+,nan"), 4, "deviation", "expected a finite number"),
+        (GOOD.replace("100,1,-,0.5", "100,1,sideways,0.5"), 5, "direction", "direction"),
+        (GOOD.replace("0,2,up,0.2", "0,two,up,0.2"), 7, "run", "whole run number"),
+        (GOOD.replace("0,2,up,0.2", "0,1,up,0.2"), 7, None, "second reading .* line 3"),
+        (GOOD.replace("0,2,up,0.2,20.2", "0,2,up"), 7, None, "expected 5 fields"),
+        (GOOD.replace("deviation", "error"), 2, "deviation", "no column 'deviation'"),
+    ],
+)
+def test_errors_name_the_line_and_field(text, line, field, match):
+    with pytest.raises(InputError, match=match) as exc:
+        parse_positioning_csv(text, "t.csv")
+    assert (exc.value.file, exc.value.line, exc.value.field) == ("t.csv", line, field)
+
+
+def test_missing_reading_and_empty_file():
+    text = "\n".join(GOOD.splitlines()[:-1])
+    with pytest.raises(InputError, match="no reading at target 0 mm, run 2, direction down"):
+        parse_positioning_csv(text, "t.csv")
+    with pytest.raises(InputError, match="has none"):
+        parse_positioning_csv("# only a comment\n", "t.csv")
+    with pytest.raises(InputError, match="no column 'run'"):
+        parse_positioning_csv("target\n1\n", "t.csv")
+    with pytest.raises(InputError, match="unknown column 'position'"):
+        parse_positioning_csv(GOOD, columns={"position": "x"})
+
+
+def test_file_reading(tmp_path):
+    p = tmp_path / "t.csv"
+    p.write_text("\ufeff" + GOOD, encoding="utf-8")
+    assert read_positioning_csv(p).m == 2
+    with pytest.raises(InputError, match="cannot read") as exc:
+        read_positioning_csv(tmp_path / "none.csv")
+    assert exc.value.file.endswith("none.csv")
+
+
+def test_reading_times_follow_the_standard_cycle():
+    tau = reading_times(3, 2)
+    order = np.sort(tau.ravel())
+    np.testing.assert_allclose(order, np.arange(12) / 11)  # each reading once
+    assert tau[0, 0, 0] == 0.0
+    assert tau[2, 0, 0] < tau[2, 0, 1] < tau[0, 0, 1] < tau[0, 1, 0]

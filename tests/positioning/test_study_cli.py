@@ -1,0 +1,218 @@
+"""The study kind, the CLI and the report: one route, the same numbers, errors with lines."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtmc.cli.main import main
+from mtmc.errors import InputError
+from mtmc.positioning import SYMBOLS, UncertaintyModel, evaluate_uncertainty, read_positioning_csv
+from mtmc.report import html
+from mtmc.study import load_study, loads_study, write_result
+from mtmc.study.positioning import PositioningStudy, summary
+from mtmc.verification import load_compensation
+
+ROOT = Path(__file__).resolve().parents[2]
+STUDY = ROOT / "examples" / "studies" / "positioning_x.toml"
+DATA = ROOT / "examples" / "studies" / "positioning_x.csv"
+M = 3000
+
+
+def test_shipped_copies_are_the_examples():
+    for name in ("positioning_x.toml", "positioning_x.csv"):
+        pkg = ROOT / "src" / "mtmc" / "data" / "studies" / name
+        assert pkg.read_bytes() == (ROOT / "examples" / "studies" / name).read_bytes()
+
+
+def test_shipped_study_is_a_1_m_axis_with_5_runs_at_11_targets():
+    s = load_study(STUDY)
+    assert isinstance(s, PositioningStudy)
+    assert (s.test.m, s.test.n) == (11, 5)
+    assert s.test.targets[-1] - s.test.targets[0] == 1000.0
+
+
+def test_api_study_and_cli_give_the_same_numbers(capsys):
+    s = load_study(STUDY)
+    result = s.run(trials=M, seed=4)
+    assert [q.name for q in result.quantities] == list(SYMBOLS)
+    assert {q.unit for q in result.quantities} == {"µm"}
+    # the library called directly
+    res = evaluate_uncertainty(s.test, s.model, M, seed=4)
+    for i, q in enumerate(result.quantities):
+        assert q.mc["estimate"] == float(np.mean(res.mc.samples[:, i]))
+        assert q.gum["u"] == res.gum_result(q.name).u
+    # the command line, with the study's model applied to the same file
+    argv = ["positioning", "evaluate", str(DATA), "--study", str(STUDY), "-n", str(M)]
+    assert main([*argv, "--seed", "4", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out == json.loads(json.dumps(summary(result)))
+    assert set(out["parameters"]) == set(SYMBOLS)
+    for sym in SYMBOLS:
+        assert set(out["parameters"][sym]) >= {"estimate", "U"}
+    assert out["unit"] == "µm"
+    assert set(out["conformity"]) == {"A", "E", "M", "R", "B"}
+
+
+def test_mtmc_run_writes_the_report_with_the_plot_and_the_notes(tmp_path):
+    out = tmp_path / "posx"
+    assert main(["run", str(STUDY), "-o", str(out), "-n", str(M), "-q"]) == 0
+    doc = json.loads((out / "result.json").read_text(encoding="utf-8"))
+    assert doc["kind"] == "positioning"
+    assert doc["positioning"]["notes"]
+    page = (out / "report.html").read_text(encoding="utf-8")
+    assert 'data-plot="positioning"' in page
+    assert "Where the GUM and the Monte Carlo disagree" in page
+    for name in ("parameters", "targets", "conformity", "compensation", "compensation_residual"):
+        assert (out / f"{name}.csv").is_file()
+
+
+def test_report_says_when_the_monte_carlo_of_A_differs(tmp_path):
+    # a flat axis: A is a maximum over tied targets (see test_uncertainty)
+    rng = np.random.default_rng(4)
+    rows = ["target,run,direction,deviation"]
+    for i, p in enumerate(np.linspace(0, 700, 8)):
+        for j in range(5):
+            for d in "+-":
+                rows.append(f"{p},{j + 1},{d},{0.5 * rng.standard_normal():.4f}")
+        del i
+    data = tmp_path / "flat.csv"
+    data.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    s = loads_study(
+        'kind = "positioning"\ndata = "flat.csv"\n[run]\ntrials = 20000\nseed = 2\n',
+        file="flat.toml",
+        folder=tmp_path,
+    )
+    result = s.run()
+    a = result.quantity("A")
+    assert a.validation["verdict"] == "not validated"
+    page = html(result.to_dict())
+    assert "A: the GUM is not validated by the Monte Carlo" in page
+
+
+def test_cli_table_compensation_and_result_folder(tmp_path, capsys):
+    comp = tmp_path / "pitch.isg"
+    out = tmp_path / "res"
+    argv = ["positioning", "evaluate", str(DATA), "-n", "2000", "--seed", "1"]
+    assert main([*argv, "--compensation", str(comp), "--sign", "correction", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "B_mean" in text
+    assert f"report: {out / 'report.html'}" in text
+    table = load_compensation(comp, "isg")
+    assert table.sign == "correction"
+    assert table.curve("EXX").positions.size == 11
+    assert (out / "result.json").is_file()
+
+
+def test_cli_columns_units_and_errors(tmp_path, capsys):
+    data = tmp_path / "vendor.csv"
+    text = DATA.read_text(encoding="utf-8").replace(
+        "target,run,direction,deviation", "Pos,Run,Dir,Err"
+    )
+    data.write_text(text, encoding="utf-8")
+    cols = "target=Pos,run=Run,direction=Dir,deviation=Err"
+    argv = ["positioning", "evaluate", str(data), "--columns", cols, "-n", "500", "--json"]
+    assert main([*argv, "--type-a", "none", "--seed", "1", "--study", str(STUDY)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["type_a"] == "none"
+    assert main([*argv, "--type-a", "none"]) == 2  # nothing uncertain left
+    assert "no uncertain input" in capsys.readouterr().err
+    assert main(["positioning", "evaluate", str(data), "--columns", "target"]) == 2
+    assert "OURS=THEIRS" in capsys.readouterr().err
+    assert main(["positioning", "evaluate", str(data)]) == 2
+    err = capsys.readouterr().err
+    assert "vendor.csv:" in err
+    assert "no column 'target'" in err
+    other = ROOT / "examples" / "studies" / "mass_calibration.toml"
+    assert main(["positioning", "evaluate", str(DATA), "--study", str(other)]) == 2
+    assert "expected a positioning study" in capsys.readouterr().err
+
+
+def _edit(tmp_path: Path, old: str, new: str) -> Path:
+    text = STUDY.read_text(encoding="utf-8")
+    assert old in text
+    path = tmp_path / "s.toml"
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    (tmp_path / "positioning_x.csv").write_bytes(DATA.read_bytes())
+    return path
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "field", "match"),
+    [
+        ("humidity_pct =", "humidty_pct =", "environment.humidty_pct", "unknown key"),
+        ('"normal(1008.2, 0.5)"', '"normal(1008.2, -0.5)"', "environment.air_pressure_hPa", ">= 0"),
+        ('"normal(1008.2, 0.5)"', "true", "environment.air_pressure_hPa", "distribution"),
+        ('type_a = "means"', 'type_a = "all"', "uncertainty.type_a", "expected one of"),
+        ('units = "mm,um"', 'units = "mm,arcsec"', "units", "TARGET,DEVIATION"),
+        ("A = 20.0", "Q = 20.0", "tolerances.Q", "unknown key"),
+        ('guard_band = "U"', 'guard_band = "2U"', "tolerances.guard_band", "expected one of"),
+        ('data = "positioning_x.csv"', 'data = "none.csv"', "data", "existing file"),
+        ("dead_path_mm = 60.0", "dead_path_mm = -1.0", "instrument.dead_path_mm", ">= 0"),
+        ('drift = "uniform(-1.0, 1.0)"', "drift = inf", "environment.drift", "finite"),
+        ('equation = "bonsch-potulski"', 'equation = "x"', "instrument.equation", "one of"),
+    ],
+)
+def test_study_errors_name_the_line_and_field(tmp_path, old, new, field, match):
+    path = _edit(tmp_path, old, new)
+    with pytest.raises(InputError, match=match) as exc:
+        load_study(path)
+    assert exc.value.field == field
+    line = next(k for k, t in enumerate(path.read_text().splitlines(), 1) if new in t)
+    assert exc.value.line == line
+
+
+def test_model_errors_are_placed_in_the_study(tmp_path):
+    # air given in part: the model refuses it, the study names the key that is there
+    path = _edit(tmp_path, 'humidity_pct = "normal(42, 4)"', "")
+    with pytest.raises(InputError, match="together") as exc:
+        load_study(path)
+    assert exc.value.field == "environment.air_temperature_C"
+
+
+def test_dead_path_without_air_and_a_bad_csv(tmp_path):
+    text = STUDY.read_text(encoding="utf-8")
+    for key in ("air_temperature_C", "air_pressure_hPa", "humidity_pct"):
+        text = "\n".join(t for t in text.splitlines() if not t.startswith(key))
+    path = tmp_path / "s.toml"
+    path.write_text(text, encoding="utf-8")
+    (tmp_path / "positioning_x.csv").write_bytes(DATA.read_bytes())
+    with pytest.raises(InputError, match="dead path needs the air") as exc:
+        load_study(path)
+    assert exc.value.field == "instrument.dead_path_mm"
+    study = _edit(tmp_path, "", "")
+    bad = DATA.read_text(encoding="utf-8").replace("98.5,1,+,0.583", "98.5,1,+,?")
+    (tmp_path / "positioning_x.csv").write_text(bad, encoding="utf-8")
+    with pytest.raises(InputError, match="finite number") as exc:
+        load_study(study)
+    assert exc.value.file.endswith("positioning_x.csv")
+
+
+def test_columns_and_a_numeric_guard_band(tmp_path):
+    path = _edit(tmp_path, 'guard_band = "U"', 'guard_band = 0.5\n[columns]\ndeviation = "Err"')
+    csv = tmp_path / "positioning_x.csv"
+    csv.write_text(
+        DATA.read_text(encoding="utf-8").replace("direction,deviation", "direction,Err"),
+        encoding="utf-8",
+    )
+    s = load_study(path)
+    assert s.guard_band == 0.5
+    assert s.test.m == 11
+
+
+def test_samples_kept_on_request():
+    s = load_study(STUDY)
+    result = s.run(trials=500, seed=1, samples=True)
+    assert result.samples["A"].shape == (500,)
+
+
+def test_the_study_result_folder_writes(tmp_path):
+    s = load_study(STUDY)
+    res = s.run(trials=500, seed=1)
+    out = write_result(res, tmp_path / "o", study_text=s.source.text)
+    assert (out / "report.html").is_file()
+    assert read_positioning_csv(DATA).m == 11
+    assert isinstance(s.model, UncertaintyModel)
