@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-dev
 
-.PHONY: demo test lint typecheck unit bench clean
+.PHONY: demo test lint typecheck unit bench clean vendor
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -35,6 +35,17 @@ unit: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python -m pip install --quiet -e ".[dev,bench]"
 	$(BIN)/python benchmarks/run.py
+
+## vendor: refresh the workbench's cytoscape.js from npm (needs Node's npm; nothing else does)
+CYTOSCAPE ?= 3.34.4
+VENDOR_DIR := src/mtmc/workbench/static/vendor
+vendor:
+	rm -rf .vendor-tmp && mkdir .vendor-tmp
+	cd .vendor-tmp && npm pack --silent cytoscape@$(CYTOSCAPE) >/dev/null && tar xzf cytoscape-*.tgz
+	cp .vendor-tmp/package/dist/cytoscape.esm.min.mjs $(VENDOR_DIR)/cytoscape.esm.min.mjs
+	cp .vendor-tmp/package/LICENSE $(VENDOR_DIR)/cytoscape.LICENSE.txt
+	$(PYTHON) -c 'import hashlib, json, sys; d = sys.argv[1]; p = json.load(open(".vendor-tmp/package/package.json")); f = "cytoscape.esm.min.mjs"; json.dump({f: {"package": "cytoscape", "version": p["version"], "license": p["license"], "licence_file": "cytoscape.LICENSE.txt", "source": "npm pack cytoscape@" + p["version"] + ": dist/" + f, "sha256": hashlib.sha256(open(d + "/" + f, "rb").read()).hexdigest()}}, open(d + "/VENDOR.json", "w"), indent=2); open(d + "/VENDOR.json", "a").write("\n")' $(VENDOR_DIR)
+	rm -rf .vendor-tmp
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache mtmc-demo

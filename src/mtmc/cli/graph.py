@@ -1,4 +1,4 @@
-"""``mtmc graph``: check, draw, export, run and sweep a measurement graph (Stryczek).
+"""``mtmc graph``: check, draw, export, run, sweep and edit a measurement graph (Stryczek).
 
 A thin shell: it reads the file, calls :mod:`mtmc.graph` and prints. Errors print one
 line (``mtmc: error: FILE:LINE: field F: ...``) and exit with status 2; files are
@@ -289,6 +289,29 @@ def sweep_cmd(
                 "surrogate": {
                     "c0": fit.c0,
                     "coefficients": dict(zip(fit.names, fit.coefficients.tolist(), strict=True)),
+
+
+@app.command("edit")
+def edit_cmd(
+    file: Path = typer.Argument(
+        ..., help="Graph file (.toml); a new one is written on the first save if it does not exist."
+    ),
+    port: int = typer.Option(0, "--port", help="Port on 127.0.0.1 (default: a free one)."),
+    no_browser: bool = typer.Option(False, "--no-browser", help="Print the URL; open nothing."),
+) -> None:
+    """Edit FILE in the browser and see its uncertainties live (needs mtmc[editor]).
+
+    The first line printed is the page's URL (127.0.0.1 only, with a random token).
+    Ctrl-C stops the server; over an unsaved edit, press it twice.
+    """
+    try:
+        from mtmc.workbench import serve
+    except ImportError as exc:
+        fail(f'the workbench needs the editor extra ({exc.name}): pip install "mtmc[editor]"')
+    try:
+        serve(file, port=port, open_browser=not no_browser, echo=typer.echo)
+    except MtmcError as exc:
+        fail(exc)
                     "max_rel_error": fit.max_rel_error,
                 },
             }
