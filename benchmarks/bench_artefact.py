@@ -18,20 +18,23 @@ from pathlib import Path
 
 import numpy as np
 
-from mtmc.artefact.study import gum_outputs, load_artefact_study, study_model
+from mtmc.artefact.study import gum_outputs, study_model
+from mtmc.study import load_study
 from mtmc.uncertainty import monte_carlo
+from mtmc.uncertainty.heap import keep_heap
 
 STUDY = Path(__file__).resolve().parents[1] / "examples" / "studies" / "wang2022.toml"
 
 
 def main() -> int:
+    keep_heap()  # as the mtmc command does when it starts
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=10_000)
     ap.add_argument("--workers", type=int, nargs="*", default=[1, 2])
     ap.add_argument("--repeat", type=int, default=1)
     args = ap.parse_args()
     print(f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} CPUs")
-    study = load_artefact_study(STUDY)
+    study = load_study(STUDY).study
     t0 = time.perf_counter()
     model, inputs, pr = study_model(study, split=True)
     t_prep = time.perf_counter() - t0

@@ -34,13 +34,15 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import least_squares as scipy_lsq
 
-from mtmc.verification.identify import expmap, identify
+from mtmc.geometry import matrix_from_rotation_vector
+from mtmc.study import load_study
+from mtmc.uncertainty.heap import keep_heap
+from mtmc.verification.identify import identify
 from mtmc.verification.simulate import (
     VerificationModel,
     reference_identification,
     simulate,
 )
-from mtmc.verification.study import load_verification_study
 
 STUDY = Path(__file__).resolve().parents[1] / "examples" / "studies" / "aguado2016.toml"
 
@@ -105,7 +107,7 @@ def bench_plain(st, trials: int, n_plain: int) -> None:  # type: ignore[no-untyp
         w = w0 + (v - 1.0) * step
         th = np.zeros(model.n_parameters)
         th[free] = w[:k]
-        R = R0 @ expmap(w[k : k + 3])
+        R = R0 @ matrix_from_rotation_vector(w[k : k + 3])
         p = model.tool_position(ver.q, th)
         return ((p - (t0 + w[k + 3 :])) @ R - meas).ravel()
 
@@ -146,6 +148,7 @@ def bench_plain(st, trials: int, n_plain: int) -> None:  # type: ignore[no-untyp
 
 
 def main() -> None:
+    keep_heap()  # as the mtmc command does when it starts
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=1000)
     ap.add_argument("--plain", type=int, default=20)
@@ -155,7 +158,7 @@ def main() -> None:
     a = ap.parse_args()
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"BLAS threads {os.environ['OPENBLAS_NUM_THREADS']}", flush=True)  # fmt: skip
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     if not a.only_5408:
         bench_identification(st, a.repeat)
         bench_mc(st, "mesh96", a.trials, 2.0)

@@ -31,3 +31,17 @@ def test_every_top_level_and_subpackage_name_is_documented():
         module = importlib.import_module(dotted)
         assert {f"{dotted}.{n}" for n in module.__all__} <= listed, dotted
     assert "mtmc.vector" not in listed
+
+
+def test_every_name_the_tutorials_and_guides_import_is_documented():
+    root = API.parents[1]
+    listed = set(_listed())
+    texts = [f.read_text(encoding="utf-8") for f in (root / "docs").rglob("*.md")]
+    texts.append((root / "README.md").read_text(encoding="utf-8"))
+    used = set()
+    for text in texts:
+        for block in re.findall(r"```python\n(.*?)```", text, re.S):
+            for mod, names in re.findall(r"^from (mtmc[\w.]*) import ([^\n(]+)$", block, re.M):
+                used |= {f"{mod}.{n.strip().split(' as ')[0]}" for n in names.split(",")}
+    assert used
+    assert not used - listed, sorted(used - listed)

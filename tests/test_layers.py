@@ -36,7 +36,9 @@ ALLOWED: dict[str, set[str]] = {
     "report": {"graph", "kinematics", "uncertainty"},
     "study": {
         "artefact",
+        "geometry",
         "graph",
+        "instruments",
         "kinematics",
         "positioning",
         "report",

@@ -527,9 +527,10 @@ def aguado2017(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     from mtmc.verification.simulate import simulate
     from mtmc.verification.workspace import mesh
 
-    study = load("aguado2017").study
-    n = max(50, int(study.trials * scale))
-    seed = study.seed
+    kind = load("aguado2017")
+    study = kind.study
+    n = max(50, int(kind.settings.trials * scale))
+    seed = kind.settings.seed
     ver = study.verification()
     sim = simulate(ver, n, seed)
     res, vm = per_point(ver, n, seed)
@@ -800,12 +801,12 @@ def aguado2016(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
         reference_identification,
         simulate,
     )
-    from mtmc.verification.study import load_verification_study
 
-    vs = load_verification_study(STUDIES / "aguado2016.toml")
-    n = max(50, int(vs.trials * scale))
+    study = load("aguado2016")
+    vs = study.study
+    n = max(50, int(study.settings.trials * scale))
     n9 = max(20, int(100 * scale))
-    seed = int(vs.seed or 0)
+    seed = int(study.settings.seed or 0)
     values: dict[str, Any] = {}
     data: dict[str, Any] = {}
     for pts in ("mesh96", "cloud96", "mesh5408"):
@@ -1220,12 +1221,13 @@ def wang2022(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     """
     from dataclasses import replace
 
-    from mtmc.artefact.study import simulate
+    from mtmc.artefact.study import simulate_artefact
 
-    study = load("wang2022").study
-    n = max(200, int(study.trials * scale))
-    seed = study.seed
-    res = simulate(study, trials=n, seed=seed)
+    kind = load("wang2022")
+    study = kind.study
+    n = max(200, int(kind.settings.trials * scale))
+    seed = kind.settings.seed
+    res = simulate_artefact(study, trials=n, seed=seed)
     j = res.to_json()
     gum_tol = _wang2022_gum_tolerance(res)
     values: dict[str, Any] = {}
@@ -1271,13 +1273,13 @@ def wang2022(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
         repeatability=np.zeros(3),
         machine_repeatability=np.asarray(WANG2022_CENTRE_SD) * um,
     )
-    res_b = simulate(other, trials=n, seed=seed, gum_too=False)
+    res_b = simulate_artefact(other, trials=n, seed=seed, gum_too=False)
     for pose, k in zip(res_b.to_json()["poses"], keys, strict=True):
         for key in ("r_max_um", "r_avg_um"):
             e = pose[key]
             values[f"t2centre{k}.{key[:-3]}.mc"] = mc(e["estimate"], e["u"], n)
             values[f"t2centre{k}.{key[:-3]}.mc_u"] = mc(e["u"], e["u"] / math.sqrt(2.0), n)
-    res_p = simulate(replace(study, cmm=False), trials=n, seed=seed, gum_too=False)
+    res_p = simulate_artefact(replace(study, cmm=False), trials=n, seed=seed, gum_too=False)
     for pose, k in zip(res_p.to_json()["poses"], keys, strict=True):
         for key in ("r_max_um", "r_avg_um"):
             e = pose[key]

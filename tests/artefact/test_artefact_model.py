@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from mtmc.artefact import (
     FiducialSetup,
-    identify,
+    identify_setup,
     paper_jacobian,
     setup_error_names,
     shipped_artefact,
@@ -67,7 +67,7 @@ def test_noise_free_setup_errors_recovered(topology: str) -> None:
     E = rng.normal(0, 3e-3, 18)  # mm
     meas = s.measure(NINE, setup=E)
     dF = (s.artefact.mounted_centres()[None] - meas.centres).reshape(-1)
-    idn = identify(s.setup_jacobian(NINE), dF, setup_error_names(s.artefact.names))
+    idn = identify_setup(s.setup_jacobian(NINE), dF, setup_error_names(s.artefact.names))
     assert idn.full_rank
     assert idn.rank == 18
     assert np.abs(idn.estimate - E).max() < 1e-9  # mm, i.e. 1e-6 um
@@ -77,7 +77,7 @@ def test_noise_free_setup_errors_recovered(topology: str) -> None:
 def test_single_pose_rank_deficiency_and_its_combinations() -> None:
     s = _setup()
     names = setup_error_names(s.artefact.names)
-    one = identify(s.setup_jacobian(NINE[:1]), np.zeros(15), names)
+    one = identify_setup(s.setup_jacobian(NINE[:1]), np.zeros(15), names)
     assert (one.rank, one.full_rank) == (15, False)
     assert s.setup_jacobian(NINE[:1]).shape == (15, 18)
     combos = one.unidentifiable()
@@ -88,13 +88,13 @@ def test_single_pose_rank_deficiency_and_its_combinations() -> None:
     ]
     assert np.isinf(one.u).all()
     # C alone (b = 0): the probe's z offset and a common z shift stay confounded
-    conly = identify(s.setup_jacobian(NINE[:3]), np.zeros(45), names)
+    conly = identify_setup(s.setup_jacobian(NINE[:3]), np.zeros(45), names)
     assert conly.rank == 17
     assert conly.unidentifiable() == ["+1·dpz +1·dw1z +1·dw2z +1·dw3z +1·dw4z +1·dw5z"]
     assert np.isfinite(conly.u[:2]).all()
     assert np.isinf(conly.u[2])
     # the nine-pose plan is full rank
-    nine = identify(s.setup_jacobian(NINE), np.zeros(135), names)
+    nine = identify_setup(s.setup_jacobian(NINE), np.zeros(135), names)
     assert nine.full_rank
     assert nine.null_space.shape == (0, 18)
 
@@ -104,12 +104,12 @@ def test_identification_covariance_against_explicit_formula() -> None:
     J = s.setup_jacobian(NINE)
     rng = np.random.default_rng(np.random.SeedSequence(2))
     sig = rng.uniform(0.1e-3, 0.3e-3, J.shape[0])
-    idn = identify(J, rng.normal(0, 1e-3, J.shape[0]), setup_error_names("12345"), sig**2)
+    idn = identify_setup(J, rng.normal(0, 1e-3, J.shape[0]), setup_error_names("12345"), sig**2)
     P = np.linalg.pinv(J)
     ref = P @ np.diag(sig**2) @ P.T
     np.testing.assert_allclose(idn.covariance, ref, rtol=0, atol=1e-9 * np.abs(ref).max())
     # with equal weights the LS covariance is s^2 (J^T J)^-1
-    V = identify(J, rng.normal(0, 1e-3, J.shape[0]), setup_error_names("12345"))
+    V = identify_setup(J, rng.normal(0, 1e-3, J.shape[0]), setup_error_names("12345"))
     s2 = float(V.residuals @ V.residuals) / (J.shape[0] - 18)
     ref = s2 * np.linalg.inv(J.T @ J)
     np.testing.assert_allclose(V.covariance, ref, rtol=0, atol=1e-9 * np.abs(ref).max())

@@ -10,13 +10,12 @@ import pytest
 from mtmc.artefact.study import (
     ArtefactStudy,
     gum_outputs,
-    load_artefact_study,
-    loads_artefact_study,
-    simulate,
+    simulate_artefact,
     study_model,
 )
 from mtmc.errors import InputError
 from mtmc.kinematics.functions import PolynomialFunction
+from mtmc.study import load_study, loads_study
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "examples" / "studies" / "wang2022.toml"
@@ -24,7 +23,7 @@ STUDY = ROOT / "examples" / "studies" / "wang2022.toml"
 
 @pytest.fixture(scope="module")
 def study():  # type: ignore[no-untyped-def]
-    return load_artefact_study(STUDY)
+    return load_study(STUDY).study
 
 
 def test_shipped_study(study) -> None:  # type: ignore[no-untyped-def]
@@ -169,7 +168,7 @@ def test_study_errors_name_file_line_field(old: str, new: str, field: str) -> No
     assert old in text
     bad = text.replace(old, new)
     with pytest.raises(InputError) as e:
-        loads_artefact_study(bad, "w.toml", STUDY.parent)
+        loads_study(bad, file="w.toml", folder=STUDY.parent)
     want_line = next(
         i
         for i, t in enumerate(bad.splitlines(), 1)
@@ -223,7 +222,7 @@ def test_linear_fit_map_against_exact_fits(study) -> None:  # type: ignore[no-un
 
 
 def test_monte_carlo_beside_gum(study) -> None:  # type: ignore[no-untyped-def]
-    res = simulate(study, trials=1500, seed=5)
+    res = simulate_artefact(study, trials=1500, seed=5)
     # setup errors are linear in the centres: MC u = GUM u within MC tolerance
     np.testing.assert_allclose(res.mc_u["setup"], res.gum_u["setup"], rtol=0.12)
     np.testing.assert_allclose(res.mc_mean["setup"], res.nominal.setup[0], atol=0.2e-3)

@@ -15,11 +15,10 @@ STUDY = ROOT / "examples" / "studies" / "wang2022.toml"
 
 
 def test_artefact_study_reports_what_simulate_computes():
-    from mtmc.artefact.study import loads_artefact_study, simulate
+    from mtmc.artefact.study import simulate_artefact
 
-    text = STUDY.read_text(encoding="utf-8")
     r = load_study(STUDY).run(trials=300, seed=4)
-    ref = simulate(loads_artefact_study(text, str(STUDY), STUDY.parent), 300, 4)
+    ref = simulate_artefact(load_study(STUDY).study, 300, 4)
     j = ref.to_json()
     setup = {row[0]: row for row in r.tables[1].rows}
     for name, e in j["setup_errors"].items():
@@ -61,11 +60,10 @@ def test_a_broken_artefact_field_keeps_its_line():
 
 
 def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them():
-    from mtmc.artefact.study import loads_artefact_study, simulate
+    from mtmc.artefact.study import simulate_artefact
 
-    text = STUDY.read_text(encoding="utf-8")
     r = load_study(STUDY).run(trials=300, seed=4)
-    ref = simulate(loads_artefact_study(text, str(STUDY), STUDY.parent), 300, 4)
+    ref = simulate_artefact(load_study(STUDY).study, 300, 4)
     q = {x.name: x for x in r.quantities}
     assert len(q) == 9 + 9 + 18
     # pose (b, c) = (-5°, -5°) in mtmc's sign (the paper's b = 5°) is the sixth of the plan

@@ -20,8 +20,8 @@ from mtmc import (
     sweep_graph,
     validate,
 )
+from mtmc.geometry.constructions import normal_plane_basis
 from mtmc.study import load_study
-from mtmc.study.graph import normal_plane_basis
 from mtmc.uncertainty.gum import endpoint_std_error
 from mtmc.uncertainty.results import convergence
 
@@ -160,6 +160,13 @@ def test_sweep_is_the_library_sweep_with_its_surrogate(results):
     np.testing.assert_allclose(sw["surrogate"]["coefficients"], fit.coefficients, rtol=1e-12)
     assert sw["surrogate"]["max_rel_error"] <= 0.05  # Stryczek: at most 5 %
     assert len(results["bcs_origin"].tables[0].rows) == 25
+    # the surface the report draws is the study's: u = sqrt(c0 + c_p s_p^2 + c_m s_m^2)
+    # over the box of the grid, written out here from the fitted constants
+    a, b = (np.asarray(x) for x in sw["surface"]["axes"])
+    np.testing.assert_allclose(a, np.linspace(0.001, 0.005, 30), rtol=1e-12)
+    c0, (cp, cm) = fit.c0, fit.coefficients
+    want = np.sqrt(c0 + cp * a[:, None] ** 2 + cm * b[None, :] ** 2)
+    np.testing.assert_allclose(sw["surface"]["u"], want, rtol=1e-12)
 
 
 def test_convergence_movement_over_the_last_half_against_direct_std(results):

@@ -15,10 +15,9 @@ STUDY = ROOT / "examples" / "studies" / "aguado2017.toml"
 
 def test_verification_study_reports_what_simulate_computes():
     from mtmc.verification.simulate import VE_NAMES, simulate
-    from mtmc.verification.study import load_verification_study
 
     r = load_study(STUDY).run(trials=60, seed=3)
-    s = load_verification_study(STUDY)
+    s = load_study(STUDY).study
     mc = simulate(
         s.verification(),
         60,

@@ -10,16 +10,16 @@ import pytest
 
 from mtmc.cli.main import main
 from mtmc.errors import InputError
+from mtmc.study import load_study, loads_study
 from mtmc.verification.compensation import read_plain_csv
 from mtmc.verification.identify import identify
-from mtmc.verification.study import load_verification_study, loads_verification_study
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDIES = ROOT / "examples" / "studies"
 
 
 def test_shipped_studies_load_with_the_papers_numbers() -> None:
-    s16 = load_verification_study(STUDIES / "aguado2016.toml")
+    s16 = load_study(STUDIES / "aguado2016.toml").study
     assert {k: v.q.shape[0] for k, v in s16.points.items()} == {
         "mesh96": 96,
         "cloud96": 96,
@@ -30,12 +30,13 @@ def test_shipped_studies_load_with_the_papers_numbers() -> None:
     cloud, mesh = s16.points["cloud96"].q, s16.points["mesh96"].q
     assert not np.allclose(cloud, mesh)
     assert np.abs(cloud - mesh).max() <= 250.0
-    s17 = load_verification_study(STUDIES / "aguado2017.toml")
+    k17 = load_study(STUDIES / "aguado2017.toml")
+    s17 = k17.study
     lt = s17.trackers["aguado2017"]
     assert np.allclose(np.degrees(lt.euler("xyz")), [0.0339, 0.0343, 59.4652])
     assert s17.noise.azimuth == 24e-6
     assert s17.noise.u_range(1000.0) == pytest.approx(0.0048)
-    assert s17.trials == 1000
+    assert (k17.settings.trials, k17.settings.seed) == (1000, 2017)
     assert s17.points["mesh"].q.shape == (81, 3)
 
 
@@ -43,7 +44,7 @@ def test_study_errors_name_file_line_and_field() -> None:
     text = (STUDIES / "aguado2017.toml").read_text()
     bad = text.replace("step = [50.0, 50.0, 50.0]", "step = [50.0, -50.0, 50.0]")
     with pytest.raises(InputError) as exc:
-        loads_verification_study(bad, file="s.toml")
+        loads_study(bad, file="s.toml")
     line = next(i for i, ln in enumerate(bad.splitlines(), 1) if ln.startswith("step"))
     assert exc.value.file == "s.toml"
     assert exc.value.line == line
@@ -51,10 +52,10 @@ def test_study_errors_name_file_line_and_field() -> None:
     assert exc.value.field.startswith("points.mesh")
     bad = text.replace("EXX = [54.0", "EXQ = [54.0")
     with pytest.raises(InputError, match="EXQ"):
-        loads_verification_study(bad, file="s.toml")
+        loads_study(bad, file="s.toml")
     bad = text.replace('noise = "aguado2017"', 'noise = "leica"')
     with pytest.raises(InputError, match="noise"):
-        loads_verification_study(bad, file="s.toml")
+        loads_study(bad, file="s.toml")
 
 
 def test_simulate_json_contract(capsys) -> None:  # type: ignore[no-untyped-def]
@@ -101,7 +102,7 @@ def test_simulate_text_rounds_as_the_gum_says(capsys) -> None:  # type: ignore[n
 
 def test_identify_from_csv_and_export(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
     study = STUDIES / "aguado2017.toml"
-    st = load_verification_study(study)
+    st = load_study(study).study
     ver = st.verification()
     x = ver.readings()
     rows = ["# commanded X Y Z (mm), tracker readings (mm)", "X,Y,Z,x_lt,y_lt,z_lt"]
@@ -139,7 +140,7 @@ def test_study_mpe_noise_is_scaled_once(conversion: str, k: float) -> None:
     # u_L = 10e-3/k + 0.3e-6/k·L, u_α = u_β = 6e-6/k + (15e-3/k)/L
     text = (STUDIES / "aguado2017.toml").read_text()
     table = f'{{ adm = [10.0, 0.3], transverse = [15.0, 6.0], conversion = "{conversion}" }}'
-    s = loads_verification_study(text.replace('"aguado2017"\neuler', f"{table}\neuler"))
+    s = loads_study(text.replace('"aguado2017"\neuler', f"{table}\neuler")).study
     n = s.noise
     assert n.radial_a == pytest.approx(0.010 / k, rel=1e-15)
     assert n.radial_b == pytest.approx(0.3e-6 / k, rel=1e-15)

@@ -115,7 +115,7 @@ def _dwell_positions(
 def test_the_shipped_aguado2016_study_plans_its_96_point_mesh(
     tmp_path: Path, capsys, monkeypatch
 ) -> None:  # type: ignore[no-untyped-def]
-    from mtmc.verification.study import load_verification_study
+    from mtmc.study import load_study
 
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "out"
@@ -161,7 +161,7 @@ def test_the_shipped_aguado2016_study_plans_its_96_point_mesh(
     table = [r.split(",") for r in rows if not r.startswith("#")][1:]
     assert [tuple(float(v) for v in r[3:6]) for r in table] == expected
     # the plan measures the study's own point set [points.mesh96], in its order
-    study = load_verification_study(SHIPPED)
+    study = load_study(SHIPPED).study
     assert np.array_equal(study.points["mesh96"].q, np.array(expected, dtype=float))
 
 

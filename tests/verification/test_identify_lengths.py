@@ -10,8 +10,8 @@ import pytest
 
 from mtmc.cli.main import main
 from mtmc.errors import InputError
+from mtmc.study import load_study
 from mtmc.verification.datafile import measured_points, parse_identification_csv
-from mtmc.verification.study import load_verification_study
 
 STUDY = Path(__file__).resolve().parents[2] / "examples" / "studies" / "aguado2016.toml"
 
@@ -24,7 +24,7 @@ def _write(path: Path, head: list[str], q: np.ndarray, vals: np.ndarray) -> None
 
 
 def test_lengths_give_the_same_identification_as_coordinates(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     ver = st.verification("mesh96", "pos4")
     p = ver.true_positions()  # the simulated machine, base frame
     q = ver.q
@@ -64,7 +64,7 @@ def test_lengths_give_the_same_identification_as_coordinates(tmp_path: Path, cap
 
 
 def test_bad_length_columns_are_named() -> None:
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     with pytest.raises(InputError, match="L_nowhere"):
         parse_identification_csv(
             "X,Y,Z,L_pos1,L_nowhere,L_pos2\n0,0,0,1,1,1\n", ("X", "Y", "Z"), st.trackers, "d.csv"
@@ -83,7 +83,7 @@ def test_self_calibrated_stations_give_the_coordinates_identification(
     tmp_path: Path,
     capsys,  # type: ignore[no-untyped-def]
 ) -> None:
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     ver = st.verification("mesh96", "pos4")
     p = ver.true_positions()
     q = ver.q
@@ -141,7 +141,7 @@ def test_self_calibrated_stations_give_the_coordinates_identification(
 
 
 def test_self_calibration_is_refused_for_coordinates_and_three_stations(tmp_path: Path) -> None:
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     ver = st.verification("mesh96", "pos4")
     xyz = parse_identification_csv(
         "X,Y,Z,x_lt,y_lt,z_lt\n0,0,0,1,1,1\n", ("X", "Y", "Z"), st.trackers, "d.csv"

@@ -8,15 +8,21 @@ from pathlib import Path
 import numpy as np
 
 from mtmc.cli.main import main
-from mtmc.verification.placement import gum_point_u, place
-from mtmc.verification.simulate import simulate
-from mtmc.verification.study import load_verification_study
+from mtmc.study import load_study
+from mtmc.verification.placement import place
+from mtmc.verification.simulate import (
+    Verification,
+    VerificationModel,
+    gum_verification,
+    reference_identification,
+    simulate,
+)
 
 STUDY = Path(__file__).resolve().parents[2] / "examples" / "studies" / "aguado2016.toml"
 
 
 def test_placement_beats_positions_1_to_3() -> None:
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     ver = st.verification("mesh96", "pos4")
     assert st.limits is not None
     r = place(ver, st.limits, references=st.trackers)
@@ -30,7 +36,16 @@ def test_placement_beats_positions_1_to_3() -> None:
         type(best)(best.model, best.q, r.best, best.true_errors, fixed=best.fixed), 400, 3
     )
     assert np.isclose(np.mean(mc.point_u), r.u_best, rtol=0.1)
-    assert np.isclose(gum_point_u(ver, st.trackers["pos1"]), r.reference["pos1"])
+
+
+def test_placement_score_is_the_gum_of_a_verification_of_the_nominal_machine() -> None:
+    st = load_study(STUDY).study
+    ver = st.verification("mesh96", "pos1")
+    assert st.limits is not None
+    nominal = Verification(ver.model, ver.q, ver.tracker, {}, pose=ver.pose, fixed=ver.fixed)
+    r = place(nominal, st.limits, references={"pos1": ver.tracker}, n_xy=2, heights=1, refine=0)
+    gum = gum_verification(VerificationModel.build(nominal, reference_identification(nominal)))
+    assert np.isclose(np.mean(gum.point_u), r.reference["pos1"], rtol=1e-12, atol=0.0)
 
 
 def test_place_cli_json(capsys) -> None:  # type: ignore[no-untyped-def]

@@ -13,7 +13,7 @@ import pytest
 
 from mtmc.cli.main import main as cli
 from mtmc.instruments import LaserTracker
-from mtmc.verification.study import load_verification_study
+from mtmc.study import load_study
 from mtmc.verification.visibility import study_visibility, visibility_warnings
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -39,7 +39,7 @@ def _ry(a: float) -> np.ndarray:
 
 
 def test_table_i_angles_are_zyz_euler_angles_and_pos4_sees_the_workspace() -> None:
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     assert st.euler == "ZYZ"
     for name, (pos, ang) in TABLE_I.items():
         a, b, c = np.radians(ang)
@@ -76,7 +76,7 @@ def test_table_i_angles_are_zyz_euler_angles_and_pos4_sees_the_workspace() -> No
 
 
 def test_warnings_name_the_position_the_point_and_the_limit() -> None:
-    st = load_verification_study(STUDY)
+    st = load_study(STUDY).study
     lines = visibility_warnings(study_visibility(st, "mesh96"), st.machine.axes)
     assert len(lines) == 1
     assert lines[0].startswith("tracker position pos3 cannot see")

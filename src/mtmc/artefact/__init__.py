@@ -18,9 +18,9 @@ from mtmc.artefact.artefact import (
 )
 from mtmc.artefact.model import (
     FiducialSetup,
-    Identification,
     Measurement,
-    identify,
+    SetupIdentification,
+    identify_setup,
     paper_jacobian,
     setup_error_names,
 )
@@ -38,13 +38,13 @@ __all__ = [
     "PAPER_REPEATABILITY_UM",
     "Artefact",
     "FiducialSetup",
-    "Identification",
+    "SetupIdentification",
     "Measurement",
     "SphereFit",
     "distances",
     "fit_points",
     "fit_sensitivity",
-    "identify",
+    "identify_setup",
     "load_artefact",
     "loads_artefact",
     "paper_jacobian",

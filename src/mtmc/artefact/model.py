@@ -33,7 +33,7 @@ orthogonal and the noise model isotropic per block).
 One pose gives ``3N`` equations in ``3N + 3`` unknowns: a common shift of every fiducial
 cannot be told from a probe offset; the null space is ``{(Δp, Δw_i = J_p Δp for all i)}``
 (``J_p`` does not depend on the ball). Poses with different ``J_p`` remove it;
-:func:`identify` reports the rank and the unidentifiable combinations.
+:func:`identify_setup` reports the rank and the unidentifiable combinations.
 """
 
 from __future__ import annotations
@@ -56,9 +56,9 @@ from mtmc.kinematics.topology import is_linear
 
 __all__ = [
     "FiducialSetup",
-    "Identification",
+    "SetupIdentification",
     "Measurement",
-    "identify",
+    "identify_setup",
     "paper_jacobian",
     "setup_error_names",
 ]
@@ -316,7 +316,7 @@ class FiducialSetup:
 
 
 @dataclass(frozen=True, eq=False)
-class Identification:
+class SetupIdentification:
     """Least-squares solution of ``ΔF = J ΔE`` with its covariance and its rank.
 
     Attributes
@@ -371,14 +371,14 @@ class Identification:
         return out
 
 
-def identify(
+def identify_setup(
     J: npt.ArrayLike,
     dF: npt.ArrayLike,
     names: Sequence[str],
     cov: npt.ArrayLike | None = None,
     *,
     rtol: float = 1e-10,
-) -> Identification:
+) -> SetupIdentification:
     """Solve ``ΔF = J ΔE`` (eq. 20) by least squares, with covariance, rank and null space.
 
     Parameters
@@ -397,7 +397,7 @@ def identify(
 
     Returns
     -------
-    Identification
+    SetupIdentification
 
     Raises
     ------
@@ -438,7 +438,7 @@ def identify(
         V = V.copy()
         V[inf, :] = np.inf
         V[:, inf] = np.inf
-    return Identification(
+    return SetupIdentification(
         tuple(names),
         frozen_floats(est),
         frozen_floats(V),

@@ -5,7 +5,7 @@ a machine with its probe offset and its (chosen) geometric errors, the real setu
 the probing (patch, repeatability, calibrated or free radius), the plan of rotary poses
 and repetitions, and which uncertainty sources vary from trial to trial.
 
-:func:`simulate` probes the artefact on the modelled machine, noise-free, with the full
+:func:`simulate_artefact` probes the artefact on the modelled machine, noise-free, with the full
 chain (:meth:`~mtmc.artefact.model.FiducialSetup.measure`), analyses it
 (:func:`~mtmc.artefact.analysis.analyse`), then runs :func:`mtmc.uncertainty.monte_carlo`
 over a vectorised model of the same analysis whose inputs are
@@ -37,7 +37,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -45,8 +44,9 @@ from numpy.typing import NDArray
 
 from mtmc.artefact.analysis import ANALYSIS_OUTPUTS, Analysis, analyse
 from mtmc.artefact.artefact import SHIPPED, Artefact, load_artefact, pairs, shipped_artefact
-from mtmc.artefact.model import FiducialSetup, Measurement, identify, setup_error_names
+from mtmc.artefact.model import FiducialSetup, Measurement, identify_setup, setup_error_names
 from mtmc.artefact.probing import PAPER_REPEATABILITY_UM, patch_offsets
+from mtmc.document import Fields
 from mtmc.errors import InputError
 from mtmc.geometry.fits import fit_sphere
 from mtmc.kinematics import Machine
@@ -60,16 +60,15 @@ __all__ = [
     "ArtefactStudy",
     "GumOutput",
     "gum_outputs",
-    "load_artefact_study",
-    "loads_artefact_study",
-    "simulate",
+    "read_artefact_study",
+    "simulate_artefact",
     "study_model",
 ]
 
 _F = NDArray[np.float64]
 UM = 1e-3  # mm per um
 
-#: The outputs whose Monte Carlo values :func:`simulate` keeps (the rest keep moments):
+#: The outputs whose Monte Carlo values :func:`simulate_artefact` keeps (the rest keep moments):
 #: the setup errors and Table 2's ``r_max`` and ``r_avg`` per pose, a few numbers a trial.
 SAMPLED_OUTPUTS = ("setup", "r_max_measured", "r_avg_measured", "r_max_model", "r_avg_model")
 URAD = 1e-6  # rad per urad
@@ -104,10 +103,6 @@ class ArtefactStudy:
         Per-probing repeatability of the linear axes, mm.
     setup_u : float or None
         Standard deviation of the setup errors about ``setup_errors``, mm.
-    trials : int
-        Default number of Monte Carlo trials.
-    seed : int or None
-        Default seed.
     file : str
         Where the study was read from.
     """
@@ -123,8 +118,6 @@ class ArtefactStudy:
     cmm: bool = True
     machine_repeatability: _F | None = None
     setup_u: float | None = None
-    trials: int = 10_000
-    seed: int | None = None
     file: str = ""
 
     def __post_init__(self) -> None:
@@ -413,7 +406,7 @@ class ArtefactResult:
         The noise-free probing.
     nominal : Analysis
         The analysis of the noise-free centres (``M = 1``).
-    identification : Identification
+    identification : SetupIdentification
         The noise-free identification, its covariance ``J⁺ V J⁺ᵀ`` from the covariance
         ``V`` of ``ΔF`` (the centres' and the calibration's): the GUM of eq. 20.
     mc_mean, mc_u : dict of str to ndarray
@@ -508,9 +501,9 @@ def _joined(res: Any, attr: str, n_poses: int) -> dict[str, _F]:
     return out
 
 
-def simulate(
+def simulate_artefact(
     study: ArtefactStudy,
-    trials: int | None = None,
+    trials: int,
     seed: int | None = None,
     *,
     exact_fit: bool = False,
@@ -523,10 +516,10 @@ def simulate(
     Parameters
     ----------
     study : ArtefactStudy
-    trials : int, optional
-        Default ``study.trials``.
+    trials : int
+        Monte Carlo trials.
     seed : int, optional
-        Default ``study.seed``.
+        The seed (None: fresh entropy, recorded in the result).
     exact_fit : bool
         Converged sphere fits in every trial (slow; see :func:`study_model`).
     gum_too : bool
@@ -547,8 +540,7 @@ def simulate(
     P, N = pr.meas.centres.shape[:2]
     R = study.repetitions
     nominal = analyse(pr.meas.centres[None, None].repeat(R, axis=1), pr.cal, pr.pinv, pr.Jp)
-    n = trials if trials is not None else study.trials
-    s = seed if seed is not None else study.seed
+    n, s = trials, seed
     kept = [f"{k}/{p}" for k in SAMPLED_OUTPUTS if k != "setup" for p in range(P)]
     res = monte_carlo(model, inputs, trials=n, seed=s, keep=["setup", *kept], **engine)
     mean = _joined(res, "estimate_vector", P)
@@ -575,7 +567,7 @@ def simulate(
         Vc = Rb @ art.centre_covariance() @ Rb.T
         T = np.tile(np.eye(3 * N), (R * P, 1))
         VF = Vm + T @ Vc @ T.T
-    ident = identify(np.tile(pr.J, (R, 1)), dF, study.names, VF)
+    ident = identify_setup(np.tile(pr.J, (R, 1)), dF, study.names, VF)
     return ArtefactResult(
         study, pr.meas, nominal, ident, mean, u, gum_u, res.trials, res.seed, gum_all, samples
     )
@@ -759,36 +751,19 @@ def _uncertainty(top: Any) -> tuple[bool, _F | None, float | None]:
     return cmm, mrep, su
 
 
-def _run(top: Any) -> tuple[int, int | None]:
-    """The optional ``[run]`` table: the default trials and seed."""
-    trials, seed = 10_000, None
-    rf = top.table("run", required=False)
-    if rf is not None:
-        rf.only(("trials", "seed"))
-        trials = rf.integer("trials", trials, minimum=2)
-        seed = rf.integer("seed", None, minimum=0)
-    return trials, seed
-
-
-def loads_artefact_study(
-    text: str, file: str = "<study>", folder: Path | None = None
-) -> ArtefactStudy:
-    """Read an artefact study from TOML text (format: ``docs/artefact.md``).
+def read_artefact_study(top: Fields) -> ArtefactStudy:
+    """The artefact study of a parsed study file (format: ``docs/artefact.md``).
 
     One reader per table, in file order: ``[artefact]``, ``[machine]``, ``[probing]``,
-    ``[plan]``, ``[setup_errors]``, ``[uncertainty]``, ``[run]``.
+    ``[plan]``, ``[setup_errors]``, ``[uncertainty]``; ``[run]`` is the study layer's
+    (:meth:`mtmc.study.spec.RunSettings.read`).
 
     Raises
     ------
-    ParseError
-        If the text is not TOML.
     InputError
         On a missing, unknown or malformed field: the message names the file, the line
         and the field, and says what was expected.
     """
-    from mtmc.document import parse_toml
-
-    top = parse_toml(text, file, folder)
     top.only(
         (
             "kind",
@@ -813,7 +788,6 @@ def loads_artefact_study(
     poses, reps = _plan(top, setup.rotary)
     E = _setup_errors(top, art.names)
     cmm, mrep, su = _uncertainty(top)
-    trials, seed = _run(top)
     return ArtefactStudy(
         title,
         setup,
@@ -826,21 +800,5 @@ def loads_artefact_study(
         cmm,
         mrep,
         su,
-        trials,
-        seed,
-        file,
+        top.source.file,
     )
-
-
-def load_artefact_study(path: str | Path) -> ArtefactStudy:
-    """Read an artefact study file (see :func:`loads_artefact_study`).
-
-    Raises
-    ------
-    InputError
-        If the file cannot be read, or on a bad field (file, line and field named).
-    """
-    from mtmc.document import read_text
-
-    p = Path(path)
-    return loads_artefact_study(read_text(p, "study file"), str(p), p.parent)

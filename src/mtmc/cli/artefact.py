@@ -60,17 +60,24 @@ def simulate_cmd(
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties."""
-    from mtmc.artefact.study import load_artefact_study, simulate
+    from mtmc.artefact.study import simulate_artefact
+    from mtmc.errors import InputError
+    from mtmc.study import load_study
 
     if figure is not None and figure.suffix.lower() not in FIG_SUFFIXES:
         fail(f"{figure}: expected a file ending in {', '.join(FIG_SUFFIXES)}")
     try:
-        st = load_artefact_study(study)
+        kind: Any = load_study(study)  # the study as ``mtmc run`` reads it
+        if kind.kind != "artefact":
+            raise InputError(
+                f"expected an artefact study, got kind {kind.kind!r}", file=str(study), field="kind"
+            )
+        st = kind.study
         with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
-            res = simulate(
+            res = simulate_artefact(
                 st,
-                trials,
-                seed,
+                kind.settings.trials if trials is None else trials,
+                kind.settings.seed if seed is None else seed,
                 gum_too=not no_gum,
                 noise=noise,
                 progress=bar,

@@ -31,6 +31,21 @@ app = typer.Typer(
 )
 
 STUDY = typer.Argument(..., help="The verification study (TOML).")
+
+
+def _load(path: Path) -> Any:
+    """The study of ``path`` as ``mtmc run`` reads it; it must be a verification study."""
+    from mtmc.errors import InputError
+    from mtmc.study import load_study
+
+    st = load_study(path)
+    if st.kind != "verification":
+        raise InputError(
+            f"expected a verification study, got kind {st.kind!r}", file=str(path), field="kind"
+        )
+    return st
+
+
 JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
 
 
@@ -103,11 +118,13 @@ def plan_cmd(
             typer.echo("  " + v.text(plan.axes).replace("\n", "\n  "))
 
 
-def _stats_um(est: Any, u: Any, base: int) -> dict[str, dict[str, float]]:
-    return {
-        k: {"estimate": float(est[base + i]) * 1e3, "u": float(u[base + i]) * 1e3}
-        for i, k in enumerate(("max", "mean", "min"))
-    }
+def _stats_um(r: Any, which: str) -> dict[str, dict[str, float]]:
+    """Max, mean and min of one volumetric error over the points, µm (``r.ve``)."""
+    out = {}
+    for k in ("max", "mean", "min"):
+        est, u = r.ve(f"{which}.{k}")
+        out[k] = {"estimate": est * 1e3, "u": u * 1e3}
+    return out
 
 
 def _point_stats_um(r: Any) -> dict[str, dict[str, dict[str, float]]]:
@@ -142,25 +159,21 @@ def simulate_cmd(
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Monte Carlo of the whole verification: volumetric errors, coefficients, point u."""
-    from mtmc.verification.simulate import simulate
-    from mtmc.verification.study import load_verification_study
     from mtmc.verification.visibility import study_visibility, visibility_warnings
 
     try:
-        st = load_verification_study(study)
+        kind = _load(study)
+        st = kind.study
         ver = st.verification(points, tracker)
         warnings = visibility_warnings(
             study_visibility(st, points, [tracker or st.default_tracker]), st.machine.axes
         )
         warn(warnings)
         par = parallel_options(workers, executor, scheduler)
-        m = st.trials if trials is None else trials
-        s = st.seed if seed is None else seed
+        m = kind.settings.trials if trials is None else trials
+        s = kind.settings.seed if seed is None else seed
         with progress_bar(f"{study.name}: verifications", progress) as bar:
-            r = simulate(
-                ver, m, s, repeatability=st.repeatability, reflector_u=st.reflector_u,
-                pose_u=None if st.pose else st.pose_u, progress=bar, **par,
-            )  # fmt: skip
+            r = st.simulate(m, s, points=points, tracker=tracker, progress=bar, **par)
     except MtmcError as exc:
         fail(exc)
     coefs = {}
@@ -179,9 +192,9 @@ def simulate_cmd(
         "points": ver.n_points,
         "point_set": points or st.default_points,
         "tracker": tracker or st.default_tracker,
-        "initial_ve_um": _stats_um(r.ve_estimate, r.ve_u, 0),
-        "residual_ve_um": _stats_um(r.ve_estimate, r.ve_u, 3),
-        "compensated_ve_um": _stats_um(r.ve_estimate, r.ve_u, 6),
+        "initial_ve_um": _stats_um(r, "initial"),
+        "residual_ve_um": _stats_um(r, "residual"),
+        "compensated_ve_um": _stats_um(r, "compensated"),
         "point_mean_ve_um": _point_stats_um(r),
         "coefficients": coefs,
         "gum": gum_u,
@@ -253,17 +266,18 @@ def identify_cmd(
     ),
 ) -> None:
     """Identify the error functions (and the tracker pose) from measured data."""
-    import numpy as np
-
-    from mtmc.verification.compensation import compensation_table, write_compensation
-    from mtmc.verification.study import load_verification_study
+    from mtmc.verification.compensation import (
+        compensation_table,
+        measured_grid,
+        write_compensation,
+    )
 
     if (export is None) != (out is None):
         fail("--export and -o go together")
     if export is not None and export not in ("isg", "etalon", "csv"):
         fail(f"--export: expected isg, etalon or csv, got {export!r}")
     try:
-        st = load_verification_study(study)
+        st = _load(study).study
         ver = st.verification(None, tracker)
         from mtmc.verification.datafile import measured_points, read_identification_csv
         from mtmc.verification.identify import identify
@@ -275,10 +289,7 @@ def identify_cmd(
         )
         r = identify(st.model, q, meas, lt, pose=st.pose or self_cal, fixed=st.fixed)
         if export is not None and out is not None:
-            grid = {ax: np.unique(q[:, i]) for i, ax in enumerate(st.machine.axes)}
-            used = {st.machine.error_term(n).axis for n in st.model.error_names}
-            grid = {ax: g for ax, g in grid.items() if ax in used}
-            table = compensation_table(st.model, grid, theta=r.theta[0])
+            table = compensation_table(st.model, measured_grid(st.model, q), theta=r.theta[0])
             write_compensation(table, out, export)
     except MtmcError as exc:
         fail(exc)
@@ -338,11 +349,11 @@ def place_cmd(
     import math
 
     from mtmc.verification.placement import place
-    from mtmc.verification.study import load_verification_study
     from mtmc.verification.visibility import study_visibility, visibility_warnings
 
     try:
-        st = load_verification_study(study)
+        kind = _load(study)
+        st = kind.study
         if st.limits is None:
             fail(f"{study}: placement needs [tracker.limits] with height_mm")
         ver = st.verification(points, None)
@@ -355,7 +366,7 @@ def place_cmd(
             n_xy=grid,
             refine=refine,
             trials=trials,
-            seed=st.seed if seed is None else seed,
+            seed=kind.settings.seed if seed is None else seed,
             **parallel_options(workers, executor, scheduler),
         )
     except MtmcError as exc:

@@ -55,6 +55,7 @@ __all__ = [
     "line_from_point_direction",
     "line_from_points",
     "middle",
+    "normal_plane_basis",
     "plane_from_point_normal",
     "plane_from_points",
     "project_point_plane",
@@ -699,3 +700,26 @@ def frame_from_plane_line_point(
     T[:, :3, 3] = o
     T[:, 3, 3] = 1.0
     return T
+
+
+def normal_plane_basis(direction: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Two orthonormal columns spanning the plane normal to ``direction``, shape (3, 2).
+
+    The first column is the unit vector of the coordinate axis least aligned with
+    ``direction``, made normal to it; the second completes a right-handed set
+    ``(e1, e2, d)``.
+
+    Examples
+    --------
+    >>> normal_plane_basis(np.array([0.0, 0.0, 1.0])).T
+    array([[1., 0., 0.],
+           [0., 1., 0.]])
+    """
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    e = np.zeros(3)
+    e[int(np.argmin(np.abs(d)))] = 1.0
+    e1 = e - d * (e @ d)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(d, e1)
+    return np.column_stack([e1, e2])

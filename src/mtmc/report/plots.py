@@ -268,23 +268,16 @@ def sweep_svg(sw: dict[str, Any]) -> str:
     grid = np.asarray(sw["grid"]) * 1e3
     scale, label = display_unit(sw["unit"])
     u = np.asarray(sw["u"]) * scale
-    s = sw["surrogate"]
-    coef = np.asarray(s["coefficients"])
     names = sw["names"]
-
-    def surrogate(sig_um: np.ndarray) -> np.ndarray:
-        sig = sig_um / 1e3
-        out: np.ndarray = np.sqrt(np.clip(s["c0"] + (sig**2) @ coef, 0.0, None)) * scale
-        return out
+    surface = sw["surface"]  # the surrogate on a fine grid, as the study computed it
+    axes = [np.asarray(a) * 1e3 for a in surface["axes"]]
+    u_fit = np.asarray(surface["u"]) * scale
 
     if grid.shape[1] == 2:
         fig = _figure(6.4, 4.6, left=0.0, right=0.95, bottom=0.05, top=1.0)
         ax = fig.add_subplot(1, 1, 1, projection="3d")
-        a = np.linspace(grid[:, 0].min(), grid[:, 0].max(), 30)
-        b = np.linspace(grid[:, 1].min(), grid[:, 1].max(), 30)
-        aa, bb = np.meshgrid(a, b, indexing="ij")
-        zz = surrogate(np.column_stack([aa.ravel(), bb.ravel()])).reshape(aa.shape)
-        ax.plot_surface(aa, bb, zz, cmap="viridis", alpha=0.55, linewidth=0)
+        aa, bb = np.meshgrid(axes[0], axes[1], indexing="ij")
+        ax.plot_surface(aa, bb, u_fit, cmap="viridis", alpha=0.55, linewidth=0)
         ax.scatter(grid[:, 0], grid[:, 1], u, color="C3", s=12, label="Monte Carlo")
         ax.set_xlabel(f"{names[0]} / µm", fontsize=8)
         ax.set_ylabel(f"{names[1]} / µm", fontsize=8)
@@ -294,10 +287,7 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         fig = _figure(6.0, 3.4, left=0.12, right=0.98, bottom=0.15, top=0.97)
         ax = fig.add_subplot(1, 1, 1)
         x = grid[:, 0]
-        xs = np.linspace(x.min(), x.max(), 200)
-        full = np.repeat(grid[:1], 200, axis=0)
-        full[:, 0] = xs
-        ax.plot(xs, surrogate(full), "k-", lw=1.0, label="surrogate")
+        ax.plot(axes[0], u_fit, "k-", lw=1.0, label="surrogate")
         ax.plot(x, u, "C3o", ms=4, label="Monte Carlo")
         ax.set_xlabel(f"{names[0]} / µm")
         ax.set_ylabel(f"u({sw['output']}) / {label}")

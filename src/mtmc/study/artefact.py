@@ -1,8 +1,8 @@
 """Study kind ``artefact``: a fiducial-artefact study of Wang, Cheung and Kong (2022).
 
 The file is an artefact study (``docs/artefact.md``) with ``kind = "artefact"``: it is
-read by :func:`mtmc.artefact.study.loads_artefact_study` and run by
-:func:`mtmc.artefact.study.simulate` (the noise-free chain, Monte Carlo over the probing,
+read by :func:`mtmc.artefact.study.read_artefact_study` and run by
+:func:`mtmc.artefact.study.simulate_artefact` (the noise-free chain, Monte Carlo over the probing,
 CMM and repeatability noise, the GUM beside it). The result holds the tables of the
 paper — Table 2 per pose (``r_max``, ``r_avg`` of the measured and the modelled centres),
 the identified setup errors (eq. 18) — each with the Monte Carlo mean and ``u`` and the
@@ -34,17 +34,17 @@ class ArtefactKindStudy(Study):
     Attributes
     ----------
     study : ArtefactStudy
-        The validated study of :func:`mtmc.artefact.study.loads_artefact_study`.
+        The validated study of :func:`mtmc.artefact.study.read_artefact_study`.
     """
 
     kind = "artefact"
     study: Any
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
-        """Simulate the study (:func:`mtmc.artefact.study.simulate`) and tabulate it."""
-        from mtmc.artefact.study import simulate
+        """Simulate the study (:func:`mtmc.artefact.study.simulate_artefact`) and tabulate it."""
+        from mtmc.artefact.study import simulate_artefact
 
-        res = simulate(
+        res = simulate_artefact(
             self.study,
             trials=settings.trials,
             seed=settings.seed,
@@ -149,14 +149,14 @@ def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
 
 @register_kind("artefact", "a fiducial artefact probed at rotary poses (Wang, Cheung and Kong)")
 def load_artefact_kind(top: Fields) -> ArtefactKindStudy:
-    """Validate an ``artefact`` study file with :func:`mtmc.artefact.study.loads_artefact_study`."""
-    from mtmc.artefact.study import loads_artefact_study
+    """Validate an ``artefact`` study file (reader: :mod:`mtmc.artefact.study`)."""
+    from mtmc.artefact.study import read_artefact_study
 
-    src = top.source
-    study = loads_artefact_study(src.text, src.file, src.folder)
+    settings = RunSettings.read(top, default_trials=10_000)
+    study = read_artefact_study(top)
     return ArtefactKindStudy(
         title=study.title or "Fiducial artefact",
-        source=src,
-        settings=RunSettings(trials=study.trials, seed=study.seed),
+        source=top.source,
+        settings=settings,
         study=study,
     )

@@ -1,8 +1,9 @@
 """Study kinds ``graph`` and ``sweep``: a measurement graph (Stryczek) run by Monte Carlo.
 
-``graph``: each output place of the graph is a model of the graph's random inputs
-(:func:`mtmc.graph_model`), run by :func:`mtmc.monte_carlo` and by :func:`mtmc.gum`
-component by component, with the JCGM 101 §8 comparison. Points get their coverage
+``graph``: one Monte Carlo run of the graph for all its output places
+(:func:`mtmc.run_graph`), and the GUM once per output place with a vector result (each
+output is a model of the graph's random inputs, :func:`mtmc.graph_model`), reported
+component by component with the JCGM 101 §8 comparison. Points get their coverage
 ellipses in the coordinate planes; an axis (a ``line`` place) gets the ellipse of its
 location in the plane normal to it and of its direction (JCGM 102 §7.7; Stryczek Fig. 1).
 
@@ -23,12 +24,13 @@ from numpy.typing import NDArray
 
 from mtmc.document import Fields, check_number
 from mtmc.errors import MtmcError
+from mtmc.geometry.constructions import normal_plane_basis
 from mtmc.graph.model import Graph, Plan, check
 from mtmc.graph.places import SCALAR_TYPES
-from mtmc.graph.run import graph_model, random_inputs
+from mtmc.graph.run import graph_model, random_inputs, run_graph
 from mtmc.graph.sweep import Surrogate, apply_setting, sweep
 from mtmc.graph.toml_format import load
-from mtmc.graph.units import place_dimension
+from mtmc.graph.units import place_dimension, unit_of
 from mtmc.graph.values import PARTS
 from mtmc.study.base import (
     ProgressFn,
@@ -42,10 +44,9 @@ from mtmc.study.base import (
 )
 from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.gum import gum
-from mtmc.uncertainty.montecarlo import monte_carlo
 from mtmc.uncertainty.results import MonteCarloResult
 
-__all__ = ["GraphStudy", "SweepSpec", "SweepStudy", "component_names", "normal_plane_basis"]
+__all__ = ["GraphStudy", "SweepSpec", "SweepStudy", "component_names"]
 
 
 def component_names(place: str, type_: str) -> list[tuple[str, str]]:
@@ -83,36 +84,7 @@ def component_names(place: str, type_: str) -> list[tuple[str, str]]:
 
 
 def _unit(plan: Plan, place: str, part: str) -> str:
-    length, angle = place_dimension(plan, place, part)
-    names = []
-    if length:
-        names.append("mm" + (f"^{length}" if length != 1 else ""))
-    if angle:
-        names.append("rad" + (f"^{angle}" if angle != 1 else ""))
-    return "·".join(names) or "1"
-
-
-def normal_plane_basis(direction: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Two orthonormal columns spanning the plane normal to ``direction``, shape (3, 2).
-
-    The first column is the unit vector of the coordinate axis least aligned with
-    ``direction``, made normal to it; the second completes a right-handed set
-    ``(e1, e2, d)``.
-
-    Examples
-    --------
-    >>> normal_plane_basis(np.array([0.0, 0.0, 1.0])).T
-    array([[1., 0., 0.],
-           [0., 1., 0.]])
-    """
-    d = np.asarray(direction, dtype=np.float64)
-    d = d / np.linalg.norm(d)
-    e = np.zeros(3)
-    e[int(np.argmin(np.abs(d)))] = 1.0
-    e1 = e - d * (e @ d)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(d, e1)
-    return np.column_stack([e1, e2])
+    return unit_of(place_dimension(plan, place, part))
 
 
 @dataclass(frozen=True)
@@ -180,37 +152,39 @@ class GraphStudy(Study):
         n_grid = 0
         if self.sweep is not None:
             n_grid = int(np.prod([len(v) for v in self.sweep.vary.values()]))
-        total = settings.trials * len(self.outputs) + n_grid * (
-            self.sweep.trials if self.sweep else 0
+        total = settings.trials + n_grid * (self.sweep.trials if self.sweep else 0)
+        # one Monte Carlo of the whole graph for every output (each trial fires every
+        # transition once), then the GUM once per output, its vector result cut into the
+        # components the report shows
+        res = run_graph(
+            plan,
+            settings.trials,
+            settings.seed,
+            outputs=self.outputs,
+            keep=self.outputs,
+            progress=_offset(progress, 0, total),
+            **settings.parallel,
         )
-        for i, out in enumerate(self.outputs):
-            model, inputs = graph_model(plan, out)
-            step = _offset(progress, i * settings.trials, total)
-            mc = monte_carlo(
-                model,
-                inputs,
-                trials=settings.trials,
-                seed=settings.seed,
-                progress=step,
-                **settings.parallel,
-            )
-            vals = mc.values.reshape(mc.m, -1)
+        for out in self.outputs:
+            mc = res.places[out].result
+            vals = np.asarray(mc.samples, dtype=np.float64).reshape(res.trials, -1)
             if settings.samples:
-                samples[out] = mc.values
+                samples[out] = np.asarray(mc.samples)
+            model, inputs = graph_model(plan, out)
+            g = gum(model, inputs, p=settings.p)
             for j, (name, part) in enumerate(component_names(out, plan.types[out])):
-                comp = _component(model, vals.shape[1], j)
-                g = gum(comp, inputs, p=settings.p)
                 q_mc = MonteCarloResult(
-                    samples=vals[:, j], trials=mc.trials, seed=mc.seed, omitted=mc.omitted
+                    samples=vals[:, j], trials=res.trials, seed=res.seed, omitted=mc.omitted
                 )
-                quantities.append(quantity(name, _unit(plan, out, part), q_mc, g, settings))
+                g_j = g.component(j) if g.dim else g
+                quantities.append(quantity(name, _unit(plan, out, part), q_mc, g_j, settings))
             regions += self._regions(plan, out, vals, settings.p)
         extra: dict[str, Any] = {
             "graph": {"file": self.graph.file, "title": self.graph.title, "toml": self.graph_text}
         }
         tables: list[Table] = []
         if self.sweep is not None:
-            step = _offset(progress, settings.trials * len(self.outputs), total)
+            step = _offset(progress, settings.trials, total)
             sweep_d, table = self._sweep(settings, step)
             extra["sweep"] = sweep_d
             tables.append(table)
@@ -293,6 +267,7 @@ class GraphStudy(Study):
             "seed": sw.seed,
             "surrogate": _surrogate_dict(fit),
             "surrogate_no_intercept": _surrogate_dict(fit0),
+            "surface": _surface(fit, sw.grid, factor),
         }
         rows = tuple(
             (
@@ -317,20 +292,30 @@ class GraphStudy(Study):
         return d, table
 
 
+def _surface(fit: Surrogate, grid: NDArray[np.float64], factor: float) -> dict[str, Any]:
+    """The surrogate on a fine grid over the swept box, for the report to draw.
+
+    Two varied parameters: ``axes``, two arrays of 30 values, and ``u``, 30 × 30; otherwise
+    a curve along the first parameter (the others at the first grid point): ``axes``, one
+    array of 200 values, and ``u`` (200,). Parameters in mm, like ``grid``.
+    """
+    if grid.shape[1] == 2:
+        axes = [np.linspace(grid[:, i].min(), grid[:, i].max(), 30) for i in range(2)]
+        aa, bb = np.meshgrid(*axes, indexing="ij")
+        u = fit.predict(np.column_stack([aa.ravel(), bb.ravel()])).reshape(aa.shape)
+    else:
+        axes = [np.linspace(grid[:, 0].min(), grid[:, 0].max(), 200)]
+        full = np.repeat(grid[:1], 200, axis=0)
+        full[:, 0] = axes[0]
+        u = fit.predict(full)
+    return {"axes": [a * factor for a in axes], "u": u}
+
+
 @dataclass(frozen=True)
 class SweepStudy(GraphStudy):
     """A sweep of a graph without a full Monte Carlo run of its places (kind ``sweep``)."""
 
     kind = "sweep"
-
-
-def _component(model: Any, width: int, j: int) -> Any:
-    """Component ``j`` of a model returning ``(m, width)`` values, as a scalar model."""
-
-    def comp(**arrays: Any) -> NDArray[np.float64]:
-        return np.asarray(model(**arrays)).reshape(-1, width)[:, j]
-
-    return comp
 
 
 def _offset(progress: ProgressFn | None, before: int, total: int) -> ProgressFn | None:

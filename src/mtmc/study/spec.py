@@ -72,12 +72,25 @@ class RunSettings:
         return {"workers": self.workers, "executor": self.executor, "scheduler": self.scheduler}
 
     @classmethod
-    def read(cls, top: Fields, default_trials: int = 200_000) -> RunSettings:
-        """Read ``[run]`` (every key optional)."""
+    def read(
+        cls, top: Fields, default_trials: int = 200_000, extra: tuple[str, ...] = ()
+    ) -> RunSettings:
+        """Read ``[run]`` (every key optional): the one reader of the keys every study has.
+
+        Parameters
+        ----------
+        top : Fields
+            The top table of the study file.
+        default_trials : int
+            The trials of the kind when the file gives none.
+        extra : tuple of str
+            Keys of ``[run]`` that the kind reads itself (a verification's point set and
+            tracker position); any other key is refused.
+        """
         run = top.table("run", required=False)
         if run is None:
             return cls(trials=default_trials)
-        run.only(("trials", "seed", "p", "interval", "ndig", "samples"))
+        run.only(("trials", "seed", "p", "interval", "ndig", "samples", *extra))
         return cls(
             trials=run.integer("trials", default_trials, minimum=2),
             seed=run.integer("seed", None, minimum=0),

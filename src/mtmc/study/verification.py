@@ -1,7 +1,7 @@
 """Study kind ``verification``: a laser-tracker volumetric verification (Aguado et al.).
 
 The file is a verification study (``docs/verification.md``), read by
-:func:`mtmc.verification.study.loads_verification_study` and run by
+:func:`mtmc.verification.study.read_verification_study` and run by
 :func:`mtmc.verification.simulate.simulate`: the tracker noise is drawn by Monte Carlo, each
 trial identifies the machine's error functions from its readings, and the result gives
 the volumetric error before and after compensation (Aguado et al. 2017 §3, Fig. 5–6) and
@@ -21,7 +21,6 @@ import numpy as np
 from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
 from mtmc.study.spec import RunSettings, register_kind
-from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = ["VerificationKindStudy"]
 
@@ -33,7 +32,7 @@ class VerificationKindStudy(Study):
     Attributes
     ----------
     study : VerificationStudy
-        The validated study of :func:`mtmc.verification.study.loads_verification_study`.
+        The validated study of :func:`mtmc.verification.study.read_verification_study`.
     """
 
     kind = "verification"
@@ -42,7 +41,7 @@ class VerificationKindStudy(Study):
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Simulate the verification and tabulate it (module docstring)."""
         from mtmc.verification.identify import parameter_unit
-        from mtmc.verification.simulate import POINT_STATS, VE_NAMES, simulate
+        from mtmc.verification.simulate import POINT_STATS, VE_NAMES
         from mtmc.verification.visibility import study_visibility, visibility_warnings
 
         s = self.study
@@ -50,27 +49,16 @@ class VerificationKindStudy(Study):
         warnings = visibility_warnings(
             study_visibility(s, None, [s.default_tracker]), s.machine.axes
         )
-        mc = simulate(
-            ver,
-            settings.trials,
-            settings.seed,
-            repeatability=s.repeatability,
-            pose_u=s.pose_u,
-            reflector_u=s.reflector_u,
-            progress=progress,
-            **settings.parallel,
-        )
+        mc = s.simulate(settings.trials, settings.seed, progress=progress, **settings.parallel)
         quantities = tuple(
             quantity(
                 f"volumetric_error.{name}",
                 "mm",
-                MonteCarloResult(
-                    samples=np.asarray(mc.ve_samples)[:, i], trials=mc.trials, seed=mc.seed
-                ),
+                mc.ve_result(name),
                 None,
                 settings,
             )
-            for i, name in enumerate(VE_NAMES)
+            for name in VE_NAMES
         )
         ref = np.asarray(mc.reference.estimate, dtype=np.float64)[0]
         coef_rows = tuple(
@@ -146,14 +134,14 @@ class VerificationKindStudy(Study):
 
 @register_kind("verification", "a laser-tracker volumetric verification (Aguado et al.)")
 def load_verification_kind(top: Fields) -> VerificationKindStudy:
-    """Validate a ``verification`` study file with :mod:`mtmc.verification.study`."""
-    from mtmc.verification.study import loads_verification_study
+    """Validate a ``verification`` study file (reader: :mod:`mtmc.verification.study`)."""
+    from mtmc.verification.study import RUN_KEYS, read_verification_study
 
-    src = top.source
-    study = loads_verification_study(src.text, file=src.file, folder=src.folder)
+    settings = RunSettings.read(top, default_trials=1000, extra=RUN_KEYS)
+    study = read_verification_study(top)
     return VerificationKindStudy(
         title=study.title or "Laser-tracker verification",
-        source=src,
-        settings=RunSettings(trials=study.trials, seed=study.seed),
+        source=top.source,
+        settings=settings,
         study=study,
     )

@@ -59,6 +59,7 @@ __all__ = [
     "CompensationTable",
     "ErrorCurve",
     "compensation_table",
+    "measured_grid",
     "etalon_text",
     "isg_csv_text",
     "load_compensation",
@@ -252,6 +253,34 @@ class CompensationTable:
 
 
 ErrorSource = ErrorFunction | float | Callable[[NDArray[np.float64]], Any]
+
+
+def measured_grid(model: ErrorModel, q: npt.ArrayLike) -> dict[str, NDArray[np.float64]]:
+    """The grid a compensation table of a verification is tabulated on: the measured positions.
+
+    For each axis that carries an identified error of ``model``, the distinct commanded
+    positions of that axis in the verification ``q`` (sorted); an axis without an error of
+    the model gets no grid.
+
+    Parameters
+    ----------
+    model : ErrorModel
+        The identified model.
+    q : array_like, shape (N, n_axes)
+        The commanded axis positions of the verification (mm, rad).
+
+    Examples
+    --------
+    >>> from mtmc.kinematics import ErrorModel, LegendreSeries, Machine
+    >>> exx = LegendreSeries([0.0, 0.0], 0.0, 100.0)
+    >>> m = ErrorModel(Machine.from_topology("XFYZ"), {"EXX": exx})
+    >>> measured_grid(m, [[0.0, 0.0, 0.0], [50.0, 0.0, 0.0], [50.0, 20.0, 0.0]])
+    {'X': array([ 0., 50.])}
+    """
+    qq = np.asarray(q, dtype=np.float64)
+    axes = model.machine.axes
+    used = {model.machine.error_term(n).axis for n in model.error_names}
+    return {ax: np.unique(qq[:, i]) for i, ax in enumerate(axes) if ax in used}
 
 
 def compensation_table(

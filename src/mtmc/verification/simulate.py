@@ -79,20 +79,23 @@ from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
 from mtmc.frozen import frozen_floats
+from mtmc.geometry.transforms import (
+    cross_matrix,
+    matrix_from_rotation_vector,
+    rotation_vector_from_matrix,
+)
 from mtmc.instruments.laser_tracker import LaserTracker
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.uncertainty.distributions import IID, Normal
 from mtmc.uncertainty.gum import Validation, gum, validate
 from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.results import MonteCarloResult
 from mtmc.verification.identify import (
     POSE_NAMES,
     Identification,
     _error_basis,
     _problem,
-    _skew,
-    expmap,
     identify,
-    logmap,
     ve_stats,
 )
 
@@ -348,7 +351,7 @@ class VerificationModel:
         t = np.broadcast_to(self.t_nom, (m, 3))
         if pose is not None:
             dp = pose * self.pose_u
-            R = self.R_nom @ expmap(dp[:, :3])
+            R = self.R_nom @ matrix_from_rotation_vector(dp[:, :3])
             t = self.t_nom + dp[:, 3:]
         return np.einsum("mij,mni->mnj", R, p - t[:, None, :])
 
@@ -375,16 +378,16 @@ class VerificationModel:
             d = -r.reshape(m, 3 * N) @ self.A.T
             est += d
             if self.pose:
-                R = R @ expmap(d[:, k : k + 3])
+                R = R @ matrix_from_rotation_vector(d[:, k : k + 3])
                 t = t + d[:, k + 3 : k + 6]
         for _ in range(self.refine):  # exact steps, all trials at once
             d = -self.gradient(est, R, t, x_meas) @ self.Hinv
             est[:, :k] += d[:, :k]
             if self.pose:
-                R = R @ expmap(d[:, k : k + 3])
+                R = R @ matrix_from_rotation_vector(d[:, k : k + 3])
                 t = t + d[:, k + 3 : k + 6]
         if self.pose:  # the pose as reported by identify: Log(R0^T R), t - t0
-            est[:, k : k + 3] = logmap(np.swapaxes(self.R_nom, -1, -2) @ R)
+            est[:, k : k + 3] = rotation_vector_from_matrix(np.swapaxes(self.R_nom, -1, -2) @ R)
             est[:, k + 3 : k + 6] = t - self.t_nom
         p = self.p_fit + ((est[:, :k] - self.est0[:k]) @ Jt).reshape(m, N, 3)
         r = (p - t[:, None, :]) @ R - x_meas
@@ -490,6 +493,37 @@ class VerificationGUM:
     point_u: _F = field(repr=False)
 
 
+def _gum_propagate(A: _F, C: _F, G: _F, extra: Sequence[_F] = ()) -> tuple[_F, _F]:
+    """The GUM covariance of identified parameters and of the points they compensate.
+
+    Parameters
+    ----------
+    A : ndarray, shape (p, 3N)
+        Sensitivity of the parameters to the readings (``J⁺`` at the solution).
+    C : ndarray, shape (N, 3, 3)
+        Covariance of each reading, mm².
+    G : ndarray, shape (Ne, 3, p)
+        Sensitivity of the compensated points (tracker frame) to the parameters.
+    extra : sequence of ndarray, shape (N, 3, k)
+        Sensitivities of the readings to further independent inputs of unit variance.
+
+    Returns
+    -------
+    cov : ndarray, shape (p, p)
+        ``A Σ Aᵀ`` with ``Σ`` the block-diagonal ``C`` plus ``Σ_e E Eᵀ`` of each ``extra``.
+    point_cov : ndarray, shape (Ne, 3, 3)
+        ``G cov Gᵀ`` at each point, mm².
+    """
+    N = C.shape[0]
+    A3 = A.reshape(-1, N, 3)
+    cov = np.einsum("pni,nij,qnj->pq", A3, C, A3)
+    for E in extra:
+        AG = np.einsum("pni,nik->pk", A3, E)
+        cov = cov + AG @ AG.T
+    pc = np.einsum("nik,kl,njl->nij", G, cov, G)
+    return cov, pc
+
+
 def gum_verification(vm: VerificationModel) -> VerificationGUM:
     """The GUM covariance of the identified parameters and compensated points.
 
@@ -505,25 +539,20 @@ def gum_verification(vm: VerificationModel) -> VerificationGUM:
     C = vm.noise.covariance(vm.x_true)  # (N, 3, 3)
     if vm.repeatability > 0:
         C = C + vm.repeatability**2 * np.eye(3)
-    A3 = vm.A.reshape(-1, N, 3)
-    cov = np.einsum("pni,nij,qnj->pq", A3, C, A3)
     extra = []
     if np.any(vm.pose_u > 0):
         G = np.concatenate(
-            [_skew(vm.x_true), -np.broadcast_to(vm.R_nom.T, (N, 3, 3))], axis=-1
+            [cross_matrix(vm.x_true), -np.broadcast_to(vm.R_nom.T, (N, 3, 3))], axis=-1
         )  # (N, 3, 6)
         extra.append(G * vm.pose_u)
     if vm.reflector_u > 0:
         extra.append(np.einsum("ji,njk->nik", vm.R_nom, vm.J_tool) * vm.reflector_u)
-    for G in extra:
-        AG = np.einsum("pni,nik->pk", A3, G)
-        cov = cov + AG @ AG.T
     G = np.einsum("ji,njk->nik", vm.R_ref, vm.Jpe)  # R̂ᵀ ∂p/∂θ at the evaluation points
     if vm.pose:
         xe = np.einsum("ji,nj->ni", vm.R_ref, vm.pe_fit - vm.t_ref)
         Ne = xe.shape[0]
-        G = np.concatenate([G, _skew(xe), -np.broadcast_to(vm.R_ref.T, (Ne, 3, 3))], axis=-1)
-    pc = np.einsum("nik,kl,njl->nij", G, cov, G)
+        G = np.concatenate([G, cross_matrix(xe), -np.broadcast_to(vm.R_ref.T, (Ne, 3, 3))], axis=-1)
+    cov, pc = _gum_propagate(vm.A, C, G, extra)
     return VerificationGUM(
         vm.names,
         frozen_floats(cov),
@@ -584,10 +613,21 @@ class VerificationMC:
     compensated_point_mean: _F = field(repr=False)
     compensated_point_u: _F = field(repr=False)
 
-    def ve(self, which: str) -> tuple[float, float]:
-        """``(estimate, u)`` of one of :data:`VE_NAMES`."""
+    def ve_result(self, which: str) -> MonteCarloResult:
+        """The Monte Carlo result of one of :data:`VE_NAMES`, from its kept samples.
+
+        The one route from the samples to a statistic's estimate, ``u`` and intervals:
+        :meth:`ve`, ``mtmc verify simulate`` and the study's quantities all read it.
+        """
         i = VE_NAMES.index(which)
-        return float(self.ve_estimate[i]), float(self.ve_u[i])
+        return MonteCarloResult(
+            samples=np.asarray(self.ve_samples)[:, i], trials=self.trials, seed=self.seed
+        )
+
+    def ve(self, which: str) -> tuple[float, float]:
+        """``(estimate, u)`` of one of :data:`VE_NAMES` (:meth:`ve_result`)."""
+        r = self.ve_result(which)
+        return r.estimate, r.u
 
     def point_mean_ve(self, which: str) -> dict[str, tuple[float, float]]:
         """Max, mean and min over the points of each point's mean error, with their ``u``.

@@ -64,13 +64,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import Fields, parse_toml, read_text
+from mtmc.document import Fields
 from mtmc.errors import InputError, MtmcError
 from mtmc.instruments.laser_tracker import LaserTracker, TrackerLimits, TrackerNoise
 from mtmc.kinematics.functions import (
@@ -81,9 +80,9 @@ from mtmc.kinematics.functions import (
 )
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.parameters import ErrorModel
-from mtmc.verification.simulate import Verification
+from mtmc.verification.simulate import Verification, VerificationMC, simulate
 
-__all__ = ["PointSet", "VerificationStudy", "load_verification_study", "loads_verification_study"]
+__all__ = ["RUN_KEYS", "PointSet", "VerificationStudy", "read_verification_study"]
 
 _F = NDArray[np.float64]
 
@@ -124,8 +123,6 @@ class VerificationStudy:
     trackers: Mapping[str, LaserTracker]
     limits: TrackerLimits | None
     points: Mapping[str, PointSet]
-    trials: int
-    seed: int | None
     default_points: str
     default_tracker: str
     repeatability: float = 0.0
@@ -159,6 +156,42 @@ class VerificationStudy:
             self.truth,
             pose=self.pose,
             fixed=self.fixed,
+        )
+
+    def simulate(
+        self,
+        trials: int,
+        seed: int | None = None,
+        *,
+        points: str | None = None,
+        tracker: str | None = None,
+        progress: Any = None,
+        **parallel: Any,
+    ) -> VerificationMC:
+        """The Monte Carlo of whole verifications of this study (:func:`simulate`).
+
+        The study's repeatability, reflector ``u`` and, where the pose is not identified,
+        the pose's ``u`` are the uncertainties drawn besides the tracker's noise; ``mtmc
+        run`` and ``mtmc verify simulate`` both run this.
+
+        Parameters
+        ----------
+        trials, seed
+            As :func:`simulate`.
+        points, tracker : str, optional
+            A point set and a tracker position of the study (default: those of ``[run]``).
+        progress, **parallel
+            As :func:`simulate` (``workers``, ``executor``, ``scheduler``).
+        """
+        return simulate(
+            self.verification(points, tracker),
+            trials,
+            seed,
+            repeatability=self.repeatability,
+            reflector_u=self.reflector_u,
+            pose_u=None if self.pose else self.pose_u,
+            progress=progress,
+            **parallel,
         )
 
 
@@ -436,18 +469,24 @@ def _point_sets(top: Fields, n_axes: int) -> dict[str, PointSet]:
     return points
 
 
+#: The keys of ``[run]`` a verification study adds to those of every study (trials, seed,
+#: ...), which the study layer reads (:meth:`mtmc.study.spec.RunSettings.read`).
+RUN_KEYS = ("points", "tracker", "repeatability_um", "reflector_um", "pose_u")
+
+
 def _run(
-    top: Fields, points: Mapping[str, PointSet], trackers: Mapping[str, Any]
+    top: Fields, points: Mapping[str, PointSet], trackers: Mapping[str, Any], pose: bool
 ) -> dict[str, Any]:
-    """The optional ``[run]`` table, as keyword arguments of :class:`VerificationStudy`."""
+    """The verification's keys of ``[run]`` (:data:`RUN_KEYS`), as keyword arguments."""
     rf = top.table("run", required=False) or Fields(top.source, {}, ("run",))
-    rf.only(("trials", "seed", "points", "tracker", "repeatability_um", "reflector_um", "pose_u"))
     dp = rf.text("points", next(iter(points)), choices=tuple(points))
     dt = rf.text("tracker", next(iter(trackers)), choices=tuple(trackers))
     pose_u = tuple(_vector(rf, "pose_u", 6).tolist()) if "pose_u" in rf.data else (0.0,) * 6
+    if pose and any(u > 0.0 for u in pose_u):
+        raise rf.error(
+            "give pose_u only when the pose is not identified ([model] pose = false)", "pose_u"
+        )
     return {
-        "trials": rf.integer("trials", 1000, minimum=2),
-        "seed": rf.integer("seed", None, minimum=0) if "seed" in rf.data else None,
         "default_points": dp,
         "default_tracker": dt,
         "repeatability": rf.number("repeatability_um", 0.0, low=0.0) * 1e-3,
@@ -456,21 +495,17 @@ def _run(
     }
 
 
-def loads_verification_study(
-    text: str, *, file: str = "<study>", folder: Path | None = None
-) -> VerificationStudy:
-    """Read a verification study from TOML text.
+def read_verification_study(top: Fields) -> VerificationStudy:
+    """The verification study of a parsed study file (:func:`mtmc.document.parse_toml`).
 
     One reader per table, in file order: ``[machine]``, ``[model]``, ``[truth]``,
-    ``[tracker]`` (:func:`read_trackers`), ``[points]``, ``[run]``.
+    ``[tracker]`` (:func:`read_trackers`), ``[points]``, and the keys of ``[run]`` that
+    are the verification's (:data:`RUN_KEYS`; the study layer reads the others).
 
     Parameters
     ----------
-    text : str
-    file : str
-        Name used in messages.
-    folder : Path, optional
-        Folder of the file.
+    top : Fields
+        The top table of the file.
 
     Returns
     -------
@@ -478,10 +513,9 @@ def loads_verification_study(
 
     Raises
     ------
-    InputError, ParseError
+    InputError
         Naming the file, line and field of the first bad entry.
     """
-    top = parse_toml(text, file, folder)
     top.only(
         (
             "title",
@@ -511,7 +545,7 @@ def loads_verification_study(
     assert noise is not None
     points = _point_sets(top, machine.n_axes)
     return VerificationStudy(
-        file=file,
+        file=top.source.file,
         title=title,
         note=note,
         machine=machine,
@@ -524,26 +558,5 @@ def loads_verification_study(
         limits=limits,
         points=points,
         euler=tf.text("euler", "xyz"),
-        **_run(top, points, trackers),
-    )
-
-
-def load_verification_study(path: str | Path) -> VerificationStudy:
-    """Read a verification study file.
-
-    Parameters
-    ----------
-    path : str or Path
-
-    Returns
-    -------
-    VerificationStudy
-
-    Raises
-    ------
-    InputError
-        If the file cannot be read, or as :func:`loads_verification_study`.
-    """
-    return loads_verification_study(
-        read_text(path, "study file"), file=str(path), folder=Path(path).parent
+        **_run(top, points, trackers, pose),
     )
