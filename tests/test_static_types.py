@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.graph import PlaceSummary
-from mtmc.report import report
+from mtmc.report import render_report
 from mtmc.uncertainty import MonteCarloResult, MonteCarloResults, monte_carlo
 
 
@@ -37,9 +37,9 @@ def named(x: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
 inputs = {"x": "normal(0, 1)"}
 assert_type(monte_carlo(one, inputs, trials=10), MonteCarloResult)
 assert_type(monte_carlo(named, inputs, trials=10), MonteCarloResults)
-assert_type(report(Path("folder")), Path)
-assert_type(report({"a": 1}), str)
-assert_type(report({"a": 1}, "page.html"), Path)
+assert_type(render_report(Path("folder")), Path)
+assert_type(render_report({"a": 1}), str)
+assert_type(render_report({"a": 1}, "page.html"), Path)
 
 
 def place(s: PlaceSummary) -> None:

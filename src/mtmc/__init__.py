@@ -29,10 +29,8 @@ from mtmc.errors import *  # noqa: F403
 
 __version__ = "0.1.0"
 
-# Imported after the version, which the result folders record. ``mtmc.report`` is the
-# function that renders a result (the module stays importable as ``mtmc.report``); it is
-# bound here, before any later import of the module could bind the name to the module.
-from mtmc.report import report as report
+# Imported after the version, which the result folders record.
+from mtmc.report import render_report as render_report
 
 #: The names resolved on first access, and the subpackage each comes from.
 _NAMES: dict[str, str] = {
@@ -77,7 +75,7 @@ _NAMES: dict[str, str] = {
 __all__: list[str] = [
     "__version__",
     "errors",
-    "report",
+    "render_report",
     *errors.__all__,
     "load_study",
     "loads_study",

@@ -138,15 +138,15 @@ def test_render_refuses_what_is_not_a_result(tmp_path):
 
 
 def test_report_of_a_result_object_equals_the_folder(tmp_path):
-    from mtmc import report
+    from mtmc import render_report
 
     study = load_study(STUDIES / "mass_calibration.toml")
     result = study.run(trials=2000, seed=1)
     folder = write_result(result, tmp_path / "m")
-    page = report(result)
+    page = render_report(result)
     assert page.count("<svg") == (folder / "report.html").read_text().count("<svg") == 2
-    assert report(folder) == folder / "report.html"
-    assert report(result, tmp_path / "page.html").read_text(encoding="utf-8") == page
+    assert render_report(folder) == folder / "report.html"
+    assert render_report(result, tmp_path / "page.html").read_text(encoding="utf-8") == page
 
 
 def _decimals(text):

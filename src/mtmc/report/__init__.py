@@ -19,7 +19,7 @@ from typing import Any, Protocol, overload
 from mtmc.errors import InputError, MtmcError
 from mtmc.io import write_text_atomic
 
-__all__ = ["fmt", "html", "render", "render_index", "report"]
+__all__ = ["fmt", "html", "render", "render_index", "render_report"]
 
 
 def fmt(x: Any, digits: int = 6) -> str:
@@ -191,18 +191,18 @@ class _HasToDict(Protocol):
 
 
 @overload
-def report(source: str | Path, path: None = None) -> Path: ...
+def render_report(source: str | Path, path: None = None) -> Path: ...
 
 
 @overload
-def report(source: Mapping[str, Any] | _HasToDict, path: None = None) -> str: ...
+def render_report(source: Mapping[str, Any] | _HasToDict, path: None = None) -> str: ...
 
 
 @overload
-def report(source: Mapping[str, Any] | _HasToDict, path: str | Path) -> Path: ...
+def render_report(source: Mapping[str, Any] | _HasToDict, path: str | Path) -> Path: ...
 
 
-def report(
+def render_report(
     source: str | Path | Mapping[str, Any] | _HasToDict, path: str | Path | None = None
 ) -> Path | str:
     """Render a result: a result folder, or a result object (anything with ``to_dict()``).
