@@ -613,3 +613,26 @@ def test_live_run_reports_a_failed_run_at_its_transition():
 def test_check_payload_accepts_a_view_of_the_file():
     view = graph_json((GRAPHS / "bcs_origin.toml").read_text())
     assert check_payload(copy.deepcopy(view), view) == view
+
+
+def test_the_summary_gives_the_coverage_ellipsoid_of_a_point(ball):
+    # JCGM 102 §7.7.2: k² is the q-th smallest squared Mahalanobis distance of the trials
+    # from their mean (q = ceil(p M)), the semi-axes k √λ of the covariance; recomputed here
+    # from the same 2^14 RQMC trials with NumPy alone
+    from mtmc.graph import run_graph
+    from mtmc.workbench.compute import LIVE_SEED, LIVE_TRIALS
+
+    client, _, path = ball
+    out = _post(client, "api/run", {"seq": 1, "graph": _view(client), "selected": "p"}).json()
+    (region,) = out["summary"]["regions"]
+    assert region["unit"] == "mm"
+    res = run_graph(load_graph(path), LIVE_TRIALS, LIVE_SEED, keep=["p"], sampling="sobol")
+    x = np.asarray(res.places["p"].result.samples)
+    d = x - x.mean(axis=0)
+    cov = d.T @ d / (len(x) - 1)
+    m2 = np.einsum("ri,ij,rj->r", d, np.linalg.inv(cov), d)
+    k = np.sqrt(np.sort(m2)[int(np.ceil(0.95 * len(x))) - 1])
+    want = np.sort(k * np.sqrt(np.linalg.eigvalsh(cov)))[::-1]
+    assert region["k"] == pytest.approx(k, abs=1e-3)
+    # through an eigendecomposition: to the conditioning of the covariance (κ ≈ 2 here)
+    np.testing.assert_allclose(region["semi_axes_value"], want, rtol=1e-9)

@@ -302,7 +302,61 @@ def _summary(
                 }
             rows.append(row)
             col += 1
-    return {"place": name, "type": s.type, "p": P, "trials": res.trials, "components": rows}
+    return {
+        "place": name,
+        "type": s.type,
+        "p": P,
+        "trials": res.trials,
+        "components": rows,
+        "regions": _regions(plan, s.type, np.asarray(mc.samples), name),
+    }
+
+
+def _regions(plan: Plan, type_: str, values: Any, name: str) -> list[dict[str, Any]]:
+    """The coverage regions of a point, direction, line or circle (JCGM 102 §7.7).
+
+    A point or vector: its ellipsoid in space; a direction: the ellipse of its tilt in the
+    plane normal to it; a line or circle: the ellipse of its point (centre) in the plane
+    normal to its direction (normal), and of the tilt of that direction, as the report
+    draws them (:mod:`mtmc.study.graph`). Semi-axes in the file's unit (rad for a tilt),
+    the factor ``k`` of the Monte Carlo region (JCGM 102 §7.7.2).
+    """
+    from mtmc.geometry.constructions import normal_plane_basis
+    from mtmc.uncertainty.results import MonteCarloResult
+
+    v = np.asarray(values, dtype=np.float64)
+    if v.ndim != 2 or v.shape[0] < 3:
+        return []
+    length = plan.graph.units
+    factor = plan.graph.factor
+    sets: list[tuple[str, Any, str, float]] = []
+    if type_ in ("point", "vector"):
+        sets.append((f"{name} in space", v[:, 0:3], length, factor))
+    elif type_ == "direction":
+        basis = normal_plane_basis(v[:, 0:3].mean(axis=0))
+        sets.append((f"tilt of {name}", v[:, 0:3] @ basis, "rad", 1.0))
+    elif type_ in ("line", "circle"):
+        basis = normal_plane_basis(v[:, 3:6].mean(axis=0))
+        first, second = ("point", "direction") if type_ == "line" else ("centre", "normal")
+        sets.append((f"{first} of {name}, normal to it", v[:, 0:3] @ basis, length, factor))
+        sets.append((f"tilt of the {second} of {name}", v[:, 3:6] @ basis, "rad", 1.0))
+    out = []
+    for label, xs, unit, scale in sets:
+        try:
+            ell = MonteCarloResult.from_samples(xs, seed=None).coverage_ellipsoid(P)
+        except MtmcError:  # a singular covariance: no region
+            continue
+        semi = np.sort(np.asarray(ell.semi_axes))[::-1] / scale
+        out.append(
+            {
+                "region": label,
+                "unit": unit,
+                "k": round(float(ell.k), 3),
+                "semi_axes": [at_place(a, a, the_u=True) for a in semi],
+                "semi_axes_value": [float(a) for a in semi],
+            }
+        )
+    return out
 
 
 def _budget(g: GumResult, scale: float) -> list[dict[str, Any]]:

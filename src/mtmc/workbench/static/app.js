@@ -333,6 +333,13 @@ function showSummary(s) {
   }
   t.append(body);
   box.append(t);
+  for (const r of s.regions || []) {
+    const e = document.createElement("p");
+    e.className = "hint";
+    e.textContent = `${Math.round(100 * s.p)} % coverage region, ${r.region}: semi-axes ` +
+      `${r.semi_axes.join(", ")} ${r.unit} (k = ${r.k}, JCGM 102)`;
+    box.append(e);
+  }
   const first = s.components.find((c) => c.gum && c.gum.budget.length);
   if (first) {
     const b = document.createElement("p");
