@@ -41,6 +41,7 @@ import numpy as np
 
 from mtmc import MultivariateNormal, Normal, Uniform, expression, monte_carlo
 from mtmc.graph import check_graph, load_graph, run_graph
+from mtmc.uncertainty.heap import keep_heap
 from mtmc.uncertainty.tolerance import numerical_tolerance
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -193,6 +194,7 @@ def _sig2(x: float) -> str:
 
 
 def main() -> None:
+    keep_heap()  # as the mtmc command does when it starts
     ap = argparse.ArgumentParser()
     ap.add_argument("cases", nargs="*", default=[*CASES, "axis_c"])
     ap.add_argument("--seeds", type=int, default=12)

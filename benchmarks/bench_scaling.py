@@ -26,6 +26,7 @@ import numpy as np
 from mtmc.graph import load_graph
 from mtmc.graph.sweep import sweep
 from mtmc.parallel import local_cluster
+from mtmc.uncertainty.heap import keep_heap
 from mtmc.uncertainty.montecarlo import monte_carlo
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,6 +46,7 @@ def timed(fn):
 
 
 def main() -> None:
+    keep_heap()  # as the mtmc command does when it starts
     import distributed
 
     scale = float(sys.argv[1]) if len(sys.argv) > 1 else 1.0

@@ -26,6 +26,7 @@ import numpy as np
 
 import mtmc
 from mtmc.uncertainty import MonteCarloResult, Normal, Uniform, monte_carlo
+from mtmc.uncertainty.heap import keep_heap
 
 M = 10**6
 REPEAT = 5
@@ -149,6 +150,7 @@ def big_run(m: int) -> None:
 
 
 def main() -> int:
+    keep_heap()  # as the mtmc command does when it starts
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--big", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--trials", type=int, default=M)

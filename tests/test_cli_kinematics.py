@@ -57,9 +57,17 @@ def test_draw(tmp_path: Path) -> None:
     f = tmp_path / "chain.svg"
     assert main(["kinematics", "draw", "wBZfXYCt", "-o", str(f)]) == 0
     root = ET.fromstring(f.read_text())
-    groups = [g for g in root.iter("{http://www.w3.org/2000/svg}g") if "axis" in g.get("class", "")]
-    assert [g.get("data-axis") for g in groups] == ["B", "Z", "X", "Y", "C"]
-    assert [g.get("class") for g in groups][:2] == ["axis rotary part", "axis linear part"]
+    ids = [g.get("id", "") for g in root.iter("{http://www.w3.org/2000/svg}g")]
+    assert [i for i in ids if i.startswith("axis-")] == [
+        "axis-B-rotary-part",
+        "axis-Z-linear-part",
+        "axis-X-linear-tool",
+        "axis-Y-linear-tool",
+        "axis-C-rotary-tool",
+    ]
+    texts = [t.text for t in root.iter("{http://www.w3.org/2000/svg}text")]
+    assert texts[0] == "wBZfXYCt  (ZBFXYC)"
+    assert {"B", "about y, part", "Z", "along z, part", "C", "about z, tool"} <= set(texts)
 
 
 def test_errors_are_one_line(capsys) -> None:  # type: ignore[no-untyped-def]

@@ -46,7 +46,7 @@ ALLOWED: dict[str, set[str]] = {
         "verification",
         "version",
     },
-    "workbench": {"graph", "report", "study", "uncertainty"},
+    "workbench": {"geometry", "graph", "report", "study", "uncertainty"},
     "demo": {"report", "study"},
     "cli": {
         "artefact",

@@ -13,12 +13,14 @@ from mtmc.artefact.analysis import analyse, rigid_fit_residuals
 from mtmc.artefact.gravity import gravity_effect, read_gravity
 from mtmc.errors import InputError
 
+# Table 1 of the paper (tests/reference/wang2022/table1.csv): the calibrated ball centres, mm
 TABLE1 = [
-    (59.31108, -0.25560, 14.99509),
-    (-58.74790, 0.864597, 14.29131),
-    (-59.13960, 59.79868, 19.31120),
-    (59.49720, 59.29094, 24.40756),
-    (28.48006, 59.94329, 24.75141),
+    tuple(row)
+    for row in np.loadtxt(
+        Path(__file__).resolve().parents[1] / "reference" / "wang2022" / "table1.csv",
+        delimiter=",",
+        skiprows=1,
+    ).tolist()
 ]
 
 

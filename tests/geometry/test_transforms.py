@@ -12,13 +12,16 @@ from mtmc.errors import DegenerateGeometryError, InputError
 from mtmc.geometry.transforms import (
     apply_htm,
     axis_angle_from_matrix,
+    cross_matrix,
     euler_from_matrix,
     htm,
     htm_inverse,
     matrix_from_axis_angle,
     matrix_from_euler,
+    matrix_from_rotation_vector,
     quaternion_from_matrix,
     rotate_about_axis,
+    rotation_vector_from_matrix,
     rotation_x,
     rotation_y,
     rotation_z,
@@ -110,6 +113,29 @@ def test_axis_angle_batched_and_near_pi() -> None:
     ax0, th0 = axis_angle_from_matrix(np.eye(3))
     np.testing.assert_array_equal(ax0, [0.0, 0.0, 1.0])
     assert th0 == 0.0
+
+
+def test_rotation_vector_maps_match_scipy_and_invert_each_other() -> None:
+    rng = np.random.default_rng(np.random.SeedSequence(17))
+    phi = rng.normal(size=(500, 3))
+    phi /= np.maximum(1.0, np.linalg.norm(phi, axis=-1, keepdims=True) / 3.0)  # below pi
+    phi[:5] = 0.0
+    phi[5:200] *= 10.0 ** rng.uniform(-9.0, -3.0, size=(195, 1))
+    R = matrix_from_rotation_vector(phi)
+    np.testing.assert_allclose(R, Rotation.from_rotvec(phi).as_matrix(), atol=1e-15)
+    np.testing.assert_array_equal(R[:5], np.broadcast_to(np.eye(3), (5, 3, 3)))
+    np.testing.assert_allclose(rotation_vector_from_matrix(R), phi, rtol=1e-9, atol=1e-15)
+    # below 1e-4 rad the series: no step between it and the closed form at the switch
+    below, above = matrix_from_rotation_vector([[1e-4 * (1.0 - 1e-12), 0.0, 0.0], [1e-4, 0, 0]])
+    np.testing.assert_allclose(below, above, atol=1e-16)
+
+
+def test_cross_matrix_is_the_cross_product() -> None:
+    rng = np.random.default_rng(np.random.SeedSequence(19))
+    v, u = rng.normal(size=(2, 40, 3))
+    K = cross_matrix(v)
+    np.testing.assert_allclose(np.einsum("mij,mj->mi", K, u), np.cross(v, u), atol=1e-15)
+    np.testing.assert_array_equal(K, -np.swapaxes(K, -1, -2))
 
 
 def test_quaternion_matches_scipy() -> None:

@@ -12,6 +12,7 @@ from scipy import stats
 
 from mtmc.errors import DistributionError
 from mtmc.uncertainty.distributions import (
+    IID,
     Arcsine,
     Constant,
     CurvilinearTrapezoid,
@@ -280,6 +281,49 @@ def test_parse_errors(text, fragments):
     msg = str(exc.value)
     for frag in fragments:
         assert frag in msg, msg
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("normal(007, 1.e5)", Normal(7, 1e5)),  # numbers as written, not as Python reads them
+        ("normal(-.5,\n +2E-3)", Normal(-0.5, 2e-3)),
+        ("\tnormal(0,\u00a01)  ", Normal(0, 1)),
+        ("iid(base=normal(0, 1), k=2)", IID(Normal(0, 1), 2)),
+        ("mvnormal([0, 1], [[1, 0], [0, 1]])", MultivariateNormal([0, 1], [[1, 0], [0, 1]])),
+    ],
+)
+def test_forms_python_would_read_otherwise(text, expected):
+    assert parse_distribution(text) == expected
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("normal(0, 1,)", "expected a number or a list, got ')'"),
+        ("normal((0), 1)", "expected a number or a list, got '('"),
+        ("normal(0x10, 1)", "expected ',' or ')', got 'x10'"),
+        ("normal(1_000, 1)", "expected ',' or ')', got '_000'"),
+        ("normal(0, 1) # note", "unexpected character '#'"),
+        ("normal('0', 1)", 'unexpected character "\'"'),
+        ("normal(0, 1)[0]", "unexpected '[' after the closing ')'"),
+        ("normal(None, 1)", "unknown distribution 'None'"),
+        ("__import__('os')", 'unexpected character "\'"'),
+        ("normal(0, mean=1, 2)", "positional parameter after a keyword parameter"),
+        ("t(9, loc=1, loc=2)", "parameter 'loc' given twice"),
+        ("iid(normal, 2)", "expected '(', got ','"),
+        ("normal(0, [1, 2", "expected ',' or ']', got end of text"),
+        ("[1, 2]", "column 1: expected a distribution name, got '['"),
+        ("t(loc=1)", "t is missing parameter(s) df (t(df, loc, scale))"),
+        ("normal([], 1)", "field mean: normal: expected a finite number, got []"),
+        # deeper than Python's parser goes: refused, not a crash
+        ("  constant(" + "[" * 250 + "1" + "]" * 250 + ")", "column 211: syntax error in"),
+    ],
+)
+def test_what_python_reads_but_a_distribution_is_not(text, message):
+    with pytest.raises(DistributionError) as exc:
+        parse_distribution(text)
+    assert message in str(exc.value)
 
 
 def test_parse_error_names_file_line_field():

@@ -4,6 +4,8 @@ Welch–Satterthwaite vs JCGM 100 H.1, correlated inputs vs C U Cᵀ, one batche
 from __future__ import annotations
 
 import math
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,9 +22,23 @@ from mtmc import (
     Uniform,
     expression,
     monte_carlo,
+    parse_distribution,
     validate,
 )
+from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.gum import GumResult, coverage_factor, gum, welch_satterthwaite
+
+REFERENCE = Path(__file__).resolve().parents[1] / "reference"
+
+
+def gauge_block_inputs(table: str) -> dict[str, Distribution]:
+    """The end-gauge inputs of ``tests/reference/gauge_block/inputs.toml``: shared + ``table``."""
+    text = (REFERENCE / "gauge_block" / "inputs.toml").read_text(encoding="utf-8")
+    data = tomllib.loads(text)
+    return {
+        name: parse_distribution(pdf) for name, pdf in {**data["shared"], **data[table]}.items()
+    }
+
 
 X0 = {"a": 1.3, "b": 0.7, "c": 2.1}
 U0 = {"a": 0.01, "b": 0.02, "c": 0.05}
@@ -140,17 +156,7 @@ def test_welch_satterthwaite_gum_h1_end_gauge():
     in nm and °C. A scaled-and-shifted t carries each (u, ν) pair: the GUM takes its
     scale as u. Published: u_c(l) = 32 nm, ν_eff(l) = 16, k = t_95(16) = 2.12, U = 67 nm,
     l = 50.000 838 mm."""
-    inputs = {
-        "l_s": StudentT(18, 50_000_623.6, 25.0),
-        "d_bar": StudentT(24, 215.0, 5.8),
-        "d1": StudentT(5, 0.0, 3.9),
-        "d2": StudentT(8, 0.0, 6.7),
-        "alpha_s": Uniform(9.5e-6, 13.5e-6),
-        "theta_bar": Normal(-0.1, 0.2),
-        "Delta": Arcsine(-0.5, 0.5),
-        "dalpha": StudentT(50, 0.0, 0.58e-6),
-        "dtheta": StudentT(2, 0.0, 0.029),
-    }
+    inputs = gauge_block_inputs("gum_h1")
     model = expression(
         "l_s + d_bar + d1 + d2 - l_s * (alpha_s * dtheta + dalpha * (theta_bar + Delta))"
     )

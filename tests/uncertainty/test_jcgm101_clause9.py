@@ -14,22 +14,34 @@ determined, is checked as well.
 from __future__ import annotations
 
 import math
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import integrate, optimize, special, stats
 
 from mtmc import (
-    Arcsine,
-    CurvilinearTrapezoid,
     MultivariateNormal,
     Normal,
-    StudentT,
     Uniform,
     expression,
     monte_carlo,
+    parse_distribution,
 )
+from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.gum import gum, validate
+
+REFERENCE = Path(__file__).resolve().parents[1] / "reference"
+
+
+def gauge_block_inputs(table: str) -> dict[str, Distribution]:
+    """The end-gauge inputs of ``tests/reference/gauge_block/inputs.toml``: shared + ``table``."""
+    text = (REFERENCE / "gauge_block" / "inputs.toml").read_text(encoding="utf-8")
+    data = tomllib.loads(text)
+    return {
+        name: parse_distribution(pdf) for name, pdf in {**data["shared"], **data[table]}.items()
+    }
 
 
 @pytest.fixture(params=["random", "sobol"])
@@ -375,18 +387,8 @@ def test_9_4_comparison_loss_correlated_inputs(sampling):
 GAUGE = expression(
     "l_s + d_bar + d1 + d2 - l_s * (dalpha * (theta_bar + Delta) + alpha_s * dtheta) - 50000000"
 )
-GAUGE_INPUTS = {
-    # §9.5, Table 13 / 14 (nm, °C, °C⁻¹); the output is L - 50 mm in nm.
-    "l_s": StudentT(18, 50_000_623.6, 25.0),
-    "d_bar": StudentT(24, 215.0, 5.8),
-    "d1": StudentT(5, 0.0, 3.9),
-    "d2": StudentT(8, 0.0, 6.7),
-    "alpha_s": Uniform(9.5e-6, 13.5e-6),
-    "theta_bar": Normal(-0.1, 0.2),
-    "Delta": Arcsine(-0.5, 0.5),
-    "dalpha": CurvilinearTrapezoid(-1.0e-6, 1.0e-6, 0.1e-6),
-    "dtheta": CurvilinearTrapezoid(-0.050, 0.050, 0.025),
-}
+# §9.5, Tables 13 and 14 (nm, °C, °C⁻¹); the output is L - 50 mm in nm.
+GAUGE_INPUTS = gauge_block_inputs("jcgm101_9_5")
 
 
 def test_9_5_gauge_block_table_16(sampling):

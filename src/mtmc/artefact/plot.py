@@ -36,10 +36,8 @@ def plot_error_vectors(
     Path
         ``path``.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib import colormaps
+    from matplotlib.figure import Figure
 
     from mtmc.io import atomic_path
 
@@ -48,11 +46,11 @@ def plot_error_vectors(
     v = result.nominal.volumetric[0]  # (P, N, 3) in W
     vec = np.linalg.solve(meas.axis_map[:, None], v[..., None])[..., 0] * magnification
     labels = result.pose_labels()
-    fig = plt.figure(figsize=(13, 4.4))
+    fig = Figure(figsize=(13, 4.4))  # no pyplot: nothing of the process changes
     ax1 = fig.add_subplot(1, 3, 1)
     ax2 = fig.add_subplot(1, 3, 2)
     ax3: Any = fig.add_subplot(1, 3, 3, projection="3d")
-    colors = plt.get_cmap("tab10")(np.arange(pos.shape[0]) % 10)
+    colors = colormaps["tab10"](np.arange(pos.shape[0]) % 10)
     for p in range(pos.shape[0]):
         lab = ", ".join(f"{k[0]} = {val:g}°" for k, val in labels[p].items())
         x, y, z = pos[p].T
@@ -85,5 +83,4 @@ def plot_error_vectors(
     out = Path(path)
     with atomic_path(out) as tmp:
         fig.savefig(tmp, format=out.suffix.lstrip(".").lower() or "svg")
-    plt.close(fig)
     return out

@@ -148,7 +148,7 @@ def run_cmd(
     """
     from mtmc.graph.model import check
     from mtmc.graph.run import run_graph
-    from mtmc.graph.units import place_dimension
+    from mtmc.graph.units import place_dimension, unit_of
 
     try:
         plan = check(_read(file))
@@ -188,20 +188,11 @@ def run_cmd(
                 "" if part == "value" else part,
                 _fmt(r.estimate if r.dim == 0 else r.estimate_vector, u, scale),
                 _fmt(u, u, scale, the_u=True),
-                _unit_label(g.units, power, angle),
+                unit_of((power, angle), g.units),
             )
             first = False
     Console().print(table)
     typer.echo(f"trials {res.trials}  seed {res.seed}")
-
-
-def _unit_label(length_unit: str, length_power: int, angle_power: int) -> str:
-    names = []
-    if length_power:
-        names.append(length_unit + (f"^{length_power}" if length_power != 1 else ""))
-    if angle_power:
-        names.append("rad" + (f"^{angle_power}" if angle_power != 1 else ""))
-    return "·".join(names) or "1"
 
 
 def _fmt(
@@ -289,6 +280,15 @@ def sweep_cmd(
                 "surrogate": {
                     "c0": fit.c0,
                     "coefficients": dict(zip(fit.names, fit.coefficients.tolist(), strict=True)),
+                    "max_rel_error": fit.max_rel_error,
+                },
+            }
+        )
+        return
+    if csv is None:
+        typer.echo(text, nl=False)
+    typer.echo(f"surrogate: {fit.formula()}")
+    typer.echo(f"largest relative error on the grid: {100 * fit.max_rel_error:.2f} %")
 
 
 @app.command("edit")
@@ -312,12 +312,3 @@ def edit_cmd(
         serve(file, port=port, open_browser=not no_browser, echo=typer.echo)
     except MtmcError as exc:
         fail(exc)
-                    "max_rel_error": fit.max_rel_error,
-                },
-            }
-        )
-        return
-    if csv is None:
-        typer.echo(text, nl=False)
-    typer.echo(f"surrogate: {fit.formula()}")
-    typer.echo(f"largest relative error on the grid: {100 * fit.max_rel_error:.2f} %")

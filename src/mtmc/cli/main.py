@@ -2,13 +2,19 @@
 
 Exit status: 0 on success; 2 on bad input, whether the subcommand found it (through
 :func:`mtmc.cli.common.fail`, one line ``mtmc: error: ...`` on stderr) or the argument
-parser did (one line naming the command, and ``--help`` for more); 130 on Ctrl-C.
+parser did (one line naming the command, and ``--help`` for more); 130 on Ctrl-C; 143 on
+SIGTERM (the same clean ending: one line, worker processes stopped, no file half-written).
 """
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import sys
+import threading
 import warnings
+from collections.abc import Iterator
+from types import FrameType
 
 import typer
 
@@ -41,11 +47,14 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
-    version: bool = typer.Option(
+    version: bool = typer.Option(  # noqa: ARG001 - read by its eager callback
         False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
     ),
 ) -> None:
     """Machine-tool Monte Carlo."""
+    from mtmc.uncertainty.heap import keep_heap
+
+    keep_heap()  # a command runs: its process is its own, and its runs reuse freed heap
 
 
 def _usage_error(exc: Exception) -> int | None:
@@ -69,7 +78,57 @@ def _usage_error(exc: Exception) -> int | None:
     return code
 
 
+class _Terminated:
+    """Whether SIGTERM ended the command (its handler raises ``KeyboardInterrupt``)."""
+
+    seen = False
+
+
+def _on_sigterm(_signum: int, _frame: FrameType | None) -> None:
+    _Terminated.seen = True
+    raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """Let SIGTERM unwind the command as Ctrl-C does (pools shut, temporaries removed)."""
+    _Terminated.seen = False
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _interrupted() -> int:
+    if _Terminated.seen:
+        typer.echo("mtmc: terminated", err=True)
+        return 143
+    typer.echo("mtmc: interrupted", err=True)
+    return 130
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run the CLI with ``argv`` and return the exit status (SIGTERM handled as Ctrl-C).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        As :func:`_main`; 143 after SIGTERM (one line ``mtmc: terminated``).
+    """
+    with _sigterm_as_interrupt():
+        return _main(argv)
+
+
+def _main(argv: list[str] | None = None) -> int:
     """Run the CLI with ``argv`` and return the exit status.
 
     Parameters
@@ -103,8 +162,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except KeyboardInterrupt:
         # Every file is written atomically (mtmc.io): an interrupted run leaves none half-way.
-        typer.echo("mtmc: interrupted", err=True)
-        return 130
+        return _interrupted()
     except SystemExit as exc:
         code = exc.code
         return code if isinstance(code, int) else (0 if code is None else 1)
@@ -114,7 +172,7 @@ def main(argv: list[str] | None = None) -> int:
             raise
         return code
     if rv == 130:  # Typer turns Ctrl-C inside a subcommand into this status
-        typer.echo("mtmc: interrupted", err=True)
+        return _interrupted()
     return rv if isinstance(rv, int) else 0
 
 

@@ -153,6 +153,14 @@ def _check_radius(r: NDArray[np.float64], name: str) -> None:
         )
 
 
+def _set_point_and_unit(obj: Line | Plane, name: str, what: str) -> None:
+    """Check ``obj.point`` and the vector ``obj.<name>``, normalise it, broadcast both."""
+    p = _own(check_points(obj.point, "point"), obj.point)
+    v = check_vectors(getattr(obj, name), name)
+    m = batch_size(point=p, **{name: v})
+    _set(obj, point=broadcast_batch(m, p), **{name: broadcast_batch(m, _normalised(v, name, what))})
+
+
 @dataclass(frozen=True, eq=False)
 class Line:
     """A batch of ``M`` straight lines, each a point and a unit direction.
@@ -176,14 +184,7 @@ class Line:
     direction: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        p = _own(check_points(self.point, "point"), self.point)
-        d = check_vectors(self.direction, "direction")
-        m = batch_size(point=p, direction=d)
-        _set(
-            self,
-            point=broadcast_batch(m, p),
-            direction=broadcast_batch(m, _normalised(d, "direction", "line direction")),
-        )
+        _set_point_and_unit(self, "direction", "line direction")
 
     @classmethod
     def of_unit(cls, point: NDArray[np.float64], direction: NDArray[np.float64]) -> Line:
@@ -246,14 +247,7 @@ class Plane:
     normal: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        p = _own(check_points(self.point, "point"), self.point)
-        n = check_vectors(self.normal, "normal")
-        m = batch_size(point=p, normal=n)
-        _set(
-            self,
-            point=broadcast_batch(m, p),
-            normal=broadcast_batch(m, _normalised(n, "normal", "plane normal")),
-        )
+        _set_point_and_unit(self, "normal", "plane normal")
 
     def __len__(self) -> int:
         return int(self.point.shape[0])

@@ -44,6 +44,9 @@ __all__ = [
     "euler_from_matrix",
     "matrix_from_axis_angle",
     "axis_angle_from_matrix",
+    "matrix_from_rotation_vector",
+    "rotation_vector_from_matrix",
+    "cross_matrix",
     "quaternion_from_matrix",
     "apply_htm",
 ]
@@ -566,18 +569,107 @@ def matrix_from_axis_angle(axis: npt.ArrayLike, angle: npt.ArrayLike) -> NDArray
         raise DegenerateGeometryError(
             "zero-length rotation axis: expected a non-zero vector", field="axis"
         )
-    n = n / norm
-    K = np.zeros((*n.shape[:-1], 3, 3))
-    K[..., 0, 1] = -n[..., 2]
-    K[..., 0, 2] = n[..., 1]
-    K[..., 1, 0] = n[..., 2]
-    K[..., 1, 2] = -n[..., 0]
-    K[..., 2, 0] = -n[..., 1]
-    K[..., 2, 1] = n[..., 0]
+    K = cross_matrix(n / norm)
     s = np.sin(th)[..., None, None]
     c = np.cos(th)[..., None, None]
     out: NDArray[np.float64] = np.eye(3) + s * K + (1.0 - c) * (K @ K)
     return out
+
+
+def matrix_from_rotation_vector(phi: npt.ArrayLike) -> NDArray[np.float64]:
+    """Rotation matrices of rotation vectors (the exponential map ``Exp(φ)``, Rodrigues).
+
+    Parameters
+    ----------
+    phi : array_like, shape (..., 3)
+        Rotation vectors (rad): the axis times the angle; zero gives the identity.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``R = I + a K + b K^2`` with ``K = [φ]x``, ``θ = |φ|``, ``a = sin(θ) / θ`` and
+        ``b = (1 - cos(θ)) / θ^2``; below ``θ = 1e-4`` rad ``a`` and ``b`` are their series
+        ``1 - θ²/6`` and ``1/2 - θ²/24``, so the map is exact at zero and smooth about it
+        (the parametrisation of small rotations that a least-squares fit steps through).
+
+    See Also
+    --------
+    rotation_vector_from_matrix : the inverse (the logarithmic map).
+    matrix_from_axis_angle : the same rotation from a unit axis and an angle.
+
+    Examples
+    --------
+    >>> np.allclose(matrix_from_rotation_vector([0.0, 0.0, 0.3]), rotation_z(0.3))
+    True
+    >>> matrix_from_rotation_vector([0.0, 0.0, 0.0])
+    array([[1., 0., 0.],
+           [0., 1., 0.],
+           [0., 0., 1.]])
+    """
+    p = np.asarray(phi, dtype=np.float64)
+    th2 = np.sum(p * p, axis=-1)
+    th = np.sqrt(th2)
+    small = th < 1e-4
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th2 / 6.0, np.sin(ths) / ths)
+    b = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(ths)) / (ths * ths))
+    K = cross_matrix(p)
+    eye = np.broadcast_to(np.eye(3), K.shape)
+    out: NDArray[np.float64] = eye + a[..., None, None] * K + b[..., None, None] * (K @ K)
+    return out
+
+
+def rotation_vector_from_matrix(R: npt.ArrayLike) -> NDArray[np.float64]:
+    """Rotation vectors (axis times angle, rad) of rotation matrices, the logarithmic map.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices.
+
+    Returns
+    -------
+    ndarray, shape (..., 3)
+        ``φ = θ n`` from :func:`axis_angle_from_matrix`, ``θ`` in ``[0, pi]``; the inverse of
+        :func:`matrix_from_rotation_vector` for ``|φ| < pi``.
+
+    Raises
+    ------
+    InputError
+        As for :func:`axis_angle_from_matrix`.
+
+    Examples
+    --------
+    >>> np.round(rotation_vector_from_matrix(rotation_x(0.25)), 12) + 0.0
+    array([0.25, 0.  , 0.  ])
+    """
+    ax, ang = axis_angle_from_matrix(np.asarray(R, dtype=np.float64))
+    return np.asarray(ax) * np.asarray(ang)[..., None]
+
+
+def cross_matrix(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The cross-product (skew-symmetric) matrices ``[v]x`` of vectors: ``[v]x u = v × u``.
+
+    Parameters
+    ----------
+    v : ndarray, shape (..., 3)
+        The vectors.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``[[0, -v_z, v_y], [v_z, 0, -v_x], [-v_y, v_x, 0]]``.
+
+    Examples
+    --------
+    >>> cross_matrix(np.array([1.0, 2.0, 3.0])) @ np.array([0.0, 0.0, 1.0])
+    array([ 2., -1.,  0.])
+    """
+    K = np.zeros((*v.shape[:-1], 3, 3))
+    K[..., 0, 1], K[..., 0, 2] = -v[..., 2], v[..., 1]
+    K[..., 1, 0], K[..., 1, 2] = v[..., 2], -v[..., 0]
+    K[..., 2, 0], K[..., 2, 1] = -v[..., 1], v[..., 0]
+    return K
 
 
 def axis_angle_from_matrix(

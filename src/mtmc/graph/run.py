@@ -28,7 +28,6 @@ from numpy.typing import NDArray
 
 from mtmc.errors import GraphError, InputError, MtmcError
 from mtmc.frozen import frozen_array, frozen_mapping, read_only
-from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 from mtmc.graph import ops as _ops
 from mtmc.graph import probe as _probe
 from mtmc.graph.model import Graph, Plan, check
@@ -53,7 +52,6 @@ __all__ = [
     "PlaceSummary",
     "GraphResult",
     "random_inputs",
-    "evaluate",
     "run_graph",
     "graph_model",
     "flatten",
@@ -394,34 +392,6 @@ def random_inputs(plan: Plan) -> dict[str, Distribution]:
     return out
 
 
-def _full(value: Any, m: int) -> Any:
-    """A value with its batch of one (a constant) repeated to ``m`` trials.
-
-    A value that already holds ``m`` trials is returned as it is (no copy, no new checks).
-    """
-    if isinstance(value, (Line, Plane, Circle, Sphere)):
-        if len(value) == m:
-            return value
-        if isinstance(value, Line):
-            return Line(
-                *(np.broadcast_to(x, (m, *x.shape[1:])) for x in (value.point, value.direction))
-            )
-        if isinstance(value, Plane):
-            parts0 = (value.point, value.normal)
-            return Plane(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts0))
-        if isinstance(value, Circle):
-            parts = (value.centre, value.normal, value.radius)
-            return Circle(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts))
-        parts2 = (value.centre, value.radius)
-        return Sphere(*(np.broadcast_to(x, (m, *x.shape[1:])) for x in parts2))
-    arr = np.asarray(value, dtype=np.float64)
-    if arr.ndim == 0:
-        arr = arr.reshape(1)
-    if arr.shape[0] == m:
-        return arr
-    return np.broadcast_to(arr, (m, *arr.shape[1:]))
-
-
 def _releases(plan: Plan, want: Container[str]) -> tuple[tuple[str, ...], ...]:
     """For each step, the places it is the last to read and that are not wanted."""
     last: dict[str, int] = {}
@@ -433,57 +403,6 @@ def _releases(plan: Plan, want: Container[str]) -> tuple[tuple[str, ...], ...]:
         if p not in want:
             out[i].append(p)
     return tuple(tuple(ps) for ps in out)
-
-
-def evaluate(
-    plan: Plan,
-    samples: Mapping[str, Any],
-    m: int,
-    outputs: Iterable[str] | None = None,
-    *,
-    specs: Mapping[str, _probe.MeasSpec] | None = None,
-) -> dict[str, Any]:
-    """Fire every transition once on a batch of trials.
-
-    Parameters
-    ----------
-    plan : Plan
-        A checked graph.
-    samples : mapping of str to ndarray
-        Draws of :func:`random_inputs` for ``m`` trials (leading axis the trial).
-    m : int
-        Number of trials in the batch.
-    outputs : iterable of str, optional
-        Places whose values to return (default: all). Other intermediate values are
-        released as soon as no later transition needs them.
-    specs : mapping, optional
-        Pre-resolved ``meas`` parameters (internal; resolved here when missing).
-
-    Returns
-    -------
-    dict of str to value
-        The value of each requested place: ``(m,)`` scalars, ``(m, 3)`` points/vectors,
-        geometry primitives, ``(m, 4, 4)`` frames (constants repeated to ``m``, as
-        read-only views).
-
-    Raises
-    ------
-    DegenerateGeometryError
-        If a construction is degenerate in some trial (naming the transition).
-    """
-    g = plan.graph
-    want = set(plan.types) if outputs is None else set(outputs)
-    for name in want:
-        if name not in plan.types:
-            raise InputError(f"the graph has no place {name}", file=g.file, field=name)
-    if specs is None:
-        specs = {
-            s.transition.name: _probe.meas_spec(s.transition, g.probe, g.factor)
-            for s in plan.steps
-            if s.transition.op == "meas"
-        }
-    values = _fire(plan, samples, m, specs, _releases(plan, want))
-    return {k: _full(v, m) for k, v in values.items() if k in want}
 
 
 def _fire(

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from mtmc.graph.model import Plan
 
-__all__ = ["place_dimension"]
+__all__ = ["place_dimension", "unit_of"]
 
 #: The parts of each place type that are lengths (the others are unit vectors, rotation
 #: matrices, or the value of a scalar place, whose dimension follows its producer).
@@ -90,3 +90,32 @@ def place_dimension(plan: Plan, name: str, part: str = "value") -> tuple[int, in
     if part == "value":
         return _scalar_dimension(plan, name)
     return (1 if part in _LENGTH_PARTS else 0, 0)
+
+
+def unit_of(dimension: tuple[int, int], length_unit: str = "mm") -> str:
+    """The unit of a dimension (power of length, power of angle), as reports print it.
+
+    Parameters
+    ----------
+    dimension : tuple of int
+        As :func:`place_dimension` gives it.
+    length_unit : str
+        The unit of length (``"mm"``, or a graph file's ``units``); angles are in rad.
+
+    Returns
+    -------
+    str
+        ``"mm"``, ``"rad"``, ``"mm^2"``, ``"mm·rad"``; ``"1"`` for a number.
+
+    Examples
+    --------
+    >>> unit_of((1, 0)), unit_of((2, 0), "um"), unit_of((1, -1)), unit_of((0, 0))
+    ('mm', 'um^2', 'mm·rad^-1', '1')
+    """
+    length, angle = dimension
+    names = []
+    if length:
+        names.append(length_unit + (f"^{length}" if length != 1 else ""))
+    if angle:
+        names.append("rad" + (f"^{angle}" if angle != 1 else ""))
+    return "·".join(names) or "1"

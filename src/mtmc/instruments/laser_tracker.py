@@ -47,7 +47,6 @@ from numpy.typing import NDArray
 
 from mtmc.errors import InputError
 from mtmc.geometry.transforms import (
-    axis_angle_from_matrix,
     euler_from_matrix,
     matrix_from_axis_angle,
     matrix_from_euler,
@@ -419,15 +418,6 @@ class LaserTracker:
     def euler(self, seq: str = "xyz") -> _F:
         """Euler angles (rad) of :attr:`rotation` in ``seq``."""
         return euler_from_matrix(self.rotation, seq)
-
-    def axis_angle(self) -> tuple[_F, float]:
-        """Rodrigues axis (3,) and angle (rad) of :attr:`rotation`."""
-        ax, ang = axis_angle_from_matrix(self.rotation)
-        return np.asarray(ax), float(ang)
-
-    def with_pose(self, rotation: npt.ArrayLike, position: npt.ArrayLike) -> LaserTracker:
-        """The same tracker (noise, name) at another pose."""
-        return LaserTracker(np.asarray(rotation), np.asarray(position), self.noise, self.name)
 
     def to_tracker(self, p: npt.ArrayLike) -> _F:
         """Base-frame points ``(..., 3)`` in the tracker frame: ``x = Rᵀ (p − t)`` (eq. 1 above)."""

@@ -1,4 +1,4 @@
-"""A drawing of the kinematic chain as SVG (the schematic of Aguado et al. 2016, Fig. 4).
+"""A drawing of the kinematic chain (the schematic of Aguado et al. 2016, Fig. 4), with Matplotlib.
 
 The chain is drawn left to right as it is written, from the workpiece to the tool: the
 workpiece, the part-side axes, the machine frame (a ground symbol), the tool-side axes,
@@ -8,13 +8,14 @@ circle with a curved arrow. Part-side bodies are blue, tool-side bodies orange.
 Examples
 --------
 >>> svg = draw_chain("XFYZ")
->>> svg.startswith("<svg") and svg.count('class="axis') == 3
+>>> svg.count('<g id="axis-') == 3 and '<g id="axis-X-linear-part">' in svg
 True
 """
 
 from __future__ import annotations
 
-from html import escape
+import io
+from typing import Any
 
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import Topology, is_linear, parse_topology
@@ -39,15 +40,22 @@ def draw_chain(spec: str | Topology | Machine, *, title: str | None = None) -> s
     Returns
     -------
     str
-        A standalone SVG document; each body is a ``<g>`` element with
-        ``class="axis linear|rotary part|tool"`` and ``data-axis`` set to its letter, in
-        chain order.
+        A standalone SVG document (Matplotlib, text kept as text, the same bytes for the
+        same chain). The body of each axis is the element ``<g id="axis-L-KIND-SIDE">``,
+        ``L`` its letter, ``KIND`` ``linear`` or ``rotary``, ``SIDE`` ``part`` or ``tool``,
+        in chain order; the workpiece, the frame and the tool are ``<g id="workpiece">``,
+        ``<g id="frame">`` and ``<g id="tool">``; each axis is labelled with its letter and
+        "along x, part" (or "about z, tool", ...).
 
     Raises
     ------
     TopologyError
         If ``spec`` is a string that does not parse.
     """
+    import matplotlib
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Circle, FancyArrowPatch, Polygon, Rectangle
+
     if isinstance(spec, Machine):
         topo = spec.topology
     elif isinstance(spec, Topology):
@@ -55,87 +63,79 @@ def draw_chain(spec: str | Topology | Machine, *, title: str | None = None) -> s
     else:
         topo = parse_topology(spec)
     head = title if title is not None else f"{topo}  ({topo.aguado})"
-    step = 110
-    n = len(topo.chain) + 3
-    width = step * n + 40
-    height = 190
-    y = 100
-    items: list[str] = []
-    x = 40
+    step, y, height = 110.0, 100.0, 190.0
+    width = step * (len(topo.chain) + 3) + 40.0
+    fig = Figure(figsize=(width / 72.0, height / 72.0))  # one unit of the axes, one pt
+    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
+    ax.set_xlim(0.0, width)
+    ax.set_ylim(height, 0.0)
+    ax.axis("off")
+    ax.text(20.0, 24.0, head, fontsize=11.0)
+
+    def text(x: float, yy: float, s: str, **kw: Any) -> None:
+        ax.text(x, yy, s, ha="center", va="baseline", fontsize=kw.pop("fontsize", 10.0), **kw)
 
     def link(x0: float, x1: float) -> None:
-        items.append(
-            f'<line x1="{x0}" y1="{y}" x2="{x1}" y2="{y}" stroke="#444" stroke-width="2"/>'
-        )
+        ax.plot([x0, x1], [y, y], color="#444", lw=1.5)
 
-    # workpiece
-    items.append(
-        f'<g class="end workpiece"><rect x="{x}" y="{y - 18}" width="60" height="36" '
-        f'fill="#e2e8f0" stroke="{_PART}" stroke-width="2"/>'
-        f'<text x="{x + 30}" y="{y + 5}" text-anchor="middle">workpiece</text></g>'
+    x = 40.0
+    ax.add_patch(
+        Rectangle((x, y - 18.0), 60.0, 36.0, fc="#e2e8f0", ec=_PART, lw=1.5, gid="workpiece")
     )
-    xs = x + 60
+    text(x + 30.0, y + 5.0, "workpiece")
+    xs = x + 60.0
     x += step
     for side, axes in (("part", topo.part_axes), ("frame", ()), ("tool", topo.tool_axes)):
         if side == "frame":
-            link(xs, x + 30)
-            items.append(
-                f'<g class="frame"><line x1="{x}" y1="{y + 30}" x2="{x + 60}" y2="{y + 30}" '
-                f'stroke="#000" stroke-width="3"/>'
-                + "".join(
-                    f'<line x1="{x + 6 + 12 * i}" y1="{y + 30}" x2="{x + 12 * i}" '
-                    f'y2="{y + 40}" stroke="#000"/>'
-                    for i in range(5)
-                )
-                + f'<line x1="{x + 30}" y1="{y}" x2="{x + 30}" y2="{y + 30}" stroke="#000" '
-                f'stroke-width="3"/><text x="{x + 30}" y="{y + 58}" text-anchor="middle">'
-                "frame</text></g>"
-            )
-            xs = x + 30
+            link(xs, x + 30.0)
+            ground = [((x, y + 30.0), (x + 60.0, y + 30.0)), ((x + 30.0, y), (x + 30.0, y + 30.0))]
+            ground += [((x + 6.0 + 12.0 * i, y + 30.0), (x + 12.0 * i, y + 40.0)) for i in range(5)]
+            path = [p for seg in ground for p in (*seg, (float("nan"), float("nan")))]
+            ax.plot(*zip(*path, strict=True), color="#000", lw=2.0, gid="frame")
+            text(x + 30.0, y + 58.0, "frame")
+            xs = x + 30.0
             x += step
             continue
         colour = _PART if side == "part" else _TOOL
-        for ax in axes:
-            kind = "linear" if is_linear(ax) else "rotary"
-            cx = x + 30
-            link(xs, x if kind == "linear" else cx - 24)
-            label = f'<text x="{cx}" y="{y - 34}" text-anchor="middle" font-weight="bold">'
-            label += f"{ax}</text>"
-            sub = f'<text x="{cx}" y="{y + 48}" text-anchor="middle" font-size="11">'
-            sub += f"{'along' if kind == 'linear' else 'about'} {_DIRS[ax]}, {side}</text>"
+        for name in axes:
+            kind = "linear" if is_linear(name) else "rotary"
+            cx = x + 30.0
+            gid = f"axis-{name}-{kind}-{side}"
             if kind == "linear":
-                body = (
-                    f'<rect x="{x}" y="{y - 18}" width="60" height="36" fill="white" '
-                    f'stroke="{colour}" stroke-width="2"/>'
-                    f'<line x1="{x + 10}" y1="{y}" x2="{x + 50}" y2="{y}" stroke="{colour}" '
-                    f'marker-start="url(#arrow)" marker-end="url(#arrow)"/>'
+                link(xs, x)
+                ax.add_patch(
+                    Rectangle((x, y - 18.0), 60.0, 36.0, fc="white", ec=colour, lw=1.5, gid=gid)
                 )
-                xs = x + 60
+                a, b, style = (x + 10.0, y), (x + 50.0, y), "arc3"
+                xs = x + 60.0
             else:
-                body = (
-                    f'<circle cx="{cx}" cy="{y}" r="24" fill="white" stroke="{colour}" '
-                    f'stroke-width="2"/><path d="M {cx - 12} {y + 8} A 14 14 0 1 1 {cx + 12} '
-                    f'{y + 8}" fill="none" stroke="{colour}" marker-end="url(#arrow)"/>'
+                link(xs, cx - 24.0)
+                ax.add_patch(Circle((cx, y), 24.0, fc="white", ec=colour, lw=1.5, gid=gid))
+                a, b, style = (cx - 12.0, y + 8.0), (cx + 12.0, y + 8.0), "arc3,rad=-1.1"
+                xs = cx + 24.0
+            arrows = "<|-|>" if kind == "linear" else "-|>"
+            ax.add_patch(
+                FancyArrowPatch(
+                    a,
+                    b,
+                    arrowstyle=arrows,
+                    connectionstyle=style,
+                    mutation_scale=8.0,
+                    color=colour,
+                    lw=1.0,
+                    shrinkA=0.0,
+                    shrinkB=0.0,
                 )
-                xs = cx + 24
-            items.append(f'<g class="axis {kind} {side}" data-axis="{ax}">{body}{label}{sub}</g>')
+            )
+            text(cx, y - 34.0, name, fontweight="bold")
+            where = f"{'along' if kind == 'linear' else 'about'} {_DIRS[name]}, {side}"
+            text(cx, y + 48.0, where, fontsize=8.5)
             x += step
     link(xs, x)
-    items.append(
-        f'<g class="end tool"><polygon points="{x},{y - 18} {x + 40},{y - 18} {x + 20},{y + 22}" '
-        f'fill="#fefcbf" stroke="{_TOOL}" stroke-width="2"/>'
-        f'<text x="{x + 20}" y="{y + 42}" text-anchor="middle">tool</text></g>'
-    )
-    defs = (
-        '<defs><marker id="arrow" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="6" '
-        'markerHeight="6" orient="auto-start-reverse"><path d="M 0 0 L 10 5 L 0 10 z" '
-        'fill="#444"/></marker></defs>'
-    )
-    return (
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
-        f'viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="13">'
-        f"{defs}<title>{escape(head, quote=False)}</title>"
-        f'<text x="20" y="24" font-size="15">{escape(head, quote=False)}</text>'
-        + "".join(items)
-        + "</svg>"
-    )
+    tool = [(x, y - 18.0), (x + 40.0, y - 18.0), (x + 20.0, y + 22.0)]
+    ax.add_patch(Polygon(tool, closed=True, fc="#fefcbf", ec=_TOOL, lw=1.5, gid="tool"))
+    text(x + 20.0, y + 42.0, "tool")
+    buf = io.StringIO()
+    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": "chain"}):
+        fig.savefig(buf, format="svg", metadata={"Date": None})
+    return buf.getvalue()

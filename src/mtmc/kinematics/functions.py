@@ -28,11 +28,13 @@ array([-0.001 , -0.0005,  0.003 ])
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from numpy.polynomial import chebyshev, legendre
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
@@ -215,7 +217,30 @@ def _check_range(low: float, high: float) -> None:
 
 
 @dataclass(frozen=True, eq=False)
-class LegendreSeries(ErrorFunction):
+class _TravelSeries(ErrorFunction):
+    """A series of polynomials in ``t``, the position mapped from the travel onto [-1, 1]."""
+
+    coefficients: NDArray[np.float64]
+    low: float = -1.0
+    high: float = 1.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "coefficients", _coeffs(self.coefficients, "coefficients"))
+        _check_range(self.low, self.high)
+
+    def _basis(
+        self,
+        q: npt.ArrayLike,
+        vander: Callable[[NDArray[np.float64], int], NDArray[np.floating[Any]]],
+    ) -> NDArray[np.float64]:
+        """The pseudo-Vandermonde matrix of ``vander`` at ``t``, shape ``(M, n)``."""
+        t = _mapped(_positions(q), self.low, self.high)
+        B = vander(t, self.n_coefficients - 1).astype(np.float64, copy=False)
+        return B.reshape(*t.shape, self.n_coefficients)
+
+
+@dataclass(frozen=True, eq=False)
+class LegendreSeries(_TravelSeries):
     """A Legendre series over the axis travel.
 
     ``f(q) = sum_k c_k P_k(t)``, ``t = (2 q - low - high) / (high - low)``, with the
@@ -229,29 +254,13 @@ class LegendreSeries(ErrorFunction):
         The travel of the axis (mm or rad).
     """
 
-    coefficients: NDArray[np.float64]
-    low: float = -1.0
-    high: float = 1.0
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "coefficients", _coeffs(self.coefficients, "coefficients"))
-        _check_range(self.low, self.high)
-
     def basis(self, q: npt.ArrayLike) -> NDArray[np.float64]:
-        """``P_k(t)``, shape ``(M, n)``."""
-        t = _mapped(_positions(q), self.low, self.high)
-        n = self.n_coefficients
-        out = np.empty((*t.shape, n))
-        out[..., 0] = 1.0
-        if n > 1:
-            out[..., 1] = t
-        for k in range(1, n - 1):
-            out[..., k + 1] = ((2 * k + 1) * t * out[..., k] - k * out[..., k - 1]) / (k + 1)
-        return out
+        """``P_k(t)``, shape ``(M, n)`` (NumPy's ``legvander``)."""
+        return self._basis(q, legendre.legvander)
 
 
 @dataclass(frozen=True, eq=False)
-class ChebyshevSeries(ErrorFunction):
+class ChebyshevSeries(_TravelSeries):
     """A Chebyshev series (first kind) over the axis travel.
 
     ``f(q) = sum_k c_k T_k(t)``, ``t`` as for :class:`LegendreSeries`,
@@ -265,25 +274,9 @@ class ChebyshevSeries(ErrorFunction):
         The travel of the axis.
     """
 
-    coefficients: NDArray[np.float64]
-    low: float = -1.0
-    high: float = 1.0
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "coefficients", _coeffs(self.coefficients, "coefficients"))
-        _check_range(self.low, self.high)
-
     def basis(self, q: npt.ArrayLike) -> NDArray[np.float64]:
-        """``T_k(t)``, shape ``(M, n)``."""
-        t = _mapped(_positions(q), self.low, self.high)
-        n = self.n_coefficients
-        out = np.empty((*t.shape, n))
-        out[..., 0] = 1.0
-        if n > 1:
-            out[..., 1] = t
-        for k in range(1, n - 1):
-            out[..., k + 1] = 2.0 * t * out[..., k] - out[..., k - 1]
-        return out
+        """``T_k(t)``, shape ``(M, n)`` (NumPy's ``chebvander``)."""
+        return self._basis(q, chebyshev.chebvander)
 
 
 @dataclass(frozen=True, eq=False)

@@ -30,6 +30,7 @@ Box–Muller transform (Stryczek eq. 6) is available as ``normal_method=
 from __future__ import annotations
 
 import abc
+import ast
 import dataclasses
 import math
 import re
@@ -40,7 +41,8 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal, NoReturn, TypeVar, cas
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.errors import DistributionError
+from mtmc.errors import DistributionError, MtmcError
+from mtmc.uncertainty.expression import parse_tree
 
 __all__ = [
     "Arcsine",
@@ -377,9 +379,27 @@ class Normal(Distribution):
         return np.asarray(self.mean + self.std * ndtri(u), dtype=np.float64)
 
 
+@dataclass(frozen=True, eq=False)
+class _Interval(Distribution):
+    """A PDF on the interval ``[a, b]``, symmetric about its middle: limits and expectation."""
+
+    low: float
+    high: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "low", _real("low", self.low, self.name))
+        object.__setattr__(self, "high", _real("high", self.high, self.name))
+        _check_interval(self.name, self.low, self.high)
+
+    @property
+    def mean(self) -> float:
+        """Expectation ``(a + b)/2``."""
+        return 0.5 * (self.low + self.high)
+
+
 @register_distribution("uniform", "rectangular")
 @dataclass(frozen=True, eq=False)
-class Uniform(Distribution):
+class Uniform(_Interval):
     """Rectangular PDF R(a, b) (JCGM 101 §6.4.2).
 
     Parameters
@@ -398,19 +418,6 @@ class Uniform(Distribution):
     >>> d.mean, round(d.std**2, 12)
     (0.0, 0.333333333333)
     """
-
-    low: float
-    high: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "low", _real("low", self.low, "uniform"))
-        object.__setattr__(self, "high", _real("high", self.high, "uniform"))
-        _check_interval("uniform", self.low, self.high)
-
-    @property
-    def mean(self) -> float:
-        """Expectation ``(a + b)/2``."""
-        return 0.5 * (self.low + self.high)
 
     @property
     def std(self) -> float:
@@ -522,7 +529,7 @@ class Triangular(Distribution):
 
 @register_distribution("trapezoidal", "trapezoid")
 @dataclass(frozen=True, eq=False)
-class Trapezoidal(Distribution):
+class Trapezoidal(_Interval):
     """Symmetric trapezoidal PDF Trap(a, b, β) (JCGM 101 §6.4.4).
 
     Parameters
@@ -545,25 +552,16 @@ class Trapezoidal(Distribution):
     True
     """
 
-    low: float
-    high: float
     beta: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "low", _real("low", self.low, "trapezoidal"))
-        object.__setattr__(self, "high", _real("high", self.high, "trapezoidal"))
-        _check_interval("trapezoidal", self.low, self.high)
+        super().__post_init__()
         beta = _real("beta", self.beta, "trapezoidal")
         if not 0.0 <= beta <= 1.0:
             raise DistributionError(
                 f"trapezoidal: expected 0 <= beta <= 1, got {_fmt(beta)}", field="beta"
             )
         object.__setattr__(self, "beta", beta)
-
-    @property
-    def mean(self) -> float:
-        """Expectation ``(a + b)/2``."""
-        return 0.5 * (self.low + self.high)
 
     @property
     def std(self) -> float:
@@ -599,7 +597,7 @@ class Trapezoidal(Distribution):
 
 @register_distribution("ctrap", "curvilinear_trapezoid")
 @dataclass(frozen=True, eq=False)
-class CurvilinearTrapezoid(Distribution):
+class CurvilinearTrapezoid(_Interval):
     """Curvilinear trapezoidal PDF CTrap(a, b, d) (JCGM 101 §6.4.3).
 
     A rectangular PDF with limits ``a``, ``b`` that are themselves inexact by ``±d``:
@@ -624,14 +622,10 @@ class CurvilinearTrapezoid(Distribution):
     True
     """
 
-    low: float
-    high: float
     d: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "low", _real("low", self.low, "ctrap"))
-        object.__setattr__(self, "high", _real("high", self.high, "ctrap"))
-        _check_interval("ctrap", self.low, self.high)
+        super().__post_init__()
         d = _real("d", self.d, "ctrap", nonnegative=True)
         if d > 0.5 * (self.high - self.low):
             raise DistributionError(
@@ -640,11 +634,6 @@ class CurvilinearTrapezoid(Distribution):
                 field="d",
             )
         object.__setattr__(self, "d", d)
-
-    @property
-    def mean(self) -> float:
-        """Expectation ``(a + b)/2``."""
-        return 0.5 * (self.low + self.high)
 
     @property
     def std(self) -> float:
@@ -710,7 +699,7 @@ class CurvilinearTrapezoid(Distribution):
 
 @register_distribution("arcsine", "u_shaped")
 @dataclass(frozen=True, eq=False)
-class Arcsine(Distribution):
+class Arcsine(_Interval):
     """Arc sine (U-shaped) PDF U(a, b) (JCGM 101 §6.4.6).
 
     Parameters
@@ -728,19 +717,6 @@ class Arcsine(Distribution):
     >>> Arcsine(-1, 1).std
     0.7071067811865475
     """
-
-    low: float
-    high: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "low", _real("low", self.low, "arcsine"))
-        object.__setattr__(self, "high", _real("high", self.high, "arcsine"))
-        _check_interval("arcsine", self.low, self.high)
-
-    @property
-    def mean(self) -> float:
-        """Expectation ``(a + b)/2``."""
-        return 0.5 * (self.low + self.high)
 
     @property
     def std(self) -> float:
@@ -1241,12 +1217,25 @@ _TOKEN = re.compile(
     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)|(?P<punct>[()\[\],=]))"
 )
 
+_Token = tuple[str, str, int]  # kind ("num", "name", "punct", "end"), text, column
 
-class _Parser:
+
+class _Reader:
+    """Read the text of a distribution: Python's :mod:`ast` gives its tree, nothing is evaluated.
+
+    The text is cut into tokens (numbers with their sign, names, ``( ) [ ] , =``) and their
+    order checked, so that a text that is not a distribution is refused at the first token
+    out of place, saying what was expected there. Python's parser
+    (:func:`~mtmc.uncertainty.expression.parse_tree`, as for a model expression) then
+    reads the structure, with each name written ``_`` and each number ``0`` so that it sees
+    nothing but the structure, and the tree is read back into PDFs: a call is a PDF, a number
+    the float of its text, a bracketed list a list.
+    """
+
     def __init__(self, text: str, file: str | None, line: int | None, field: str | None):
         self.text = text
         self.file, self.line, self.field = file, line, field
-        self.tokens: list[tuple[str, str, int]] = []
+        self.tokens: list[_Token] = []
         pos = 0
         while pos < len(text):
             if text[pos:].strip() == "":
@@ -1258,7 +1247,7 @@ class _Parser:
             kind = m.lastgroup or ""
             self.tokens.append((kind, m.group(kind), m.start(kind) + 1))
             pos = m.end()
-        self.i = 0
+        self.at = {col: tok for _, tok, col in self.tokens}
 
     def fail(self, message: str, column: int | None = None) -> NoReturn:
         raise DistributionError(
@@ -1269,77 +1258,131 @@ class _Parser:
             field=self.field,
         )
 
-    def peek(self) -> tuple[str, str, int]:
-        if self.i < len(self.tokens):
-            return self.tokens[self.i]
-        return ("end", "", len(self.text) + 1)
+    def _expected(self, what: str, tok: _Token) -> NoReturn:
+        self.fail(
+            f"expected {what}, got {'end of text' if tok[0] == 'end' else repr(tok[1])}", tok[2]
+        )
 
-    def take(self, kind: str, value: str | None = None, what: str = "") -> tuple[str, str, int]:
-        tok = self.peek()
-        if tok[0] != kind or (value is not None and tok[1] != value):
-            got = "end of text" if tok[0] == "end" else repr(tok[1])
-            self.fail(f"expected {what or value or kind}, got {got}", tok[2])
-        self.i += 1
-        return tok
+    def check(self) -> None:
+        """Refuse the first token out of place, saying what was expected there.
 
-    def value(self) -> Any:
-        tok = self.peek()
-        if tok[0] == "name":
-            return self.distribution()
-        if tok[0] == "num":
-            self.i += 1
-            return float(tok[1])
-        if tok[0] == "punct" and tok[1] == "[":
-            self.i += 1
-            items: list[Any] = []
-            if self.peek()[1] != "]":
-                items.append(self.value())
-                while self.peek()[1] == ",":
-                    self.i += 1
-                    items.append(self.value())
-            self.take("punct", "]", "',' or ']'")
-            return items
-        got = "end of text" if tok[0] == "end" else repr(tok[1])
-        self.fail(f"expected a number or a list, got {got}", tok[2])
+        The states name what the next token may be: ``name`` (the text's distribution),
+        ``argument`` (after ``(``: a parameter or ``)``), ``positional`` (after ``,`` in a
+        call: a parameter), ``item`` (after ``[``: a value or ``]``), ``value`` (a number, a
+        list or a distribution), ``next`` (after a value: ``,``, the closing bracket, or
+        the end of the text after the last one).
+        """
+        toks = [*self.tokens, ("end", "", len(self.text) + 1)]
+        self.open: list[tuple[str, set[str]]] = []  # "(" with the keywords given, or "["
+        steps = {
+            "name": self._name,
+            "argument": self._argument,
+            "positional": self._positional,
+            "item": self._item,
+            "value": self._value,
+            "next": self._next,
+        }
+        want, i = "name", 0
+        while want != "done":
+            want, i = steps[want](toks, i)
 
-    def parse(self) -> Distribution:
-        dist = self.distribution()
-        tail = self.peek()
-        if tail[0] != "end":
-            self.fail(f"unexpected {tail[1]!r} after the closing ')'", tail[2])
-        return dist
+    def _call(self, toks: list[_Token], i: int) -> tuple[str, int]:
+        _, text, col = toks[i]
+        if text.lower() not in _REGISTRY:
+            names = ", ".join(distribution_names())
+            self.fail(f"unknown distribution {text!r}; expected one of {names}", col)
+        if toks[i + 1][1] != "(":
+            self._expected("'('", toks[i + 1])
+        self.open.append(("(", set()))
+        return "argument", i + 2
 
-    def distribution(self) -> Distribution:
-        name_tok = self.take("name", what="a distribution name")
-        name = name_tok[1].lower()
-        if name not in _REGISTRY:
-            self.fail(
-                f"unknown distribution {name_tok[1]!r}; expected one of "
-                f"{', '.join(distribution_names())}",
-                name_tok[2],
+    def _name(self, toks: list[_Token], i: int) -> tuple[str, int]:
+        if toks[i][0] != "name":
+            self._expected("a distribution name", toks[i])
+        return self._call(toks, i)
+
+    def _value(self, toks: list[_Token], i: int) -> tuple[str, int]:
+        kind, text, _ = toks[i]
+        if kind == "name":
+            return self._call(toks, i)
+        if kind == "num":
+            return "next", i + 1
+        if text != "[":
+            self._expected("a number or a list", toks[i])
+        self.open.append(("[", set()))
+        return "item", i + 1
+
+    def _argument(self, toks: list[_Token], i: int) -> tuple[str, int]:
+        if toks[i][1] == ")":
+            self.open.pop()
+            return "next", i + 1
+        return self._positional(toks, i)
+
+    def _positional(self, toks: list[_Token], i: int) -> tuple[str, int]:
+        kind, text, col = toks[i]
+        given = self.open[-1][1]
+        if kind == "name" and toks[i + 1][1] == "=":
+            if text in given:
+                self.fail(f"parameter {text!r} given twice", col)
+            given.add(text)
+            return "value", i + 2
+        if given:
+            self.fail("positional parameter after a keyword parameter", col)
+        return "value", i
+
+    def _item(self, toks: list[_Token], i: int) -> tuple[str, int]:
+        if toks[i][1] == "]":
+            self.open.pop()
+            return "next", i + 1
+        return "value", i
+
+    def _next(self, toks: list[_Token], i: int) -> tuple[str, int]:
+        kind, text, col = toks[i]
+        if not self.open:
+            if kind != "end":
+                self.fail(f"unexpected {text!r} after the closing ')'", col)
+            return "done", i
+        bracket = self.open[-1][0]
+        close = ")" if bracket == "(" else "]"
+        if text == "," and kind == "punct":
+            return ("positional" if bracket == "(" else "value"), i + 1
+        if text != close or kind != "punct":
+            self._expected(f"',' or {close!r}", toks[i])
+        self.open.pop()
+        return "next", i + 1
+
+    def read(self) -> Distribution:
+        """The distribution the text writes (after :meth:`check`)."""
+        self.check()
+        skeleton = [" "] * len(self.text)
+        for kind, tok, col in self.tokens:
+            mark = {"name": "_" * len(tok), "num": "0".ljust(len(tok))}.get(kind, tok)
+            skeleton[col - 1 : col - 1 + len(tok)] = mark
+        flat = "".join(skeleton)
+        start = len(flat) - len(flat.lstrip())
+
+        def error(message: str, column: int | None = None, **_line: Any) -> MtmcError:
+            at = None if column is None else start + column  # a column of the text as given
+            return DistributionError(
+                message, file=self.file, line=self.line, column=at, field=self.field
             )
-        cls = _REGISTRY[name]
-        self.take("punct", "(", "'('")
-        args: list[Any] = []
-        kwargs: dict[str, Any] = {}
-        if self.peek()[1] != ")":
-            while True:
-                tok = self.peek()
-                nxt = self.tokens[self.i + 1] if self.i + 1 < len(self.tokens) else None
-                if tok[0] == "name" and nxt is not None and nxt[1] == "=":
-                    self.i += 1
-                    self.take("punct", "=", "'='")
-                    if tok[1] in kwargs:
-                        self.fail(f"parameter {tok[1]!r} given twice", tok[2])
-                    kwargs[tok[1]] = self.value()
-                else:
-                    if kwargs:
-                        self.fail("positional parameter after a keyword parameter", tok[2])
-                    args.append(self.value())
-                if self.peek()[1] != ",":
-                    break
-                self.i += 1
-        self.take("punct", ")", "',' or ')'")
+
+        tree = parse_tree(flat.strip(), error, shown=self.text.strip())
+        return self.distribution(cast(ast.Call, tree.body), start + 1)  # check(): a call
+
+    def value(self, node: ast.expr, start: int) -> Any:
+        """A tree node of the skeleton back as a PDF, a float or a list of them."""
+        if isinstance(node, ast.Call):
+            return self.distribution(node, start)
+        if isinstance(node, ast.List):
+            return [self.value(n, start) for n in node.elts]
+        return float(self.at[start + node.col_offset])  # the number as written
+
+    def distribution(self, node: ast.Call, start: int) -> Distribution:
+        col = start + node.col_offset
+        cls = _REGISTRY[self.at[col].lower()]
+        args = [self.value(a, start) for a in node.args]
+        kwargs = {self.at[start + k.col_offset]: self.value(k.value, start) for k in node.keywords}
         params = [f for f in dataclasses.fields(cast(Any, cls)) if f.init]
         names = [f.name for f in params]
         required = [
@@ -1353,24 +1396,18 @@ class _Parser:
         )
         signature = f"{cls.name}({', '.join(names)})"
         if len(args) > len(names) or nargs < len(required):
-            self.fail(
-                f"{cls.name} takes {arity} parameters ({signature}), got {nargs}",
-                name_tok[2],
-            )
+            self.fail(f"{cls.name} takes {arity} parameters ({signature}), got {nargs}", col)
         for key in kwargs:
             if key not in names:
                 self.fail(
                     f"{cls.name} has no parameter {key!r}; expected one of {', '.join(names)}",
-                    name_tok[2],
+                    col,
                 )
             if names.index(key) < len(args):
-                self.fail(f"parameter {key!r} given twice", name_tok[2])
+                self.fail(f"parameter {key!r} given twice", col)
         missing = [r for r in required if r not in kwargs and names.index(r) >= len(args)]
         if missing:
-            self.fail(
-                f"{cls.name} is missing parameter(s) {', '.join(missing)} ({signature})",
-                name_tok[2],
-            )
+            self.fail(f"{cls.name} is missing parameter(s) {', '.join(missing)} ({signature})", col)
         try:
             return cls(*args, **kwargs)
         except DistributionError as exc:
@@ -1378,7 +1415,7 @@ class _Parser:
                 f"{exc.message} in {self.text.strip()!r}",
                 file=self.file,
                 line=self.line,
-                column=name_tok[2],
+                column=col,
                 field=self.field if self.field is not None else exc.field,
             ) from None
 
@@ -1394,7 +1431,8 @@ def parse_distribution(
 
     Grammar: ``name(arg, ...)`` where each argument is a number or a bracketed list of
     numbers or lists, optionally given as ``param=value`` after the positional ones. The
-    text is tokenised and parsed; nothing is evaluated.
+    text is read by Python's parser (:mod:`ast`), as a model expression is, after its tokens
+    are checked; nothing is evaluated.
 
     =====================================================  ===========================
     text                                                   PDF
@@ -1447,7 +1485,7 @@ def parse_distribution(
             line=line,
             field=field,
         )
-    return _Parser(text, file, 1 if line is None and file is None else line, field).parse()
+    return _Reader(text, file, 1 if line is None and file is None else line, field).read()
 
 
 def as_distribution(obj: Any, *, field: str | None = None) -> Distribution:

@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.errors import ExpressionError
+from mtmc.errors import ExpressionError, MtmcError
 
 __all__ = [
     "Expression",
@@ -313,6 +313,54 @@ class _Checker(ast.NodeVisitor):
             self.visit(arg)
 
 
+def parse_tree(
+    text: str, error: Callable[..., MtmcError], *, shown: str | None = None
+) -> ast.Expression:
+    """The syntax tree of ``text`` as one Python expression, by :mod:`ast`; nothing is evaluated.
+
+    The one parser of the formulas mtmc reads: model expressions (:func:`expression`) and
+    the text of distributions (:func:`~mtmc.uncertainty.distributions.parse_distribution`),
+    each of which then walks the tree and refuses every node it has no use for.
+
+    Parameters
+    ----------
+    text : str
+        The text, without leading white space.
+    error : callable
+        The error class to raise: ``error(message, line=..., column=...)``.
+    shown : str, optional
+        The text the messages quote (default ``text``).
+
+    Returns
+    -------
+    ast.Expression
+
+    Raises
+    ------
+    MtmcError
+        ``error("syntax error in 'text': <what Python says>", line, column)``, or
+        ``error("cannot parse 'text': ...")`` for a text nested too deeply.
+
+    Examples
+    --------
+    >>> ast.dump(parse_tree("f(1)", ExpressionError).body)
+    "Call(func=Name(id='f', ctx=Load()), args=[Constant(value=1)], keywords=[])"
+    >>> parse_tree("f(1", ExpressionError)
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.ExpressionError: line 1, column 2: syntax error in 'f(1': '(' was never closed
+    """
+    quoted = repr(text if shown is None else shown)
+    try:
+        return ast.parse(text, mode="eval")
+    except SyntaxError as exc:
+        raise error(
+            f"syntax error in {quoted}: {exc.msg}", line=exc.lineno, column=max(1, exc.offset or 1)
+        ) from None
+    except (ValueError, RecursionError, MemoryError) as exc:
+        raise error(f"cannot parse {quoted}: {exc}") from None
+
+
 def expression(text: str) -> Expression:
     """Parse a model formula into a vectorised callable.
 
@@ -353,16 +401,7 @@ def expression(text: str) -> Expression:
     stripped = text.strip()
     if not stripped:
         raise ExpressionError("empty expression; expected a formula such as 'a + b'")
-    try:
-        tree = ast.parse(stripped, mode="eval")
-    except SyntaxError as exc:
-        raise ExpressionError(
-            f"syntax error in {stripped!r}: {exc.msg}",
-            line=exc.lineno,
-            column=max(1, exc.offset or 1),
-        ) from None
-    except (ValueError, RecursionError, MemoryError) as exc:
-        raise ExpressionError(f"cannot parse {stripped!r}: {exc}") from None
+    tree = parse_tree(stripped, ExpressionError)
     checker = _Checker(stripped)
     try:
         checker.visit(tree)

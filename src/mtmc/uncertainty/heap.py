@@ -13,14 +13,21 @@ s of computation.
 
 :func:`keep_heap` sets the two thresholds that mtmc also gives its Dask worker processes
 (:data:`mtmc.parallel.WORKER_MALLOC_ENV`): arrays up to 32 MiB come from the heap and
-up to 256 MiB of free heap is kept, so the blocks of a run reuse the same memory. It is
-called by :func:`~mtmc.uncertainty.monte_carlo` before a run, once per process. It does
+up to 256 MiB of free heap is kept, so the blocks of a run reuse the same memory. On a
+fresh process (best of five, 2 cores) it takes the run of ``axis_c.toml`` at 10⁶ trials
+from 0.50 s to 0.36 s of wall time (75 000 page faults to 1 700), and a three-input
+expression at 2·10⁶ trials from 0.099 s to 0.068 s.
+
+The setting holds for the whole process and glibc cannot undo it (once set, its adaptive
+thresholds stay off), so no library call makes it: the ``mtmc`` command calls
+:func:`keep_heap` when one of its commands runs, the process being its own, and a
+program that runs Monte Carlo often may call it once itself. It does
 nothing where the C library is not glibc, where either threshold was set in the
 environment the process started with (``MALLOC_MMAP_THRESHOLD_``,
 ``MALLOC_TRIM_THRESHOLD_``, ``MALLOC_TOP_PAD_``; glibc reads them once, at start, so a
 variable put into ``os.environ`` later, as Dask's nanny does in the process that starts a
 ``LocalCluster``, has set nothing and does not count), or where ``MTMC_HEAP=system``
-asks to leave the allocator as it is. The cost: a process that has run a Monte Carlo
+asks to leave the allocator as it is. The cost: a process that has called it
 keeps up to 256 MiB of freed memory for its next arrays instead of returning it to the
 system. No number of a run depends on it.
 """

@@ -34,7 +34,6 @@ from mtmc.errors import ConvergenceError, InputError
 from mtmc.parallel import ExecutorKind, map_blocks
 from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.distributions import Distribution, NormalMethod
-from mtmc.uncertainty.heap import keep_heap
 from mtmc.uncertainty.results import (
     MAX_COV_DIM,
     Moments,
@@ -779,10 +778,11 @@ def monte_carlo(
     little: where the PDF is symmetric, ``kind="symmetric"`` watches the same interval
     with far less noise.
 
-    Memory: the first run in a process sets glibc's ``malloc`` to keep freed heap memory
-    for the next block (:func:`mtmc.uncertainty.heap.keep_heap`; ``MTMC_HEAP=system``
-    leaves it as it is): without it each block page-faults its arrays in afresh, which
-    cost a graph run of 10⁶ trials a third of its time.
+    Memory: a run leaves the allocator of the calling process as it is. With glibc's
+    default ``malloc`` each block page-faults its arrays in afresh, which costs a graph run
+    of 10⁶ trials a quarter of its time; the ``mtmc`` command keeps freed heap memory for
+    the next block (:func:`mtmc.uncertainty.heap.keep_heap`), and a program that runs
+    Monte Carlo often may call that once itself.
 
     With several workers the blocks are evaluated ahead in parallel but the stopping
     rule is applied block by block in order, so the number of trials and every value are
@@ -809,7 +809,6 @@ def monte_carlo(
         raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
     keep_set = _check_names(keep, "keep", (True, False, "auto"))
     sketch_set = _check_names(sketch, "sketch", (True, False, None))
-    keep_heap()  # the blocks reuse the heap instead of page-faulting it in again
     runner = _Runner(
         model, dists, seed_int, method, block_size, workers, executor, scheduler, sampling
     )

@@ -54,12 +54,16 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import IdentifiabilityError, InputError
-from mtmc.geometry.transforms import axis_angle_from_matrix
+from mtmc.geometry.transforms import (
+    cross_matrix,
+    matrix_from_rotation_vector,
+    rotation_vector_from_matrix,
+)
 from mtmc.instruments.laser_tracker import LaserTracker
 from mtmc.kinematics.functions import ErrorFunction
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.parameters import ErrorModel
-from mtmc.verification.lsq import STATUS, least_squares
+from mtmc.verification.lsq import SolverStatus, least_squares
 
 __all__ = [
     "POSE_NAMES",
@@ -68,8 +72,6 @@ __all__ = [
     "identifiability",
     "identify",
     "parameter_unit",
-    "expmap",
-    "logmap",
     "ve_stats",
 ]
 
@@ -116,38 +118,6 @@ def parameter_unit(machine: Machine, name: str) -> str:
 
 #: Default relative threshold on the singular values of the column-scaled Jacobian.
 RANK_TOL: float = 1e-9
-
-
-def expmap(phi: npt.ArrayLike) -> _F:
-    """Rotation matrices ``Exp(φ)`` of rotation vectors (Rodrigues), shape (..., 3, 3).
-
-    Exact at ``φ = 0`` (series for the coefficients below 1e-4 rad).
-    """
-    p = np.asarray(phi, dtype=np.float64)
-    th2 = np.sum(p * p, axis=-1)
-    th = np.sqrt(th2)
-    small = th < 1e-4
-    ths = np.where(small, 1.0, th)
-    a = np.where(small, 1.0 - th2 / 6.0, np.sin(ths) / ths)
-    b = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(ths)) / (ths * ths))
-    K = _skew(p)
-    eye = np.broadcast_to(np.eye(3), K.shape)
-    out: _F = eye + a[..., None, None] * K + b[..., None, None] * (K @ K)
-    return out
-
-
-def logmap(R: npt.ArrayLike) -> _F:
-    """Rotation vectors ``φ`` (axis × angle) of rotation matrices, shape (..., 3)."""
-    ax, ang = axis_angle_from_matrix(np.asarray(R, dtype=np.float64))
-    return np.asarray(ax) * np.asarray(ang)[..., None]
-
-
-def _skew(v: _F) -> _F:
-    K = np.zeros((*v.shape[:-1], 3, 3))
-    K[..., 0, 1], K[..., 0, 2] = -v[..., 2], v[..., 1]
-    K[..., 1, 0], K[..., 1, 2] = v[..., 2], -v[..., 0]
-    K[..., 2, 0], K[..., 2, 1] = -v[..., 1], v[..., 0]
-    return K
 
 
 def ve_stats(ve: npt.ArrayLike) -> _F:
@@ -260,7 +230,7 @@ def identifiability(
 
 
 @dataclass(frozen=True)
-class Identification:
+class Identification(SolverStatus):
     """Result of :func:`identify` for ``M`` sets of readings (arrays read-only).
 
     Attributes
@@ -311,15 +281,6 @@ class Identification:
             "residual_ve", "residuals", "status", "iterations", "jacobian",
         ):  # fmt: skip
             getattr(self, n).setflags(write=False)
-
-    @property
-    def converged(self) -> NDArray[np.bool_]:
-        """Per set of readings: did the solver converge."""
-        return self.status > 0
-
-    def messages(self) -> tuple[str, ...]:
-        """Solver status in words."""
-        return tuple(STATUS[int(s)] for s in self.status)
 
     @property
     def u(self) -> _F:
@@ -380,7 +341,7 @@ class _Problem:
         k = self.free.size
         th[:, self.free] = x[:, :k]
         if self.pose:
-            R = self.R0 @ expmap(x[:, k : k + 3])
+            R = self.R0 @ matrix_from_rotation_vector(x[:, k : k + 3])
             t = self.t0 + x[:, k + 3 : k + 6]
         else:
             R = np.broadcast_to(self.R0, (m, 3, 3))
@@ -440,7 +401,7 @@ class _Problem:
                 xr = self.cache["readings"]
             else:
                 xr = (self.positions(th) - t[:, None, :]) @ R
-            Jw = _skew(xr)
+            Jw = cross_matrix(xr)
             Jtr = -np.broadcast_to(np.swapaxes(R, 1, 2)[:, None], (m, N, 3, 3))
             Jt = np.concatenate([Jt, Jw, Jtr], axis=-1)
         out: _F = Jt.reshape(m, 3 * N, -1)
@@ -450,7 +411,10 @@ class _Problem:
         out = x + d
         if self.pose:
             k = self.free.size
-            out[:, k : k + 3] = logmap(expmap(x[:, k : k + 3]) @ expmap(d[:, k : k + 3]))
+            out[:, k : k + 3] = rotation_vector_from_matrix(
+                matrix_from_rotation_vector(x[:, k : k + 3])
+                @ matrix_from_rotation_vector(d[:, k : k + 3])
+            )
         return out
 
 

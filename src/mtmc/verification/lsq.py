@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import InputError
 
-__all__ = ["LeastSquaresResult", "least_squares", "STATUS"]
+__all__ = ["LeastSquaresResult", "SolverStatus", "least_squares", "STATUS"]
 
 _F = NDArray[np.float64]
 
@@ -62,8 +62,26 @@ STATUS: dict[int, str] = {
 }
 
 
+class SolverStatus:
+    """What the solver says of each of ``M`` problems: :attr:`converged`, :meth:`messages`.
+
+    A base of the results that carry a ``status`` array of :data:`STATUS` codes.
+    """
+
+    status: NDArray[np.int64]
+
+    @property
+    def converged(self) -> NDArray[np.bool_]:
+        """True where the status is 1 to 4 (the solver converged), shape (M,)."""
+        return self.status > 0
+
+    def messages(self) -> tuple[str, ...]:
+        """:data:`STATUS` text of each problem."""
+        return tuple(STATUS[int(s)] for s in self.status)
+
+
 @dataclass(frozen=True)
-class LeastSquaresResult:
+class LeastSquaresResult(SolverStatus):
     """Solutions of ``M`` least-squares problems (arrays read-only).
 
     Attributes
@@ -90,15 +108,6 @@ class LeastSquaresResult:
     def __post_init__(self) -> None:
         for n in ("x", "cost", "status", "iterations", "jac", "residuals"):
             getattr(self, n).setflags(write=False)
-
-    @property
-    def converged(self) -> NDArray[np.bool_]:
-        """True where the status is 1 to 4."""
-        return self.status > 0
-
-    def messages(self) -> tuple[str, ...]:
-        """:data:`STATUS` text of each problem."""
-        return tuple(STATUS[int(s)] for s in self.status)
 
     def covariance(self, sigma2: npt.ArrayLike | None = None) -> _F:
         """Covariance of the solution, ``s² (JᵀJ)⁻¹``, shape (M, P, P).

@@ -26,41 +26,28 @@ from mtmc.errors import InputError
 from mtmc.geometry.transforms import rotation_z
 from mtmc.instruments.laser_tracker import LaserTracker, TrackerLimits, visibility
 from mtmc.verification.identify import _problem
-from mtmc.verification.simulate import Verification
+from mtmc.verification.simulate import Verification, _gum_propagate
 
-__all__ = ["Placement", "gum_point_u", "place"]
+__all__ = ["Placement", "place"]
 
 _F = NDArray[np.float64]
 
 
-def gum_point_u(ver: Verification, tracker: LaserTracker) -> float:
+def _gum_score(ver: Verification, tracker: LaserTracker) -> float:
     """Mean calibration uncertainty of the points (mm) by the GUM, at the nominal machine.
 
-    Parameters
-    ----------
-    ver : Verification
-        Model, points, pose and fixed parameters (its tracker is replaced).
-    tracker : LaserTracker
-        The candidate (with noise).
-
-    Returns
-    -------
-    float
-        Mean over the points of ``√trace`` of the compensated position's covariance, mm.
+    The propagation of :func:`~mtmc.verification.simulate.gum_verification` with the tracker
+    noise alone, at the nominal machine and pose (``A = J⁺``, the compensated points the
+    measured ones): the mean over the points of ``√trace`` of their covariance.
     """
     if tracker.noise is None:
         raise InputError("the tracker has no noise model", field="tracker")
     prob = _problem(ver.model, ver.q, tracker, ver.pose, ver.fixed, ver.exact)
     p = prob.free.size + (6 if ver.pose else 0)
     J = prob.jac(np.zeros((1, p)))[0]
-    A = np.linalg.pinv(J)
     N = ver.n_points
     x = tracker.to_tracker(ver.model.machine.tool_position(ver.q))
-    C = tracker.noise.covariance(x)
-    A3 = A.reshape(-1, N, 3)
-    cov = np.einsum("pni,nij,qnj->pq", A3, C, A3)
-    G = J.reshape(N, 3, p)
-    pc = np.einsum("nik,kl,njl->nij", G, cov, G)
+    _, pc = _gum_propagate(np.linalg.pinv(J), tracker.noise.covariance(x), J.reshape(N, 3, p))
     return float(np.mean(np.sqrt(np.trace(pc, axis1=1, axis2=2))))
 
 
@@ -167,7 +154,7 @@ def place(
                 if not visibility(lt, pts, limits, reference=ref_i).ok:
                     rejected += 1
                     continue
-                u = gum_point_u(ver, lt)
+                u = _gum_score(ver, lt)
                 scored += 1
                 if best is None or u < best[0]:
                     best = (u, lt)
@@ -185,7 +172,7 @@ def place(
         lt = LaserTracker.from_euler(w[:3], w[3:], seq="xyz", noise=noise, name="best")
         if not visibility(lt, pts, limits, reference=ref_i).ok:
             return math.inf
-        return gum_point_u(ver, lt)
+        return _gum_score(ver, lt)
 
     opt = minimize(
         score,
@@ -199,7 +186,7 @@ def place(
             float(opt.fun),
             LaserTracker.from_euler(w[:3], w[3:], seq="xyz", noise=noise, name="best"),
         )
-    refs = {n: gum_point_u(ver, lt) for n, lt in (references or {}).items()}
+    refs = {n: _gum_score(ver, lt) for n, lt in (references or {}).items()}
     u_mc = None
     if trials > 0:
         b = best[1]
