@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-dev
 
-.PHONY: demo test lint typecheck unit bench clean vendor
+.PHONY: demo test lint typecheck unit fuzz bench clean vendor
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,13 @@ typecheck: $(STAMP)
 COV_FLOOR ?= 93
 unit: $(STAMP)
 	$(BIN)/pytest --cov=mtmc --cov-report=term-missing:skip-covered --cov-fail-under=$(COV_FLOOR)
+
+## fuzz: hostile input at a larger budget: the property of tests/fuzz (2000 cases), then a
+## random campaign over every reader and command that reads a file, with counts by outcome
+FUZZ_CASES ?= 2000
+fuzz: $(STAMP)
+	MTMC_FUZZ_EXAMPLES=$(FUZZ_CASES) $(BIN)/pytest tests/fuzz --no-cov -p no:cacheprovider -q
+	cd tests/fuzz && ../../$(BIN)/python mtmc_fuzz.py --cases $(FUZZ_CASES) --seed 1 --quiet
 
 ## bench: the benchmarks of benchmarks/ (installs suncal for the side-by-side comparison)
 bench: $(STAMP)

@@ -33,9 +33,13 @@ from mtmc.errors import InputError, ParseError
 from mtmc.io import decode_utf8
 
 __all__ = [
+    "MAX_DEPTH",
     "Fields",
     "KeyPath",
     "Source",
+    "MAX_MM",
+    "MAX_NAMES",
+    "check_length",
     "check_number",
     "key_lines",
     "load_toml",
@@ -44,6 +48,12 @@ __all__ = [
 ]
 
 _REQUIRED: Any = object()
+
+#: The most names an array of names may hold (``outputs``, ``fixed``).
+MAX_NAMES = 1000
+
+#: The largest coordinate or length (mm) a file may give: 1 km is no machine tool's.
+MAX_MM = 1e6
 
 _HEADER = re.compile(r"""^\s*(\[\[?)\s*([A-Za-z0-9_\-."' ]+?)\s*\]\]?\s*(#.*)?$""")
 _KEY = re.compile(
@@ -124,6 +134,7 @@ class _Value:
 
     def __init__(self) -> None:
         self.depth = 0
+        self.peak = 0
         self.string = ""
 
     @property
@@ -156,6 +167,7 @@ class _Value:
             else:
                 if c in "[{":
                     self.depth += 1
+                    self.peak = max(self.peak, self.depth)
                 elif c in "]}":
                     self.depth = max(0, self.depth - 1)
                 i += 1
@@ -291,8 +303,14 @@ class Fields:
             raise self.error(f"expected one of {', '.join(map(repr, opts))}, got {v!r}", key)
         return v
 
-    def integer(self, key: str, default: Any = _REQUIRED, minimum: int | None = None) -> Any:
-        """An integer field, at least ``minimum``."""
+    def integer(
+        self,
+        key: str,
+        default: Any = _REQUIRED,
+        minimum: int | None = None,
+        maximum: int | None = None,
+    ) -> Any:
+        """An integer field, at least ``minimum`` and at most ``maximum``."""
         v = self._get(key, default)
         if v is default and key not in self.data:
             return v
@@ -300,6 +318,8 @@ class Fields:
             raise self.error(f"expected an integer, got {_typename(v)} {v!r}", key)
         if minimum is not None and v < minimum:
             raise self.error(f"expected an integer >= {minimum}, got {v}", key)
+        if maximum is not None and v > maximum:
+            raise self.error(f"expected an integer <= {maximum}, got {v}", key)
         return v
 
     def number(
@@ -325,13 +345,19 @@ class Fields:
             raise self.error(f"expected true or false, got {_typename(v)} {v!r}", key)
         return v
 
-    def texts(self, key: str, default: Any = _REQUIRED) -> Any:
-        """A non-empty array of strings, as a tuple."""
+    def texts(self, key: str, default: Any = _REQUIRED, max_items: int = MAX_NAMES) -> Any:
+        """A non-empty array of distinct strings (at most ``max_items``), as a tuple."""
         v = self._get(key, default)
         if v is default and key not in self.data:
             return v
         if not isinstance(v, list) or not v or not all(isinstance(x, str) for x in v):
-            raise self.error(f"expected a non-empty array of strings, got {v!r}", key)
+            raise self.error(f"expected a non-empty array of strings, got {_short(v)}", key)
+        check_length(v, max_items, lambda msg: self.error(msg, key))
+        seen: set[str] = set()
+        for x in v:
+            if x in seen:
+                raise self.error(f"{x!r} is listed twice; expected each name once", key)
+            seen.add(x)
         return tuple(v)
 
     def table(self, key: str, required: bool = True) -> Fields | None:
@@ -344,6 +370,18 @@ class Fields:
         return Fields(self.source, v, (*self.path, key))
 
 
+def _short(v: Any, n: int = 80) -> str:
+    """``repr(v)``, cut to ``n`` characters."""
+    r = repr(v)
+    return r if len(r) <= n else r[: n - 3] + "..."
+
+
+def check_length(v: Any, maximum: int, err: Callable[[str], InputError]) -> None:
+    """Refuse an array ``v`` of more than ``maximum`` entries: ``err(message)`` raised."""
+    if len(v) > maximum:
+        raise err(f"expected at most {maximum} entries, got {len(v)}")
+
+
 def check_number(
     v: Any,
     err: Callable[[str], InputError],
@@ -354,7 +392,7 @@ def check_number(
 ) -> float:
     """``v`` as a finite float in the range, or ``err(message)`` raised."""
     if isinstance(v, bool) or not isinstance(v, int | float):
-        raise err(f"expected a number, got {_typename(v)} {v!r}")
+        raise err(f"expected a number, got {_typename(v)} {_short(v)}")
     f = float(v)
     if not math.isfinite(f):
         raise err(f"expected a finite number, got {v!r}")
@@ -417,6 +455,8 @@ def parse_toml(text: str, file: str | None = "<toml>", folder: Path | None = Non
     """
     try:
         data = tomllib.loads(text)
+    except RecursionError:
+        raise _too_deep(text, file) from None
     except tomllib.TOMLDecodeError as exc:
         m = re.search(r"line (\d+), column (\d+)", str(exc))
         line, col = (int(m.group(1)), int(m.group(2))) if m else (None, None)
@@ -426,7 +466,40 @@ def parse_toml(text: str, file: str | None = "<toml>", folder: Path | None = Non
             line, col = len(lines_), len(lines_[-1]) + 1
             msg += " at the end of the file"
         raise ParseError(f"not valid TOML: {msg}", file=file, line=line, column=col) from None
+    if _depth(data) > MAX_DEPTH:
+        raise _too_deep(text, file)
     return Fields(Source.from_text(text, file or "<toml>", folder), data)
+
+
+#: The deepest nesting of arrays and inline tables a file may have (``[[[1]]]`` is 3 deep).
+MAX_DEPTH = 32
+
+
+def _depth(value: Any) -> int:
+    """How deep arrays and tables nest in ``value`` (0 for a scalar), without recursion."""
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        v, d = stack.pop()
+        deepest = max(deepest, d)
+        if deepest > MAX_DEPTH:
+            break
+        if isinstance(v, dict):
+            stack.extend((x, d + 1) for x in v.values())
+        elif isinstance(v, list):
+            stack.extend((x, d + 1) for x in v)
+    return deepest
+
+
+def _too_deep(text: str, file: str | None) -> ParseError:
+    """The error for a value nested deeper than :data:`MAX_DEPTH`, at the first line that is."""
+    state, line = _Value(), None
+    for n, raw in enumerate(text.splitlines(), start=1):
+        state.scan(raw)
+        if state.peak > MAX_DEPTH:
+            line = n
+            break
+    msg = f"arrays and tables nested too deep; expected at most {MAX_DEPTH} levels"
+    return ParseError(msg, file=file, line=line)
 
 
 def load_toml(path: str | Path, what: str = "file") -> Fields:

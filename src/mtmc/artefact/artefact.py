@@ -249,12 +249,12 @@ def loads_artefact(text: str, file: str = "<artefact>") -> Artefact:
     InputError
         On a missing or malformed field, naming the file, line and field.
     """
-    from mtmc.document import Fields, parse_toml
+    from mtmc.document import MAX_MM, Fields, parse_toml
 
     top = parse_toml(text, file)
     src, data = top.source, top.data
     top.only(("name", "description", "diameter", "cmm", "ball"))
-    diameter = top.number("diameter", low=0.0, open_low=True)
+    diameter = top.number("diameter", low=0.0, high=MAX_MM, open_low=True)
     cmm = top.table("cmm", required=False)
     a_um, divisor = 0.25, 300.0
     if cmm is not None:
@@ -264,6 +264,8 @@ def loads_artefact(text: str, file: str = "<artefact>") -> Artefact:
     balls = data.get("ball")
     if not isinstance(balls, list) or len(balls) < 2:
         raise top.error("expected at least two [[ball]] tables", "ball")
+    if len(balls) > MAX_BALLS:
+        raise top.error(f"expected at most {MAX_BALLS} [[ball]] tables, got {len(balls)}", "ball")
     names, centres = [], []
     for k, raw in enumerate(balls):
         if not isinstance(raw, dict):
@@ -288,14 +290,22 @@ def loads_artefact(text: str, file: str = "<artefact>") -> Artefact:
 def _triple(f: Any, key: str) -> list[float]:
     """Three finite numbers from field ``key`` of a :class:`~mtmc.document.Fields`."""
     v = f._get(key, None) if f.has(key) else None
+    from mtmc.document import MAX_MM
+
     if not (
         isinstance(v, list)
         and len(v) == 3
         and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
-        and all(np.isfinite(v))
+        and all(abs(float(x)) <= MAX_MM for x in v)
     ):
-        raise f.error(f"expected three finite numbers [x, y, z], got {v!r}", key)
+        raise f.error(
+            f"expected three finite numbers [x, y, z] of at most {MAX_MM:g} mm, got {v!r}", key
+        )
     return [float(x) for x in v]
+
+
+#: The most balls an artefact file may have.
+MAX_BALLS = 100
 
 
 def load_artefact(path: str | Path) -> Artefact:

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import read_text
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
 
@@ -147,10 +148,7 @@ def read_gravity(path: str | Path) -> GravityEffect:
         Naming the file and line of a bad row or header.
     """
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise InputError(f"cannot read the measurements: {exc.strerror}", file=str(p)) from None
+    text = read_text(p, "measurements")
     rows: list[tuple[str, str, float, float, float]] = []
     header = None
     for lineno, raw in enumerate(text.splitlines(), start=1):

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,6 +28,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from mtmc.document import MAX_MM, read_text
 from mtmc.errors import InputError
 from mtmc.geometry.fits import fit_sphere
 
@@ -276,10 +276,7 @@ def read_points(path: str | Path, units: str = "mm") -> _F:
             f"expected units mm, m or um, got {units!r}", field="units", file=str(path)
         )
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise InputError(f"cannot read the points file: {exc.strerror}", file=str(p)) from None
+    text = read_text(p, "points file")
     rows: list[tuple[float, float, float]] = []
     first = True
     for lineno, raw in enumerate(text.splitlines(), start=1):
@@ -293,7 +290,7 @@ def read_points(path: str | Path, units: str = "mm") -> _F:
             fields = line.split()
         try:
             vals = [float(f) for f in fields]
-            ok = len(vals) == 3 and all(math.isfinite(v) for v in vals)
+            ok = len(vals) == 3 and all(abs(v) <= MAX_MM / UNITS[units] for v in vals)
         except ValueError:
             ok = False
         if not ok:
@@ -301,7 +298,9 @@ def read_points(path: str | Path, units: str = "mm") -> _F:
                 first = False
                 continue  # a header row
             raise InputError(
-                f"expected three finite numbers x, y, z, got {line!r}", file=str(p), line=lineno
+                f"expected three finite numbers x, y, z of at most {MAX_MM:g} mm, got {line!r}",
+                file=str(p),
+                line=lineno,
             )
         first = False
         rows.append((vals[0], vals[1], vals[2]))

@@ -38,7 +38,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.errors import InputError
+from mtmc.errors import DegenerateGeometryError, InputError
 
 __all__ = [
     "Multilateration",
@@ -156,6 +156,34 @@ def datum_frame(
     return Cd, Pd
 
 
+def _check_stations(C: _F, solid: bool, field: str) -> None:
+    """Refuse stations on one line (or, when ``solid``, on one plane).
+
+    Raises
+    ------
+    DegenerateGeometryError
+        Naming ``field``: the lengths from such stations do not fix a point (a circle or a
+        mirror pair of solutions is as good).
+    """
+    pts = C.reshape(-1, *C.shape[-2:])[0]
+    if not np.all(np.isfinite(pts)):
+        raise InputError("expected finite station coordinates", field=field)
+    s = np.linalg.svd(pts - pts.mean(axis=0), compute_uv=False)
+    tiny = 1e-9 * max(float(s[0]), 1e-300)
+    if s[1] <= tiny:
+        raise DegenerateGeometryError("the stations lie on one line", field=field)
+    if solid and s[2] <= tiny:
+        raise DegenerateGeometryError(
+            "the stations lie in one plane; expected four or more not in one plane", field=field
+        )
+
+
+def _singular(field: str) -> DegenerateGeometryError:
+    return DegenerateGeometryError(
+        "the stations and lengths do not fix the points (a singular system)", field=field
+    )
+
+
 def _linear_points(C: _F, d: _F) -> _F:
     """Linear trilateration (S >= 4 non-coplanar).
 
@@ -262,19 +290,23 @@ def trilaterate(
             f"expected (S, 3) stations with S >= 3, got shape {C.shape}", field="stations"
         )
     d = _lengths(lengths, C.shape[1])
+    _check_stations(C, points0 is None and C.shape[1] >= 4, "stations")
     m = d.shape[0]
     C = np.broadcast_to(C, (m, *C.shape[1:]))
-    P = _start_points(C, d, points0)
     scale = float(np.max(d))
     done = np.zeros(m, dtype=bool)
     it = 0
-    for it in range(1, max_iter + 1):  # noqa: B007 - iterations, not trials
-        _, _, H, g = _point_normal(P, C, d)
-        step = -np.linalg.solve(H, g[..., None])[..., 0]
-        P = P + step
-        done = np.max(np.abs(step), axis=(1, 2)) <= tol * scale
-        if np.all(done):
-            break
+    try:
+        P = _start_points(C, d, points0)
+        for it in range(1, max_iter + 1):  # noqa: B007 - iterations, not trials
+            _, _, H, g = _point_normal(P, C, d)
+            step = -np.linalg.solve(H, g[..., None])[..., 0]
+            P = P + step
+            done = np.max(np.abs(step), axis=(1, 2)) <= tol * scale
+            if np.all(done):
+                break
+    except np.linalg.LinAlgError:
+        raise _singular("lengths") from None
     return _result(P, np.array(C), d, done, it)
 
 
@@ -331,7 +363,11 @@ def self_calibrate(
             f"self-calibrate, got {N}",
             field="lengths",
         )
-    P0 = _start_points(C0[None], d[:1], points0)[0]
+    _check_stations(C0, points0 is None, "stations0")
+    try:
+        P0 = _start_points(C0[None], d[:1], points0)[0]
+    except np.linalg.LinAlgError:
+        raise _singular("lengths") from None
     Cd, Pd = datum_frame(C0, P0)
     assert Pd is not None
     # free station coordinates in the datum: C1.x, C2.x, C2.y, then all of C3...
@@ -344,27 +380,30 @@ def self_calibrate(
     scale = float(np.max(d))
     done = np.zeros(m, dtype=bool)
     it = 0
-    for it in range(1, max_iter + 1):  # noqa: B007 - iterations, not trials
-        r, e, Hpp, gp = _point_normal(P, C, d)
-        # station Jacobian: dr_si/dC_s = -e_si; columns of the free coordinates
-        Jc = np.zeros((m, S, N, k))
-        for j in range(k):  # loop over the few station unknowns
-            Jc[:, sidx[j], :, j] = -e[:, sidx[j], :, cidx[j]]
-        Hcc = np.einsum("msnj,msnl->mjl", Jc, Jc)
-        gc = np.einsum("msnj,msn->mj", Jc, r)
-        Hpc = np.einsum("msni,msnj->mnij", e, Jc)  # (M, N, 3, k)
-        Hpp_inv = np.linalg.inv(Hpp)
-        X = Hpp_inv @ Hpc  # (M, N, 3, k)
-        Sred = Hcc - np.einsum("mnij,mnil->mjl", Hpc, X)
-        rhs = gc - np.einsum("mnil,mni->ml", X, gp)
-        dc = -np.linalg.solve(Sred, rhs[..., None])[..., 0]
-        dp = -(Hpp_inv @ gp[..., None])[..., 0] - np.einsum("mnil,ml->mni", X, dc)
-        C[:, sidx, cidx] += dc
-        P += dp
-        step = np.maximum(np.max(np.abs(dc), axis=1), np.max(np.abs(dp), axis=(1, 2)))
-        done = step <= tol * scale
-        if np.all(done):
-            break
+    try:
+        for it in range(1, max_iter + 1):  # noqa: B007 - iterations, not trials
+            r, e, Hpp, gp = _point_normal(P, C, d)
+            # station Jacobian: dr_si/dC_s = -e_si; columns of the free coordinates
+            Jc = np.zeros((m, S, N, k))
+            for j in range(k):  # loop over the few station unknowns
+                Jc[:, sidx[j], :, j] = -e[:, sidx[j], :, cidx[j]]
+            Hcc = np.einsum("msnj,msnl->mjl", Jc, Jc)
+            gc = np.einsum("msnj,msn->mj", Jc, r)
+            Hpc = np.einsum("msni,msnj->mnij", e, Jc)  # (M, N, 3, k)
+            Hpp_inv = np.linalg.inv(Hpp)
+            X = Hpp_inv @ Hpc  # (M, N, 3, k)
+            Sred = Hcc - np.einsum("mnij,mnil->mjl", Hpc, X)
+            rhs = gc - np.einsum("mnil,mni->ml", X, gp)
+            dc = -np.linalg.solve(Sred, rhs[..., None])[..., 0]
+            dp = -(Hpp_inv @ gp[..., None])[..., 0] - np.einsum("mnil,ml->mni", X, dc)
+            C[:, sidx, cidx] += dc
+            P += dp
+            step = np.maximum(np.max(np.abs(dc), axis=1), np.max(np.abs(dp), axis=(1, 2)))
+            done = step <= tol * scale
+            if np.all(done):
+                break
+    except np.linalg.LinAlgError:
+        raise _singular("lengths") from None
     return _result(P, C, d, done, it)
 
 

@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import read_text
 from mtmc.errors import InputError
-from mtmc.io import decode_utf8
 
 __all__ = [
     "COLUMNS",
@@ -355,12 +355,5 @@ def read_positioning_csv(
         number, an unknown direction, a reading given twice, a target without every run
         in both directions, an unreadable file.
     """
-    p = Path(path)
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise InputError(
-            f"cannot read the positioning file: {exc.strerror or exc}", file=str(path)
-        ) from None
-    text = decode_utf8(data, str(path)).lstrip("\ufeff")
+    text = read_text(path, "positioning file")
     return parse_positioning_csv(text, str(path), columns=columns, units=units)

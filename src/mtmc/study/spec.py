@@ -17,6 +17,9 @@ from typing import TYPE_CHECKING, Any
 from mtmc.document import Fields, parse_toml, read_text
 from mtmc.errors import InputError, MtmcError
 
+#: The most Monte Carlo trials ``[run] trials`` may ask for.
+MAX_TRIALS = 1_000_000_000
+
 if TYPE_CHECKING:
     from mtmc.study.base import Study
 
@@ -92,11 +95,11 @@ class RunSettings:
             return cls(trials=default_trials)
         run.only(("trials", "seed", "p", "interval", "ndig", "samples", *extra))
         return cls(
-            trials=run.integer("trials", default_trials, minimum=2),
+            trials=run.integer("trials", default_trials, minimum=2, maximum=MAX_TRIALS),
             seed=run.integer("seed", None, minimum=0),
             p=run.number("p", 0.95, low=0.0, high=1.0, open_low=True, open_high=True),
             interval=run.text("interval", "symmetric", choices=("symmetric", "shortest")),
-            ndig=run.integer("ndig", 2, minimum=1),
+            ndig=run.integer("ndig", 2, minimum=1, maximum=15),
             samples=run.flag("samples", False),
         )
 

@@ -46,6 +46,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from mtmc.document import read_text
 from mtmc.errors import InputError, ParseError
 from mtmc.io import write_text_atomic
 from mtmc.kinematics.error_terms import ErrorTerm, parse_error_name
@@ -1099,9 +1100,4 @@ def load_compensation(path: str | Path, fmt: str) -> CompensationTable:
         raise InputError(
             f"expected a format among {', '.join(FORMATS)}, got {fmt!r}", field="format"
         )
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read the file: {exc.strerror or exc}", file=str(path)) from None
-    return _READERS[fmt](text, str(path))
+    return _READERS[fmt](read_text(path), str(path))

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import MAX_MM, read_text
 from mtmc.errors import InputError
 from mtmc.instruments.laser_tracker import LaserTracker
 from mtmc.instruments.multilateration import datum_pose, self_calibrate, trilaterate
@@ -148,6 +149,12 @@ def parse_identification_csv(
             raise InputError(
                 f"expected {len(header)} numbers, got {','.join(cells)!r}", file=file, line=ln
             ) from None
+        for j, v in zip(idx, vals[-1], strict=True):
+            if not abs(v) <= MAX_MM:
+                raise InputError(
+                    f"expected a finite number of at most {MAX_MM:g} in size, got {cells[j]!r}",
+                    file=file, line=ln, column=j + 1, field=header[j],
+                )  # fmt: skip
     if not vals:
         raise InputError("no data rows", file=file)
     arr = np.array(vals, dtype=np.float64)
@@ -165,11 +172,7 @@ def read_identification_csv(
     InputError
         If the file cannot be read, or as :func:`parse_identification_csv`.
     """
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read the data: {exc.strerror or exc}", file=str(path)) from None
-    return parse_identification_csv(text, axes, stations, str(path))
+    return parse_identification_csv(read_text(path, "data"), axes, stations, str(path))
 
 
 def measured_points(

@@ -208,6 +208,10 @@ def _is_angle(machine: Machine, name: str) -> bool:
     return bool(machine.error_term(name).angular)
 
 
+#: The highest degree of an error function in ``[model] errors``.
+MAX_DEGREE = 20
+
+
 def _vector(f: Fields, key: str, n: int = 3) -> _F:
     v = f.data.get(key)
     if v is None:
@@ -377,14 +381,16 @@ def _templates(
         name = _term_name(machine, ef, key)
         if v == "constant":
             templates[name] = 0.0
-        elif isinstance(v, int) and not isinstance(v, bool) and v >= 1:
+        elif isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= MAX_DEGREE:
             term = machine.error_term(name)
             if term.axis not in travel:
                 raise ef.error(f'{name} is not a function of an axis; write "constant"', key)
             lo, hi = travel[term.axis]
             templates[name] = _function(kind, [0.0] * (v + 1), lo, hi)
         else:
-            raise ef.error(f'expected a degree >= 1 or "constant", got {v!r}', key)
+            raise ef.error(
+                f'expected a degree from 1 to {MAX_DEGREE} or "constant", got {v!r}', key
+            )
     return templates
 
 

@@ -36,6 +36,7 @@ array([[   0.,    0.,    0.],
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -86,6 +87,10 @@ def _box(start: npt.ArrayLike, end: npt.ArrayLike) -> tuple[NDArray[np.float64],
     return lo, hi
 
 
+#: The most positions one axis of a mesh, and the whole mesh, may have.
+MAX_POSITIONS = 100_000
+
+
 def axis_values(
     start: float, end: float, *, step: float | None = None, count: int | None = None
 ) -> NDArray[np.float64]:
@@ -134,11 +139,19 @@ def axis_values(
     if count is not None:
         if isinstance(count, bool) or int(count) != count or count < 2:
             raise InputError(f"expected a count >= 2 for start < end, got {count!r}", field="count")
+        if count > MAX_POSITIONS:
+            raise InputError(f"expected a count <= {MAX_POSITIONS}, got {count!r}", field="count")
         return np.linspace(lo, hi, int(count))
     assert step is not None
     if not (np.isfinite(step) and step > 0):
         raise InputError(f"expected a step > 0, got {step!r}", field="step")
     k = span / step
+    if not k <= MAX_POSITIONS:
+        raise InputError(
+            f"a step of {step:g} gives {k:.3g} positions from {lo:g} to {hi:g}; "
+            f"expected at most {MAX_POSITIONS}",
+            field="step",
+        )
     n = round(k)
     if n < 1 or abs(k - n) > _TOL * max(1.0, k):
         raise InputError(
@@ -161,7 +174,7 @@ def _grid(
         raise InputError("expected either step or counts, not both or neither", field="step")
     if step is not None:
         st = np.broadcast_to(np.asarray(step, dtype=np.float64), (d,))
-        return [axis_values(lo[i], hi[i], step=float(st[i])) for i in range(d)]
+        return _bounded([axis_values(lo[i], hi[i], step=float(st[i])) for i in range(d)])
     cn = np.broadcast_to(np.asarray(counts), (d,))
     out = []
     for i in range(d):
@@ -169,7 +182,15 @@ def _grid(
         if not (np.issubdtype(np.asarray(c).dtype, np.integer) or float(c).is_integer()):
             raise InputError(f"axis {i}: expected an integer count, got {c!r}", field="counts")
         out.append(axis_values(lo[i], hi[i], count=1 if lo[i] == hi[i] else int(c)))
-    return out
+    return _bounded(out)
+
+
+def _bounded(axes: list[NDArray[np.float64]]) -> list[NDArray[np.float64]]:
+    """The positions of the axes, if their mesh has at most :data:`MAX_POSITIONS` points."""
+    n = math.prod(a.size for a in axes)
+    if n > MAX_POSITIONS:
+        raise InputError(f"the mesh has {n} points; expected at most {MAX_POSITIONS}", field="step")
+    return axes
 
 
 def _order(d: int, order: Sequence[int] | None) -> list[int]:

@@ -1,0 +1,157 @@
+"""Hostile input: every file mtmc reads, mutated, ends in a result or in one line of error.
+
+The budget is small and fixed (``MTMC_FUZZ_EXAMPLES``, default 40 cases, derandomised) so
+that the suite stays fast; ``make fuzz`` runs the same property with a larger budget and a
+random campaign with counts (``tests/fuzz/mtmc_fuzz.py``).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from mtmc_fuzz import (
+    CSV_OPS,
+    TOML_OPS,
+    Target,
+    make_tree,
+    mutate,
+    mutate_csv,
+    mutate_toml,
+    ops_for,
+    run_case,
+    targets,
+)
+
+from mtmc.cli.main import main
+from mtmc.document import MAX_DEPTH, parse_toml
+from mtmc.errors import DegenerateGeometryError, InputError, ParseError
+from mtmc.instruments.multilateration import self_calibrate, trilaterate
+from mtmc.io import decode_utf8
+
+EXAMPLES = int(os.environ.get("MTMC_FUZZ_EXAMPLES", "40"))
+TARGETS = targets()
+
+
+@pytest.fixture(scope="module")
+def tree(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("fuzz")
+    make_tree(root)
+    return root
+
+
+@st.composite
+def cases(draw: st.DrawFn) -> tuple[Target, list[tuple[str, int]]]:
+    target = draw(st.sampled_from(TARGETS))
+    ops = draw(
+        st.lists(
+            st.tuples(st.sampled_from(ops_for(target)), st.integers(0, 2**32 - 1)),
+            min_size=1,
+            max_size=2,
+        )
+    )
+    return target, ops
+
+
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    derandomize=EXAMPLES <= 100,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(case=cases())
+def test_mutated_files_give_a_result_or_one_line(
+    tree: Path, case: tuple[Target, list[tuple[str, int]]]
+) -> None:
+    target, ops = case
+    data = mutate(target, (tree / target.path).read_bytes(), ops)
+    outcome = run_case(target, data, tree, timeout=120.0)
+    assert outcome.kind in ("ok", "error"), (target.name, ops, outcome)
+
+
+def test_the_unmutated_files_run(tree: Path) -> None:
+    for target in TARGETS:
+        if target.cost == 1 and target.name.startswith(("graph:", "points", "comp:")):
+            outcome = run_case(target, (tree / target.path).read_bytes(), tree)
+            assert outcome.kind == "ok", (target.name, outcome)
+
+
+def test_every_mutation_changes_a_file() -> None:
+    toml = b'a = 1\nb = [1.5, 2]\n[[p]]\nname = "x"\nv = 3\n'
+    for op in TOML_OPS:
+        assert any(mutate_toml(toml, op, s) != toml for s in range(8)), op
+    csv = b"x,y,z\n1.5,2,3\n4,5.25,6\n7,8,9\n"
+    for op in CSV_OPS:
+        assert any(mutate_csv(csv, op, s) != csv for s in range(8)), op
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["a = " + "[" * 400 + "]" * 400, "a = " + "{a = " * 40 + "1" + "}" * 40, "a = " + "[" * 10**5],
+)
+def test_deep_nesting_is_one_parse_error(text: str) -> None:
+    with pytest.raises(ParseError, match=f"nested too deep; expected at most {MAX_DEPTH}"):
+        parse_toml(text, "s.toml")
+
+
+def test_nesting_up_to_the_limit_is_read() -> None:
+    v = parse_toml("a = " + "[" * MAX_DEPTH + "]" * MAX_DEPTH, "s.toml").data["a"]
+    for _ in range(MAX_DEPTH - 1):
+        v = v[0]
+    assert v == []
+
+
+def test_bom_accepted_and_utf16_named() -> None:
+    assert decode_utf8(b"\xef\xbb\xbfa = 1\n", "f.toml") == "a = 1\n"
+    with pytest.raises(ParseError, match=r"f.toml:1:1: UTF-16 text"):
+        decode_utf8("a = 1".encode("utf-16"), "f.toml")
+
+
+def test_repeated_and_too_many_names_are_refused() -> None:
+    top = parse_toml('o = ["a", "b", "a"]\nq = ["x", "y"]', "s.toml")
+    with pytest.raises(InputError, match=r"s.toml:1: field o: 'a' is listed twice"):
+        top.texts("o")
+    with pytest.raises(InputError, match="expected at most 1 entries, got 2"):
+        top.texts("q", max_items=1)
+    assert top.texts("q") == ("x", "y")
+
+
+def test_integer_maximum() -> None:
+    top = parse_toml("[run]\ntrials = 10000000000000000000000000000000", "s.toml")
+    run = top.table("run")
+    assert run is not None
+    with pytest.raises(InputError, match=r"s.toml:2: field run.trials: expected an integer <="):
+        run.integer("trials", maximum=10**9)
+
+
+@pytest.mark.parametrize(
+    ("stations", "what"),
+    [
+        ([[0, 0, 0], [1000, 0, 0], [2000, 0, 0], [3000, 0, 0]], "one line"),
+        ([[0, 0, 0], [1000, 0, 0], [0, 1000, 0], [1000, 1000, 0]], "one plane"),
+    ],
+)
+def test_degenerate_stations(stations: list[list[float]], what: str) -> None:
+    c = np.array(stations, dtype=float)
+    p = np.random.default_rng(1).uniform(0, 500, (8, 3))
+    d = np.linalg.norm(p[None] - c[:, None], axis=-1)
+    with pytest.raises(DegenerateGeometryError, match=what):
+        trilaterate(c, d)
+    with pytest.raises(DegenerateGeometryError, match=what):
+        self_calibrate(d, c)
+
+
+def test_identification_numbers_out_of_range(
+    tree: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    f = tree / "data" / "huge.csv"
+    f.write_text("X,Y,Z,x_lt,y_lt,z_lt\n0,0,0,1,2,3\n0,0,0,1e308,2,3\n")
+    study = tree / "studies" / "aguado2017.toml"
+    assert main(["verify", "identify", str(f), "--study", str(study)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "huge.csv:3:4: field x_lt: expected a finite number" in err
