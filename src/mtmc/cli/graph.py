@@ -148,7 +148,7 @@ def run_cmd(
     """
     from mtmc.graph.model import check
     from mtmc.graph.run import run_graph
-    from mtmc.graph.units import place_dimension, unit_of
+    from mtmc.graph.units import file_unit
 
     try:
         plan = check(_read(file))
@@ -168,7 +168,6 @@ def run_cmd(
     if as_json:
         print_json(res.to_dict())
         return
-    g = plan.graph
     table = Table(title=f"{file.name}: Monte Carlo over the graph (Stryczek)")
     for col in ("place", "type", "part"):
         table.add_column(col)
@@ -180,15 +179,14 @@ def run_cmd(
         for part in s.parts:
             r = s.part(part)
             u = r.u if r.dim == 0 else r.u_vector
-            power, angle = place_dimension(plan, name, part)
-            scale = g.factor**power
+            scale, unit = file_unit(plan, name, part)
             table.add_row(
                 name if first else "",
                 s.type if first else "",
                 "" if part == "value" else part,
                 _fmt(r.estimate if r.dim == 0 else r.estimate_vector, u, scale),
                 _fmt(u, u, scale, the_u=True),
-                unit_of((power, angle), g.units),
+                unit,
             )
             first = False
     Console().print(table)

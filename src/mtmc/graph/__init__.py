@@ -26,7 +26,7 @@ from mtmc.graph.sweep import sweep as sweep_graph
 from mtmc.graph.toml_format import dump as dump_graph
 from mtmc.graph.toml_format import dumps as dumps_graph
 from mtmc.graph.toml_format import loads as loads_graph
-from mtmc.graph.units import place_dimension, unit_of
+from mtmc.graph.units import file_unit, place_dimension, unit_of
 
 __all__: list[str] = [
     "Graph",
@@ -55,5 +55,6 @@ __all__: list[str] = [
     "SweepResult",
     "Surrogate",
     "place_dimension",
+    "file_unit",
     "unit_of",
 ]

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from mtmc.graph.model import Plan
 
-__all__ = ["place_dimension", "unit_of"]
+__all__ = ["file_unit", "place_dimension", "unit_of"]
 
 #: The parts of each place type that are lengths (the others are unit vectors, rotation
 #: matrices, or the value of a scalar place, whose dimension follows its producer).
@@ -119,3 +119,21 @@ def unit_of(dimension: tuple[int, int], length_unit: str = "mm") -> str:
     if angle:
         names.append("rad" + (f"^{angle}" if angle != 1 else ""))
     return "·".join(names) or "1"
+
+
+def file_unit(plan: Plan, name: str, part: str = "value") -> tuple[float, str]:
+    """How a part of a place is shown in the graph file's unit: the divisor and the unit.
+
+    The library's values are in mm and rad; a graph written in ``um`` shows a length as
+    the value divided by ``factor`` (1e-3 mm per µm), an area by ``factor²``, an angle as
+    it is. The command line and the workbench print every value through this.
+
+    Returns
+    -------
+    scale : float
+        ``factor ** (power of length)``: divide a library value by it.
+    unit : str
+        :func:`unit_of` the dimension, in the file's unit of length.
+    """
+    length, angle = place_dimension(plan, name, part)
+    return plan.graph.factor**length, unit_of((length, angle), plan.graph.units)

@@ -22,11 +22,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.errors import ConditioningWarning, MtmcError
-from mtmc.graph import GraphResult, Plan, check_graph, loads_graph, place_dimension, run_graph
+from mtmc.graph import GraphResult, Plan, check_graph, loads_graph, run_graph
 from mtmc.graph.draw import layout
 from mtmc.graph.ops import OP_PARAMS, op_names, variants
 from mtmc.graph.places import PLACE_TYPES, VALUE_TYPES
 from mtmc.graph.run import GraphModel
+from mtmc.graph.units import file_unit
 from mtmc.report import at_place
 from mtmc.uncertainty.gum import GumResult, gum, validate
 from mtmc.workbench.view import node_of_error
@@ -129,15 +130,6 @@ def positions(plan: Plan | None) -> dict[str, list[float]]:
     return {n: [float(x), float(y)] for n, (x, y) in layout(plan).items()}
 
 
-def _unit(length_unit: str, length: int, angle: int) -> str:
-    names = []
-    if length:
-        names.append(length_unit + (f"^{length}" if length != 1 else ""))
-    if angle:
-        names.append("rad" + (f"^{angle}" if angle != 1 else ""))
-    return "·".join(names) or "1"
-
-
 def _model(plan: Plan, names: Sequence[str]) -> tuple[Any, dict[str, Any]]:
     """The graph's model of every place in ``names``, its components side by side."""
     compiled = GraphModel(plan, tuple(names))
@@ -165,20 +157,18 @@ def _place(
     plan: Plan, res: GraphResult, name: str, g: GumResult | None, start: int
 ) -> dict[str, Any]:
     s = res.places[name]
-    factor = plan.graph.factor
     parts = []
     col = start
     for part in s.parts:
         r = s.part(part)
         est, u = r.estimate_vector, r.u_vector
-        length, angle = place_dimension(plan, name, part)
-        scale = factor**length
+        scale, unit = file_unit(plan, name, part)
         k = est.size
         gu = g.u_vector[col : col + k] if g is not None else None
         parts.append(
             {
                 "part": part,
-                "unit": _unit(plan.graph.units, length, angle),
+                "unit": unit,
                 "estimate": [at_place(e / scale, x / scale) for e, x in zip(est, u, strict=True)],
                 "u": [at_place(x / scale, x / scale, the_u=True) for x in u],
                 "u_value": [float(x / scale) for x in u],
@@ -262,14 +252,11 @@ def _summary(
 ) -> dict[str, Any]:
     """Per component: MC interval, GUM u, k, interval, the §8 verdict and the budget."""
     mc = res.result(name)
-    factor = plan.graph.factor
     s = res.places[name]
     rows = []
     col = 0
     for part in s.parts:
-        length, angle = place_dimension(plan, name, part)
-        scale = factor**length
-        unit = _unit(plan.graph.units, length, angle)
+        scale, unit = file_unit(plan, name, part)
         k = s.part(part).estimate_vector.size
         for j in range(k):
             label = part if k == 1 else f"{part}[{'xyz'[j] if k == 3 else j}]"
