@@ -106,8 +106,9 @@ def deferred_interrupt() -> Iterator[None]:
 
     Wraps the step that makes a result visible (a rename, a swap of folders), so that an
     interrupt lands before or after it, never in the middle: the destination then holds
-    the old content or the new, whole. Outside the main thread (where signal handlers
-    cannot be set) the block runs as it is.
+    the old content or the new, whole. SIGTERM is held too where a Python handler is set
+    for it (``mtmc`` sets one), and that handler is then called. Outside the main thread
+    (where signal handlers cannot be set) the block runs as it is.
 
     Raises
     ------
@@ -130,12 +131,19 @@ def deferred_interrupt() -> Iterator[None]:
         yield
         return
     seen: list[int] = []
-    previous = signal.signal(signal.SIGINT, lambda signum, _frame: seen.append(signum))
+    held = [signal.SIGINT]
+    if callable(signal.getsignal(signal.SIGTERM)):
+        held.append(signal.SIGTERM)
+    previous = {s: signal.signal(s, lambda signum, _frame: seen.append(signum)) for s in held}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
     if seen:
+        handler = previous[signal.Signals(seen[0])]
+        if seen[0] == signal.SIGTERM and callable(handler):
+            handler(seen[0], None)
         raise KeyboardInterrupt
 
 
@@ -224,6 +232,9 @@ def to_jsonable(obj: Any, *, nonfinite_as_null: bool = False) -> Any:
 def decode_utf8(data: bytes, file: str) -> str:
     r"""The text of a file that must be UTF-8, or a :class:`ParseError` at the first bad byte.
 
+    Every file mtmc reads is decoded here. A UTF-8 byte order mark at the start is accepted
+    (and dropped); UTF-16 text (its byte order mark) is named as such.
+
     Parameters
     ----------
     data : bytes
@@ -247,9 +258,14 @@ def decode_utf8(data: bytes, file: str) -> str:
     Traceback (most recent call last):
     ...
     mtmc.errors.ParseError: g.toml:2:5: not UTF-8 text (byte 0xff); expected UTF-8
+    >>> decode_utf8(b"\xef\xbb\xbfa = 1", "g.toml")
+    'a = 1'
     """
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        msg = "UTF-16 text (byte order mark at the start); expected UTF-8"
+        raise ParseError(msg, file=file, line=1, column=1)
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8").removeprefix("\ufeff")
     except UnicodeDecodeError as exc:
         head = data[: exc.start]
         line = head.count(b"\n") + 1

@@ -240,8 +240,34 @@ def map_blocks(
                 f"module-level function, not a lambda or a local function): {exc}",
                 field="model",
             ) from None
-        pool: cf.Executor = cf.ProcessPoolExecutor(max_workers=workers)
+        pool: cf.Executor = cf.ProcessPoolExecutor(max_workers=workers, initializer=_worker_signals)
     else:
         pool = cf.ThreadPoolExecutor(max_workers=workers)
-    with pool:
+    try:
         yield from pool.map(fn, task_list)
+    except BaseException:
+        # interrupted (Ctrl-C, SIGTERM) or closed early: no block is started any more, and
+        # worker processes are stopped now rather than left to finish (or to outlive us)
+        _stop(pool)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _worker_signals() -> None:
+    """In a pool's worker process: SIGTERM ends it, whatever handler its parent had set."""
+    import signal
+
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _stop(pool: cf.Executor) -> None:
+    """Shut ``pool`` down at once: queued blocks cancelled, worker processes terminated."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for proc in processes:
+        proc.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        proc.join(timeout=5)
+        if proc.is_alive():  # pragma: no cover - a worker deaf to SIGTERM
+            proc.kill()
+            proc.join(timeout=5)

@@ -267,8 +267,11 @@ def analyse(
     M, _R, _P, N = m.shape[:4]
     cal = np.broadcast_to(np.asarray(calibrated, dtype=np.float64), (M, N, 3))
     dF = (cal[:, None, None] - m).reshape(M, -1)
-    # a C-ordered copy of J⁺ᵀ: the product with the transposed view is 20 times slower
-    E = dF @ np.ascontiguousarray(np.asarray(pinv, dtype=np.float64).T)  # (M, 3 + 3N)
+    # each E[t, j] a dot product of two contiguous rows summed by einsum's own kernel, not
+    # by BLAS: a threaded GEMM sums in an order that depends on its thread count (a Dask
+    # worker runs one thread), and a run must give the same bits wherever it runs
+    pinv_c = np.ascontiguousarray(np.asarray(pinv, dtype=np.float64))
+    E = np.einsum("mk,jk->mj", np.ascontiguousarray(dF), pinv_c)  # (M, 3 + 3N)
     dp = E[:, :3]
     dw = E[:, 3:].reshape(M, N, 3)
     mean = m.mean(axis=1)  # (M, P, N, 3)

@@ -46,7 +46,7 @@ from mtmc.artefact.analysis import ANALYSIS_OUTPUTS, Analysis, analyse
 from mtmc.artefact.artefact import SHIPPED, Artefact, load_artefact, pairs, shipped_artefact
 from mtmc.artefact.model import FiducialSetup, Measurement, identify_setup, setup_error_names
 from mtmc.artefact.probing import PAPER_REPEATABILITY_UM, patch_offsets
-from mtmc.document import Fields
+from mtmc.document import Fields, check_length
 from mtmc.errors import InputError
 from mtmc.geometry.fits import fit_sphere
 from mtmc.kinematics import Machine
@@ -72,6 +72,9 @@ UM = 1e-3  # mm per um
 #: the setup errors and Table 2's ``r_max`` and ``r_avg`` per pose, a few numbers a trial.
 SAMPLED_OUTPUTS = ("setup", "r_max_measured", "r_avg_measured", "r_max_model", "r_avg_model")
 URAD = 1e-6  # rad per urad
+#: The most poses ``[plan] poses_deg`` may list, and the most repetitions of each.
+MAX_POSES = 1000
+MAX_REPETITIONS = 1000
 
 
 @dataclass(frozen=True, eq=False)
@@ -247,23 +250,44 @@ def study_model(
         inputs["repeat"] = IID(Normal(0.0, 1.0), R * P * N * 3)
     if study.setup_u is not None:
         inputs["setup"] = IID(Normal(0.0, 1.0), 3 + 3 * N)
-    c0 = meas.centres
     KpT = np.ascontiguousarray(pr.Kp[: P * N].transpose(0, 2, 1))  # the same for every r
-    A = meas.axis_map
-    AS = A * study.repeatability[None, None, :]
+    AS = meas.axis_map * study.repeatability[None, None, :]
+    model = _StudyModel(study, pr, L, KpT, AS, per, exact_fit, split)
+    return model, inputs, pr
 
-    def model(
+
+@dataclass(frozen=True, eq=False)
+class _StudyModel:
+    """The model of :func:`study_model` (module-level: worker processes and Dask get it)."""
+
+    study: ArtefactStudy
+    pr: _Prepared
+    L: _F | None
+    KpT: _F
+    AS: _F
+    per: int
+    exact_fit: bool
+    split: bool
+
+    def __call__(
+        self,
         probe: _F,
         cmm: _F | None = None,
         repeat: _F | None = None,
         setup: _F | None = None,
     ) -> dict[str, _F]:
+        study, pr, L, KpT, AS, per = self.study, self.pr, self.L, self.KpT, self.AS, self.per
+        meas = pr.meas
+        P, N, k = meas.points.shape[:3]
+        R = study.repetitions
+        art = study.setup.artefact
+        c0 = meas.centres
         m = probe.shape[0]
         z = probe.reshape(m, R * P * N, per)
         if L is not None:
             dc = np.matmul(z.transpose(1, 0, 2), L.transpose(0, 2, 1))  # (RPN, m, 3)
             centres = c0[None, None] + dc.transpose(1, 0, 2).reshape(m, R, P, N, 3)
-        elif exact_fit:
+        elif self.exact_fit:
             eps = np.einsum("pij,mrpnkj->mrpnki", AS, z.reshape(m, R, P, N, k, 3))
             pts = meas.points[None, None] + eps
             fit = fit_sphere(
@@ -291,9 +315,7 @@ def study_model(
         if cmm is not None:
             cal = cal + cmm.reshape(m, N, 3) @ art.rotation.T
         a = analyse(centres, cal, pr.pinv, pr.Jp)
-        return a.by_pose() if split else a.flat()
-
-    return model, inputs, pr
+        return a.by_pose() if self.split else a.flat()
 
 
 def _centre_covariance(study: ArtefactStudy, pr: _Prepared) -> _F:
@@ -686,8 +708,8 @@ def _probing(top: Any, machine: Machine, art: Artefact, axis: _F) -> tuple[Fiduc
     cols, rows, size, rep, free = 6, 5, 6.0, np.array(PAPER_REPEATABILITY_UM), False
     if pf is not None:
         pf.only(("columns", "rows", "size_mm", "repeatability_um", "radius"))
-        cols = pf.integer("columns", cols, minimum=1)
-        rows = pf.integer("rows", rows, minimum=1)
+        cols = pf.integer("columns", cols, minimum=1, maximum=100)
+        rows = pf.integer("rows", rows, minimum=1, maximum=100)
         size = pf.number("size_mm", size, low=0.0, open_low=True)
         rep = _vec(pf, "repeatability_um", rep, positive=True)
         free = pf.text("radius", "calibrated", choices=("calibrated", "free")) == "free"
@@ -706,6 +728,8 @@ def _plan(top: Any, rotary: tuple[str, ...]) -> tuple[_F, int]:
     plan.only(("poses_deg", "repetitions"))
     n_rot = len(rotary)
     raw = plan.data.get("poses_deg")
+    if isinstance(raw, list):
+        check_length(raw, MAX_POSES, lambda msg: plan.error(msg, "poses_deg"))
     if not (
         isinstance(raw, list)
         and raw
@@ -721,7 +745,7 @@ def _plan(top: Any, rotary: tuple[str, ...]) -> tuple[_F, int]:
             "poses_deg",
         )
     poses = np.radians(np.array(raw, dtype=np.float64).reshape(len(raw), n_rot))
-    return poses, plan.integer("repetitions", 1, minimum=1)
+    return poses, plan.integer("repetitions", 1, minimum=1, maximum=MAX_REPETITIONS)
 
 
 def _setup_errors(top: Any, ball_names: tuple[str, ...]) -> _F:

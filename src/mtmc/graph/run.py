@@ -699,8 +699,15 @@ def graph_model(
     """
     plan = _as_plan(graph)
     compiled = GraphModel(plan, (output,))
+    return _PlaceModel(compiled, output), dict(compiled.inputs)
 
-    def model(**arrays: Any) -> NDArray[np.float64]:
-        return compiled(**arrays)[output]
 
-    return model, dict(compiled.inputs)
+@dataclass(frozen=True)
+class _PlaceModel:
+    """One output place of a :class:`GraphModel` (module-level: worker processes get it)."""
+
+    compiled: GraphModel
+    output: str
+
+    def __call__(self, **arrays: Any) -> NDArray[np.float64]:
+        return self.compiled(**arrays)[self.output]

@@ -181,7 +181,20 @@ def render(folder: str | Path) -> Path:
         raise InputError("not a result folder: it has no result.json", file=str(d))
     result = _read_json(d / "result.json")
     prov = _read_json(d / "provenance.json") if (d / "provenance.json").is_file() else None
-    return write_text_atomic(d / "report.html", html(result, prov))
+    try:
+        page = html(result, prov)
+    except KeyError as exc:  # a result.json edited, or of another version
+        raise InputError(
+            f"not an mtmc result: no {exc.args[0]!r} where the report needs one "
+            f"(docs/results-format.md)",
+            file=str(d / "result.json"),
+        ) from None
+    except (TypeError, IndexError, AttributeError) as exc:
+        raise InputError(
+            f"not an mtmc result: a value of the wrong type ({exc}) (docs/results-format.md)",
+            file=str(d / "result.json"),
+        ) from None
+    return write_text_atomic(d / "report.html", page)
 
 
 class _HasToDict(Protocol):

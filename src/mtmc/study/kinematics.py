@@ -60,19 +60,34 @@ def tool_positions_model(
     >>> model(EX0C=np.array([0.0, 0.01])).shape
     (2, 3)
     """
-    q = np.asarray(poses, dtype=np.float64)
+    return _ToolPositions(machine, np.asarray(poses, dtype=np.float64))
 
-    def model(**errors: Any) -> NDArray[np.float64]:
-        return np.hstack([machine.tool_position(q[i], errors) for i in range(q.shape[0])])
 
-    return model
+@dataclass(frozen=True, eq=False)
+class _ToolPositions:
+    """The model of :func:`tool_positions_model`: module-level, so worker processes get it."""
+
+    machine: Machine
+    q: NDArray[np.float64]
+
+    def __call__(self, **errors: Any) -> NDArray[np.float64]:
+        q = self.q
+        return np.hstack([self.machine.tool_position(q[i], errors) for i in range(q.shape[0])])
+
+
+@dataclass(frozen=True)
+class _Component:
+    """Column ``j`` of a model's ``(m, d)`` output (picklable)."""
+
+    model: Callable[..., Any]
+    j: int
+
+    def __call__(self, **errors: Any) -> NDArray[np.float64]:
+        return np.asarray(self.model(**errors))[:, self.j]
 
 
 def _component(model: Callable[..., Any], j: int) -> Callable[..., NDArray[np.float64]]:
-    def comp(**errors: Any) -> NDArray[np.float64]:
-        return np.asarray(model(**errors))[:, j]
-
-    return comp
+    return _Component(model, j)
 
 
 @dataclass(frozen=True)

@@ -4,8 +4,12 @@
 the study keeps them), ``provenance.json``, a copy of the study file and the HTML report
 into a hidden temporary folder beside the destination, and renames it into place at the
 end: a run that fails or is interrupted leaves no folder that looks complete (at most a
-hidden ``.NAME.*`` folder after a kill, never a ``result.json`` at the destination). The
-layout is documented in ``docs/results-format.md``.
+hidden ``.NAME.*`` folder after a kill, never a ``result.json`` at the destination). Such
+a folder names the process that made it, and the next run into the same destination
+removes those of processes that are gone. Writers of one destination swap their folders
+in one at a time (a lock on the parent folder): the last one's folder stays, whole. A
+destination that is a symbolic link is followed. The layout is documented in
+``docs/results-format.md``.
 """
 
 from __future__ import annotations
@@ -15,10 +19,11 @@ import datetime
 import json
 import os
 import platform
+import re
 import shutil
 import sys
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -84,6 +89,71 @@ def provenance(
     }
 
 
+def _check_destination(dest: Path) -> None:
+    """Refuse a destination that is a file, or a folder that is not a result folder."""
+    if dest.exists() and not dest.is_dir():
+        raise InputError(f"{dest} exists and is not a folder", field="outdir")
+    if dest.is_dir() and any(dest.iterdir()) and not (dest / "result.json").is_file():
+        raise InputError(
+            f"{dest} exists and is not a result folder (no result.json): not replaced",
+            field="outdir",
+        )
+
+
+def _temp_prefix(dest: Path, kind: str = "") -> str:
+    """``.NAME.[old.]mtmc-PID-``: the hidden folders of this run beside ``dest``."""
+    return f".{dest.name}.{kind}mtmc-{os.getpid()}-"
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: alive
+        return True
+    return True
+
+
+def _remove_stale(dest: Path) -> None:
+    """Remove the hidden temporary folders of ``dest`` left by runs that were killed.
+
+    Only folders named as :func:`_temp_prefix` names them, whose process is gone, are
+    removed; any other hidden folder, and those of a run still going, are left alone.
+    """
+    pattern = re.compile(rf"\.{re.escape(dest.name)}\.(?:old\.)?mtmc-(\d+)-[A-Za-z0-9_]+")
+    try:
+        entries = list(dest.parent.iterdir())
+    except OSError:
+        return
+    for entry in entries:
+        match = pattern.fullmatch(entry.name)
+        if match is None or int(match.group(1)) == os.getpid():
+            continue
+        if not _pid_alive(int(match.group(1))) and entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _folder_lock(folder: Path) -> Iterator[None]:
+    """An exclusive lock (``flock``) on ``folder`` itself for the block: no lock file."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: no lock
+        yield
+        return
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:  # pragma: no cover - a folder that cannot be opened: no lock
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)
+
+
 def _dump(obj: Any) -> str:
     return json.dumps(obj, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
 
@@ -126,15 +196,13 @@ def write_result(
         If ``outdir`` exists and is a file or a folder that is not a result folder.
     """
     dest = Path(outdir)
-    if dest.exists() and not dest.is_dir():
-        raise InputError(f"{dest} exists and is not a folder", field="outdir")
-    if dest.is_dir() and any(dest.iterdir()) and not (dest / "result.json").is_file():
-        raise InputError(
-            f"{dest} exists and is not a result folder (no result.json): not replaced",
-            field="outdir",
-        )
+    if dest.is_symlink():  # a link is followed, for a folder as for a file
+        dest = Path(os.path.realpath(dest))
+    _check_destination(dest)
     dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.", dir=dest.parent))
+    with _folder_lock(dest.parent):
+        _remove_stale(dest)
+        tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(dest), dir=dest.parent))
     try:
         doc = result.to_dict()
         (tmp / "result.json").write_text(_dump(doc), encoding="utf-8")
@@ -154,14 +222,17 @@ def write_result(
             render(tmp)
         os.chmod(tmp, 0o777 & ~_umask())
         old = None
-        with deferred_interrupt():  # the swap is never cut half-way by Ctrl-C
+        # the swap is never cut half-way by Ctrl-C, and one writer of a folder swaps at a
+        # time: two runs into one OUTDIR both succeed, the last one's folder stays whole
+        with deferred_interrupt(), _folder_lock(dest.parent):
+            _check_destination(dest)
             if dest.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{dest.name}.old.", dir=dest.parent))
+                old = Path(tempfile.mkdtemp(prefix=_temp_prefix(dest, "old."), dir=dest.parent))
                 os.rmdir(old)
                 os.replace(dest, old)
             os.replace(tmp, dest)
-            if old is not None:
-                shutil.rmtree(old, ignore_errors=True)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
     except BaseException:
         with contextlib.suppress(OSError):
             shutil.rmtree(tmp)

@@ -501,6 +501,18 @@ def _run(
     }
 
 
+def _plan_tables(top: Fields, axes: tuple[str, ...]) -> None:
+    """Validate the ``[workspace]`` and ``[nc]`` tables as ``verify plan`` reads them."""
+    from mtmc.verification.ncprogram import read_nc
+    from mtmc.verification.workspace import read_workspace
+
+    ws = top.table("workspace") if "workspace" in top.data else None
+    plan_axes = read_workspace(ws, axes).axes if ws is not None else axes
+    nc = top.table("nc") if "nc" in top.data else None
+    if nc is not None:
+        read_nc(nc, plan_axes)
+
+
 def read_verification_study(top: Fields) -> VerificationStudy:
     """The verification study of a parsed study file (:func:`mtmc.document.parse_toml`).
 
@@ -534,7 +546,7 @@ def read_verification_study(top: Fields) -> VerificationStudy:
             "points",
             "run",
             "workspace",
-            "nc",  # these two read by mtmc.verification.ncprogram (verify plan)
+            "nc",  # these two as verify plan reads them (mtmc.verification.ncprogram)
         )
     )
     if "kind" in top.data:
@@ -542,6 +554,7 @@ def read_verification_study(top: Fields) -> VerificationStudy:
     title = top.text("title", "")
     note = top.text("note", "")
     machine, travel = _machine(top, title)
+    _plan_tables(top, machine.axes)
     model, fixed, pose = _model(top, machine, travel)
     truth = _truth(top, machine, travel)
     tf = top.table("tracker")

@@ -1,0 +1,113 @@
+"""SIGTERM ends ``mtmc run`` as Ctrl-C does, on every executor, and ``kill -9`` leftovers.
+
+Each test runs the command in a child process (loopback only, bounded waits) and kills
+whatever it started in a ``finally``.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDY = ROOT / "examples" / "studies" / "axis_c.toml"
+
+
+def _descendants(pid: int) -> set[int]:
+    """The processes below ``pid`` (Linux /proc), children of children included."""
+    found: set[int] = set()
+    todo = [pid]
+    while todo:
+        p = todo.pop()
+        for task in Path(f"/proc/{p}/task").glob("*"):
+            try:
+                kids = (task / "children").read_text().split()
+            except OSError:
+                continue
+            for k in map(int, kids):
+                if k not in found:
+                    found.add(k)
+                    todo.append(k)
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def _start(outdir: Path, *extra: str) -> subprocess.Popen[bytes]:
+    code = (
+        "import sys; from mtmc.cli.main import main; print('ready', flush=True); "
+        f"sys.exit(main(['run', {str(STUDY)!r}, '-o', {str(outdir)!r}, '-q', "
+        f"'-n', '4000000', '--seed', '1', *{list(extra)!r}]))"
+    )
+    return subprocess.Popen(
+        [sys.executable, "-c", code],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+
+
+def _kill_all(proc: subprocess.Popen[bytes], pids: set[int]) -> None:
+    for pid in [proc.pid, *pids]:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+    proc.wait(timeout=30)
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="needs Linux /proc")
+@pytest.mark.parametrize(
+    ("extra", "children"),
+    [
+        ((), 0),
+        (("--executor", "process", "--workers", "2"), 2),
+        (("--executor", "dask", "--workers", "2"), 2),
+    ],
+    ids=["thread", "process", "dask"],
+)
+def test_sigterm_is_one_line_exit_143_no_orphan_no_folder(tmp_path, extra, children):
+    if "dask" in extra:
+        pytest.importorskip("distributed")
+    out = tmp_path / "out"
+    proc = _start(out, *extra)
+    seen: set[int] = set()
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline() == b"ready\n"
+        deadline = time.monotonic() + 90
+        while time.monotonic() < deadline:  # until the run's workers are up
+            seen |= _descendants(proc.pid)
+            if len(seen) >= children:
+                time.sleep(1.5)
+                seen |= _descendants(proc.pid)
+                break
+            time.sleep(0.2)
+        assert len(seen) >= children, seen
+        proc.send_signal(signal.SIGTERM)
+        _out, err = proc.communicate(timeout=90)
+        assert proc.returncode == 143, err
+        lines = err.decode().splitlines()
+        if "dask" in extra:  # Dask may log its workers' ending first
+            lines = lines[-1:]
+        assert lines == ["mtmc: terminated"], err
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline and any(_alive(p) for p in seen):
+            time.sleep(0.2)
+        assert [p for p in seen if _alive(p)] == []
+        assert sorted(p.name for p in tmp_path.iterdir()) == []
+    finally:
+        if proc.poll() is None or any(_alive(p) for p in seen):
+            _kill_all(proc, seen)
