@@ -124,10 +124,6 @@ def test_every_executor_writes_the_same_folder(kind, tmp_path, client):
         got = _folder(study, tmp_path / name, **parallel)
         assert sorted(got) == sorted(ref), name
         differ += [f"{name}: {f}" for f, data in ref.items() if got[f] != data]
-    if kind == "verification" and differ:
-        # one trial of aguado2017 (of 300) comes out 1e-13 apart in a process that did
-        # not evaluate the blocks before it: state kept between calls by the model
-        pytest.xfail(f"verification model not yet the same bits in a fresh process: {differ}")
     assert differ == [], kind
 
 

@@ -172,3 +172,23 @@ def test_the_initial_error_is_the_reading_against_the_nominal_machine(setup) -> 
     noisy = vm(z)["point_initial"]
     x_meas = vm.noise.perturb(np.broadcast_to(vm.x_true, (3, n, 3)), z.reshape(3, n, 3))
     np.testing.assert_allclose(noisy, np.linalg.norm(x_meas - vm.x_nom, axis=-1), rtol=1e-12)
+
+
+def test_a_verification_is_the_same_bits_whatever_the_evaluation_block(setup, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # each trial's identification is summed on its own (no BLAS product over the batch,
+    # whose kernels change with the number of rows): blocks of 37, 100 or all 300 trials
+    # give the same numbers, as the engine promises for any chunking
+    from mtmc.uncertainty import montecarlo
+
+    original = montecarlo.evaluation_block_size
+    ver = _ver(setup)
+    out = []
+    for size in (37, 100, 300):
+        monkeypatch.setattr(
+            montecarlo, "evaluation_block_size", lambda d, s, n=size: min(n, original(d, s))
+        )
+        r = simulate(ver, 300, 11)
+        out.append((np.asarray(r.ve_samples), np.asarray(r.coef_samples)))
+    for ve, coef in out[1:]:
+        np.testing.assert_array_equal(ve, out[0][0])
+        np.testing.assert_array_equal(coef, out[0][1])

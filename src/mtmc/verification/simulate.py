@@ -184,6 +184,17 @@ class Verification:
         return self.tracker.to_tracker(self.true_positions())
 
 
+def _rows(a: Any, b: Any) -> Any:
+    """``a @ b`` for a batch of trials ``a`` (one per row): each row summed on its own.
+
+    A BLAS product of an ``(m, k)`` batch may sum a row in an order that depends on ``m``
+    (its kernels switch with the shape), so a trial's numbers would depend on the block it
+    is evaluated in; :func:`numpy.einsum` sums every row the same way whatever ``m``, so a
+    seed gives the same bits whatever the chunking, the workers or the executor.
+    """
+    return np.einsum("mk,kn->mn", a, b)
+
+
 @dataclass(frozen=True)
 class VerificationModel:
     """The vectorised model of one verification per trial (see the module notes).
@@ -373,15 +384,15 @@ class VerificationModel:
         t = np.broadcast_to(self.t_ref, (m, 3)).copy()
         Jt = self.Jp.reshape(3 * N, k).T  # (k, 3N): one matrix product per iteration
         for _ in range(self.iterations):  # chord iterations, all trials at once
-            p = self.p_fit + ((est[:, :k] - self.est0[:k]) @ Jt).reshape(m, N, 3)
+            p = self.p_fit + _rows(est[:, :k] - self.est0[:k], Jt).reshape(m, N, 3)
             r = (p - t[:, None, :]) @ R - x_meas
-            d = -r.reshape(m, 3 * N) @ self.A.T
+            d = -_rows(r.reshape(m, 3 * N), self.A.T)
             est += d
             if self.pose:
                 R = R @ matrix_from_rotation_vector(d[:, k : k + 3])
                 t = t + d[:, k + 3 : k + 6]
         for _ in range(self.refine):  # exact steps, all trials at once
-            d = -self.gradient(est, R, t, x_meas) @ self.Hinv
+            d = -_rows(self.gradient(est, R, t, x_meas), self.Hinv)
             est[:, :k] += d[:, :k]
             if self.pose:
                 R = R @ matrix_from_rotation_vector(d[:, k : k + 3])
@@ -389,7 +400,7 @@ class VerificationModel:
         if self.pose:  # the pose as reported by identify: Log(R0^T R), t - t0
             est[:, k : k + 3] = rotation_vector_from_matrix(np.swapaxes(self.R_nom, -1, -2) @ R)
             est[:, k + 3 : k + 6] = t - self.t_nom
-        p = self.p_fit + ((est[:, :k] - self.est0[:k]) @ Jt).reshape(m, N, 3)
+        p = self.p_fit + _rows(est[:, :k] - self.est0[:k], Jt).reshape(m, N, 3)
         r = (p - t[:, None, :]) @ R - x_meas
         return est, r, R, t
 
@@ -413,7 +424,7 @@ class VerificationModel:
         for a in range(0, m, step):  # blocks of trials, bounded memory
             b = min(m, a + step)
             qq = np.broadcast_to(self.q, (b - a, *self.q.shape)).reshape((b - a) * N, -1)
-            errs = {n: (th[a:b, idx] @ B.T).ravel() for n, idx, B in self.basis}
+            errs = {n: _rows(th[a:b, idx], B.T).ravel() for n, idx, B in self.basis}
             p = mach.tool_position(qq, errs, exact=self.exact).reshape(b - a, N, 3)
             xr = (p - t[a:b, None, :]) @ R[a:b]  # model readings
             r = xr - x_meas[a:b]
@@ -421,7 +432,7 @@ class VerificationModel:
             Je = mach.jacobian(qq, errs, names=names, exact=self.exact)
             s = np.einsum("rce,rc->re", Je, w).reshape(b - a, N, -1)
             for ie, (_, idx, B) in enumerate(self.basis):
-                g_th[a:b, idx] = s[:, :, ie] @ B
+                g_th[a:b, idx] = _rows(s[:, :, ie], B)
             if self.pose:
                 g[a:b, k : k + 3] = np.sum(np.cross(r, xr), axis=1)
                 g[a:b, k + 3 : k + 6] = -np.einsum("mij,mj->mi", R[a:b], r.sum(axis=1))
@@ -446,7 +457,7 @@ class VerificationModel:
         k = self.n_theta
         Ne = self.pe_fit.shape[0]
         Jte = self.Jpe.reshape(3 * Ne, k).T
-        pe = self.pe_fit + ((est[:, :k] - self.est0[:k]) @ Jte).reshape(m, Ne, 3)
+        pe = self.pe_fit + _rows(est[:, :k] - self.est0[:k], Jte).reshape(m, Ne, 3)
         comp = (pe - t[:, None, :]) @ R - self.xe_true
         ce = np.sqrt(np.sum(comp * comp, axis=-1))
         ve = np.concatenate([ve_stats(init), ve_stats(res), ve_stats(ce)], axis=1)
