@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from mtmc.graph import load_graph
-from mtmc.graph.sweep import sweep
+from mtmc.graph.sweep import sweep_graph
 from mtmc.parallel import local_cluster
 from mtmc.uncertainty.heap import keep_heap
 from mtmc.uncertainty.montecarlo import monte_carlo
@@ -61,10 +61,10 @@ def main() -> None:
     n_mc = max(10**6, int(1e8 * scale))
     rows = []
 
-    t1, ref = timed(lambda: sweep(graph, vary, "d_ac", trials=n_sweep, seed=1))
-    t2, thr = timed(lambda: sweep(graph, vary, "d_ac", trials=n_sweep, seed=1, workers=2))
+    t1, ref = timed(lambda: sweep_graph(graph, vary, "d_ac", trials=n_sweep, seed=1))
+    t2, thr = timed(lambda: sweep_graph(graph, vary, "d_ac", trials=n_sweep, seed=1, workers=2))
     t3, dsk = timed(
-        lambda: sweep(
+        lambda: sweep_graph(
             graph, vary, "d_ac", trials=n_sweep, seed=1, executor="dask", scheduler=client
         )
     )

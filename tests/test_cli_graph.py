@@ -263,7 +263,7 @@ def test_files_are_written_atomically(tmp_path, capsys, monkeypatch):
         Path(path).write_text("<svg half")
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(gdraw, "draw", broken_draw)
+    monkeypatch.setattr(gdraw, "draw_graph", broken_draw)
     assert main(["graph", "draw", str(EXAMPLES / "plane_3pt.toml"), "-o", str(out)]) == 2
     err = capsys.readouterr().err
     assert err == f"mtmc: error: {out}: cannot write: No space left on device\n"

@@ -58,7 +58,7 @@ def test_ctrl_c_in_a_subcommand_is_one_line_exit_130_and_no_file(tmp_path, capsy
     def interrupted(*_args, **_kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(mtmc.graph.draw, "draw", interrupted)
+    monkeypatch.setattr(mtmc.graph.draw, "draw_graph", interrupted)
     out_file = tmp_path / "g.svg"
     assert main(["graph", "draw", str(EXAMPLES / "ball_centre.toml"), "-o", str(out_file)]) == 130
     out, err = capsys.readouterr()

@@ -15,7 +15,7 @@ import pytest
 from conftest import absent
 from mtmc.errors import InputError
 from mtmc.graph import load_graph, run_graph
-from mtmc.graph.sweep import sweep
+from mtmc.graph.sweep import sweep_graph
 from mtmc.parallel import WORKER_MALLOC_ENV, local_cluster
 from mtmc.uncertainty.montecarlo import monte_carlo
 
@@ -100,8 +100,8 @@ def test_graph_and_sweep_through_a_scheduler_address(client):
     )
     assert got.places["d_ac"].u == ref.places["d_ac"].u
     vary = {"probe.u_probe": [0.001, 0.002], "probe.u_axis": [0.002, 0.004]}
-    a = sweep(graph, vary, "d_ac", trials=500, seed=5)
-    b = sweep(graph, vary, "d_ac", trials=500, seed=5, executor="dask", scheduler=client)
+    a = sweep_graph(graph, vary, "d_ac", trials=500, seed=5)
+    b = sweep_graph(graph, vary, "d_ac", trials=500, seed=5, executor="dask", scheduler=client)
     np.testing.assert_array_equal(a.u, b.u)
 
 

@@ -105,10 +105,10 @@ def test_frozen_graph_plan() -> None:
     from pathlib import Path
 
     from mtmc.graph import load_graph
-    from mtmc.graph.model import check
+    from mtmc.graph.model import check_graph
 
     graph = Path(__file__).resolve().parents[1] / "examples" / "graphs" / "ball_centre.toml"
-    plan = check(load_graph(graph))
+    plan = check_graph(load_graph(graph))
     name = next(iter(plan.types))
     with pytest.raises(TypeError):
         plan.types[name] = "point"  # type: ignore[index]

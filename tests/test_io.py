@@ -134,9 +134,26 @@ def test_full_device_gives_an_os_error_and_stays_a_device(tmp_path):
     import stat
 
     dev = _char_device(tmp_path / "full", 7)
-    with pytest.raises(OSError):  # noqa: PT011 (the device's own error: ENOSPC or EFBIG)
+    with pytest.raises(OSError, match=f"^{dev}: cannot write: "):  # ENOSPC or EFBIG
         write_text_atomic(dev, "x" * 10_000)
     assert stat.S_ISCHR(os.stat(dev).st_mode)
+
+
+def test_an_os_error_without_a_file_is_given_the_destination(tmp_path):
+    from mtmc.io import atomic_path
+
+    dest = tmp_path / "table.npy"
+    with pytest.raises(OSError, match="No space") as info, atomic_path(dest):
+        raise OSError(28, "No space left on device")
+    assert str(info.value) == f"{dest}: cannot write: No space left on device"
+    assert info.value.errno == 28
+    with pytest.raises(OSError, match="requested") as info, atomic_path(dest):
+        raise OSError("1000000 requested and 259568 written")
+    assert str(info.value) == f"{dest}: cannot write: 1000000 requested and 259568 written"
+    with pytest.raises(FileNotFoundError) as missing, atomic_path(dest):
+        open(tmp_path / "nowhere" / "x")  # names its own file: unchanged
+    assert missing.value.filename == str(tmp_path / "nowhere" / "x")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
 def test_folder_destination_is_refused_with_a_message(tmp_path):

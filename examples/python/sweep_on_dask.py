@@ -16,7 +16,7 @@ import numpy as np
 from distributed import Client
 
 from mtmc.graph import load_graph
-from mtmc.graph.sweep import sweep
+from mtmc.graph.sweep import sweep_graph
 from mtmc.parallel import local_cluster
 
 GRAPH = Path(__file__).resolve().parents[1] / "graphs" / "bcs_origin.toml"
@@ -30,11 +30,13 @@ def main(trials: int, workers: int) -> None:
     """Sweep in this process and on ``workers`` Dask worker processes; print both."""
     graph = load_graph(GRAPH)
     t0 = time.perf_counter()
-    here = sweep(graph, VARY, "d_ac", trials=trials, seed=1)
+    here = sweep_graph(graph, VARY, "d_ac", trials=trials, seed=1)
     t1 = time.perf_counter()
     with local_cluster(workers) as cluster, Client(cluster) as client:
         t2 = time.perf_counter()
-        there = sweep(graph, VARY, "d_ac", trials=trials, seed=1, executor="dask", scheduler=client)
+        there = sweep_graph(
+            graph, VARY, "d_ac", trials=trials, seed=1, executor="dask", scheduler=client
+        )
         t3 = time.perf_counter()
     assert np.array_equal(here.u, there.u), "a cluster must not change a number"
     print(f"u(d_ac) / um over the grid (u_probe down, u_axis across), {trials} trials a point:")

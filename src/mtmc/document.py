@@ -37,8 +37,10 @@ __all__ = [
     "Fields",
     "KeyPath",
     "Source",
+    "MAX_DEG",
     "MAX_MM",
     "MAX_NAMES",
+    "MAX_RAD",
     "check_length",
     "check_number",
     "key_lines",
@@ -52,8 +54,16 @@ _REQUIRED: Any = object()
 #: The most names an array of names may hold (``outputs``, ``fixed``).
 MAX_NAMES = 1000
 
-#: The largest coordinate or length (mm) a file may give: 1 km is no machine tool's.
+#: The largest coordinate or length (mm) a file may give: 1 km is no machine tool's. An
+#: uncertainty or an error of a length is a length: it has the same limit.
 MAX_MM = 1e6
+
+#: The largest angle (deg) a file may give: ten turns. An angular error or its uncertainty
+#: has the same limit.
+MAX_DEG = 3600.0
+
+#: :data:`MAX_DEG` in radians (20π, about 62.8 rad).
+MAX_RAD = math.radians(MAX_DEG)
 
 _HEADER = re.compile(r"""^\s*(\[\[?)\s*([A-Za-z0-9_\-."' ]+?)\s*\]\]?\s*(#.*)?$""")
 _KEY = re.compile(
@@ -424,15 +434,26 @@ def read_text(path: str | Path, what: str = "file") -> str:
     Raises
     ------
     InputError
-        If the file cannot be read (naming it and the reason).
+        If the file cannot be read (naming it and the reason), or holds more than 256 MiB.
     ParseError
         If it is not UTF-8 text (naming the line and column of the first bad byte).
     """
     try:
-        data = Path(path).read_bytes()
+        with open(path, "rb") as fh:
+            data = fh.read(_MAX_FILE_BYTES + 1)
     except OSError as exc:
         raise InputError(f"cannot read the {what}: {exc.strerror or exc}", file=str(path)) from None
+    if len(data) > _MAX_FILE_BYTES:
+        raise InputError(
+            f"cannot read the {what}: it holds more than {_MAX_FILE_BYTES >> 20} MiB "
+            "(a device or a stream that does not end?)",
+            file=str(path),
+        )
     return decode_utf8(data, str(path))
+
+
+#: The most bytes :func:`read_text` reads (a device such as /dev/zero never ends).
+_MAX_FILE_BYTES = 256 << 20
 
 
 def parse_toml(text: str, file: str | None = "<toml>", folder: Path | None = None) -> Fields:

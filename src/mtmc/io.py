@@ -32,7 +32,48 @@ from typing import Any
 
 from mtmc.errors import ParseError
 
-__all__ = ["atomic_path", "decode_utf8", "to_jsonable", "write_bytes_atomic", "write_text_atomic"]
+__all__ = [
+    "atomic_path",
+    "decode_utf8",
+    "naming_os_errors",
+    "to_jsonable",
+    "write_bytes_atomic",
+    "write_text_atomic",
+]
+
+
+@contextlib.contextmanager
+def naming_os_errors(path: str | os.PathLike[str]) -> Iterator[None]:
+    """Give an ``OSError`` raised in the block that names no file the name of ``path``.
+
+    A full disk seen by NumPy reads ``1000000 requested and 259568 written``; through this
+    block it reads ``PATH: cannot write: 1000000 requested and 259568 written``. An error
+    that names its file already passes unchanged.
+
+    Parameters
+    ----------
+    path : path-like
+        The file the block writes.
+
+    Raises
+    ------
+    OSError
+        Of the same errno and ``strerror``, with ``filename`` set to ``path``; its text
+        reads ``PATH: cannot write: REASON``.
+    """
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is not None:
+            raise
+        raise _WriteError(exc.errno, exc.strerror or str(exc), os.fspath(path)) from exc
+
+
+class _WriteError(OSError):
+    """An ``OSError`` of a write, its file named: ``strerror`` keeps the reason alone."""
+
+    def __str__(self) -> str:
+        return f"{self.filename}: cannot write: {self.strerror}"
 
 
 @contextlib.contextmanager
@@ -70,6 +111,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         When ``path`` is a folder, a block device or a socket; the message names it.
     OSError
         From the file system (full disk, no permission); ``path`` is then left as it was.
+        One that names no file (NumPy's ``1000000 requested and 259568 written``) is
+        given the name of ``path`` (:func:`naming_os_errors`).
     """
     dest = _resolve(Path(path))
     mode = _destination_mode(dest)
@@ -80,20 +123,21 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     os.close(fd)
     tmp_path = Path(tmp)
     try:
-        yield tmp_path
-        if through:
-            with open(tmp_path, "rb") as src, open(dest, "wb") as out:
-                shutil.copyfileobj(src, out)
-            tmp_path.unlink()
-            return
-        with deferred_interrupt():
-            with open(tmp_path, "rb+") as fh:
-                fh.flush()
-                os.fsync(fh.fileno())
-            # mkstemp creates the file owner-only (0600): give it the mode of the file it
-            # replaces, or the mode a plain open() would.
-            os.chmod(tmp_path, stat.S_IMODE(mode) if mode is not None else 0o666 & ~_umask())
-            os.replace(tmp_path, dest)
+        with naming_os_errors(path):
+            yield tmp_path
+            if through:
+                with open(tmp_path, "rb") as src, open(dest, "wb") as out:
+                    shutil.copyfileobj(src, out)
+                tmp_path.unlink()
+                return
+            with deferred_interrupt():
+                with open(tmp_path, "rb+") as fh:
+                    fh.flush()
+                    os.fsync(fh.fileno())
+                # mkstemp creates the file owner-only (0600): give it the mode of the file it
+                # replaces, or the mode a plain open() would.
+                os.chmod(tmp_path, stat.S_IMODE(mode) if mode is not None else 0o666 & ~_umask())
+                os.replace(tmp_path, dest)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()

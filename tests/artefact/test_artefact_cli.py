@@ -110,6 +110,23 @@ def test_fit_json_contract(capsys: pytest.CaptureFixture[str], tmp_path: Path) -
     assert main(["artefact", "fit", str(f), "--units", "inch"]) == 2
 
 
+def test_fit_of_four_points_has_no_uncertainty(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    f = tmp_path / "p4.csv"
+    f.write_text("5,0,0\n-5,0,0\n0,5,0\n0,0,5\n")
+    for extra in ([], ["--json"]):
+        assert main(["artefact", "fit", str(f), *extra]) == 2
+        out, err = capsys.readouterr()
+        assert out == ""
+        assert err == (
+            f"mtmc: error: {f}: 4 points leave no residual to give the fit's uncertainty "
+            "(4 parameters): probe at least 5 points, or give the calibrated radius (--radius)\n"
+        )
+    assert main(["artefact", "fit", str(f), "--radius", "5", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["u_centre"] == [0.0, 0.0, 0.0]
+
+
 def test_gravity_cli(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     f = tmp_path / "g.csv"
     f.write_text(

@@ -306,7 +306,27 @@ def targets() -> list[Target]:
     for f in sorted((EXAMPLES / "graphs").glob("*.toml")):
         argv = ("graph", "run", "{file}", "-n", "20", "--seed", "1", "--json")
         out.append(Target(f"graph:{f.stem}", f"graphs/{f.name}", "toml", argv))
+    sweep = ("--vary", "probe.u_probe=0.001:0.005:3", "--quantity", "d_ac", "-n", "20")
     out += [
+        Target(
+            "graph-sweep",
+            "graphs/bcs_origin.toml",
+            "toml",
+            ("graph", "sweep", "{file}", *sweep, "--seed", "1", "--json"),
+        ),
+        Target(
+            "verify-simulate",
+            "studies/aguado2017.toml",
+            "toml",
+            ("verify", "simulate", "{file}", "-n", "5", "--seed", "1", "--json"),
+            cost=3,
+        ),
+        Target(
+            "verify-plan",
+            "studies/aguado2016.toml",
+            "toml",
+            ("verify", "plan", "{file}", "-o", "{root}/data", "--json"),
+        ),
         Target(
             "artefact",
             "artefacts/wang2022_five_ball.toml",
@@ -362,7 +382,7 @@ def make_tree(root: Path) -> None:
     """A copy of ``examples/`` under ``root``, with the data files the CSV targets read."""
     import numpy as np
 
-    from mtmc.graph import assertions, toml_format
+    from mtmc.graph import assertions, load_graph
     from mtmc.study import load_study
     from mtmc.verification.compensation import compensation_table, plain_csv_text
 
@@ -370,7 +390,7 @@ def make_tree(root: Path) -> None:
         shutil.copytree(EXAMPLES / sub, root / sub)
     data = root / "data"
     data.mkdir()
-    graph = toml_format.load(EXAMPLES / "graphs" / "ball_centre.toml")
+    graph = load_graph(EXAMPLES / "graphs" / "ball_centre.toml")
     (root / "graphs" / "ball_centre.pl").write_text(assertions.dumps_assertions(graph))
     st: Any = getattr(load_study(EXAMPLES / "studies" / "aguado2017.toml"), "study")  # noqa: B009
     ver = st.verification()

@@ -80,6 +80,13 @@ def test_the_unmutated_files_run(tree: Path) -> None:
             assert outcome.kind == "ok", (target.name, outcome)
 
 
+@pytest.mark.parametrize("name", ["graph-sweep", "verify-simulate", "verify-plan"])
+def test_the_sweep_simulate_and_plan_targets_run(tree: Path, name: str) -> None:
+    target = next(t for t in TARGETS if t.name == name)
+    outcome = run_case(target, (tree / target.path).read_bytes(), tree)
+    assert outcome.kind == "ok", outcome
+
+
 def test_every_mutation_changes_a_file() -> None:
     toml = b'a = 1\nb = [1.5, 2]\n[[p]]\nname = "x"\nv = 3\n'
     for op in TOML_OPS:

@@ -9,7 +9,7 @@ from mtmc.errors import GraphError, ParseError
 from mtmc.graph import loads_graph
 from mtmc.graph.assertions import dumps_assertions, loads_assertions
 from mtmc.graph.places import Place
-from mtmc.graph.toml_format import dumps
+from mtmc.graph.toml_format import dumps_graph
 
 TOML = """
 units = "um"
@@ -46,7 +46,7 @@ def test_toml_point_takes_one_u_per_coordinate():
 
 def test_coordinate_u_round_trips_through_both_formats():
     g = loads_graph(TOML)
-    assert loads_graph(dumps(g)) == g
+    assert loads_graph(dumps_graph(g)) == g
     text = dumps_assertions(g)
     assert "u(a, 0.5, 2.0, 0.0)." in text
     assert loads_assertions(text).place("a").u == (0.5, 2.0, 0.0)

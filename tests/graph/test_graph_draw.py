@@ -6,7 +6,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from mtmc.graph import check_graph, load_graph
-from mtmc.graph.draw import draw, layout, to_dot
+from mtmc.graph.draw import draw_graph, graph_to_dot, layout
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
 
@@ -14,7 +14,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
 def test_dot_has_every_node_and_arc():
     g = load_graph(EXAMPLES / "ball_centre.toml")
     plan = check_graph(g)
-    dot = to_dot(g)
+    dot = graph_to_dot(g)
     assert dot.count("shape=circle") == len(plan.types)
     assert dot.count("shape=box") == len(g.transitions)
     arcs = sum(len(t.inputs) + 1 for t in g.transitions)
@@ -33,7 +33,7 @@ def test_layout_follows_firing_order():
 def test_svg(tmp_path):
     g = load_graph(EXAMPLES / "plane_3pt.toml")
     out = tmp_path / "g.svg"
-    draw(g, out)
+    draw_graph(g, out)
     root = ET.parse(out).getroot()
     assert root.tag.endswith("svg")
     text = out.read_text()

@@ -10,7 +10,7 @@ import pytest
 
 from mtmc.errors import InputError
 from mtmc.graph import load_graph, run_graph
-from mtmc.graph.model import check
+from mtmc.graph.model import check_graph
 from mtmc.graph.run import GraphModel, flatten, unflatten
 from mtmc.uncertainty.montecarlo import monte_carlo
 
@@ -19,7 +19,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
 
 @pytest.fixture(scope="module")
 def axis_c():
-    return check(load_graph(EXAMPLES / "axis_c.toml"))
+    return check_graph(load_graph(EXAMPLES / "axis_c.toml"))
 
 
 @pytest.mark.parametrize(
@@ -73,7 +73,7 @@ def test_memory_of_a_graph_with_thousands_of_probings_is_bounded():
     import time
     import tracemalloc
 
-    from mtmc.graph.toml_format import loads
+    from mtmc.graph.toml_format import loads_graph
 
     parts = ['units = "mm"', "[probe]", "u_axis = 0.002", "u_probe = 0.001"]
     for i in range(2500):
@@ -87,7 +87,7 @@ def test_memory_of_a_graph_with_thousands_of_probings_is_bounded():
             f'out = "x{i}"',
         ]
     t0 = time.perf_counter()
-    graph = loads("\n".join(parts))
+    graph = loads_graph("\n".join(parts))
     assert time.perf_counter() - t0 < 10.0  # was quadratic: 23 s for 2 000 transitions
     tracemalloc.start()
     res = run_graph(graph, trials=10, seed=1, outputs=["x7"])
@@ -98,7 +98,7 @@ def test_memory_of_a_graph_with_thousands_of_probings_is_bounded():
 
 
 def test_per_coordinate_u_of_a_marked_point():
-    from mtmc.graph.toml_format import loads
+    from mtmc.graph.toml_format import loads_graph
 
     text = "\n".join(
         [
@@ -119,7 +119,7 @@ def test_per_coordinate_u_of_a_marked_point():
             'out = "c"',
         ]
     )
-    res = run_graph(loads(text), trials=200_000, seed=4, outputs=["c"])
+    res = run_graph(loads_graph(text), trials=200_000, seed=4, outputs=["c"])
     u = res.places["c"].u_vector  # mm: half of (2, 0, 6) µm
     np.testing.assert_allclose(u[[0, 2]], [0.001, 0.003], rtol=0.01)  # se of u: 0.16 %
     assert u[1] < 1e-15  # a constant coordinate (to rounding of its mean)

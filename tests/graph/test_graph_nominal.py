@@ -12,7 +12,7 @@ import pytest
 from mtmc.cli.main import main
 from mtmc.errors import DegenerateGeometryError, GraphError
 from mtmc.graph import loads_graph
-from mtmc.graph.model import check
+from mtmc.graph.model import check_graph
 from mtmc.graph.nominal import ConditioningWarning, check_nominal
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
@@ -60,7 +60,7 @@ def test_condition_number_of_a_thin_triangle_against_its_closed_form():
     length, e = 100.0, 0.01
     text = _plane(f"[{length / 2}, {e}, 0.0]")
     with pytest.warns(ConditioningWarning, match=r"transition t_plane \(plane\) is badly"):
-        plan = check(loads_graph(text, file="p.toml", validate=False))
+        plan = check_graph(loads_graph(text, file="p.toml", validate=False))
     size = math.sqrt(length**2 / 6 + 2 * e**2 / 9)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConditioningWarning)
@@ -74,9 +74,9 @@ def test_examples_are_well_conditioned_and_differences_have_condition_one():
     for f in sorted(EXAMPLES.glob("*.toml")):
         with warnings.catch_warnings():
             warnings.simplefilter("error", ConditioningWarning)
-            plan = check(loads_graph(f.read_text(), file=f.name, validate=False))
+            plan = check_graph(loads_graph(f.read_text(), file=f.name, validate=False))
         assert plan.warnings == ()
-    plan = check(loads_graph((EXAMPLES / "bcs_origin.toml").read_text(), validate=False))
+    plan = check_graph(loads_graph((EXAMPLES / "bcs_origin.toml").read_text(), validate=False))
     cond = check_nominal(plan).condition
     vector_ops = [s.transition.name for s in plan.steps if s.transition.op == "vector"]
     assert vector_ops
@@ -107,6 +107,6 @@ def test_axis_angle_within_the_tolerance_passes():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         graph = loads_graph(ok, file="axis_c.toml")
-        plan = check(graph)
+        plan = check_graph(graph)
     assert plan.warnings == ()
     assert graph.place("alpha_c").value == pytest.approx(60.5)

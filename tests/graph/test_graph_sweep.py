@@ -9,7 +9,7 @@ import pytest
 
 from mtmc.errors import GraphError, InputError
 from mtmc.graph import load_graph, run_graph
-from mtmc.graph.sweep import apply_setting, fit_surrogate, parse_range, sweep
+from mtmc.graph.sweep import apply_setting, fit_surrogate, parse_range, sweep_graph
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "graphs"
 
@@ -52,7 +52,7 @@ def test_fig14_grid_and_surrogate():
         "probe.u_probe": np.linspace(0.001, 0.005, 5),
         "probe.u_axis": np.linspace(0.001, 0.005, 5),
     }
-    res = sweep(g, grid, "d_ac", trials=1000, seed=14)
+    res = sweep_graph(g, grid, "d_ac", trials=1000, seed=14)
     assert res.grid.shape == (25, 2)
     assert res.u.shape == (25,)
     fit = res.fit()
@@ -72,7 +72,7 @@ def test_fig14_grid_and_surrogate():
 def test_surrogate_coefficient_matches_the_closed_form():
     """Ball centre: u(cx)^2 = (u1^2 + u2^2 + u3^2) / 2, so c(u_probe) = c(u_axis) = 1/2."""
     g = load_graph(EXAMPLES / "ball_centre.toml")
-    res = sweep(
+    res = sweep_graph(
         g,
         {"probe.u_probe": [0.001, 0.003, 0.005], "probe.u_axis": [0.001, 0.004]},
         "cx",
@@ -102,4 +102,4 @@ def test_apply_setting_and_sweep_errors():
     with pytest.raises(InputError, match="probe has no field 'u_x'"):
         apply_setting(g, "probe.u_x", 1.0)
     with pytest.raises(GraphError, match="needs a scalar output place"):
-        sweep(g, {"probe.u_axis": [0.001]}, "p", trials=10, seed=1)
+        sweep_graph(g, {"probe.u_axis": [0.001]}, "p", trials=10, seed=1)

@@ -1,7 +1,7 @@
 """place_dimension: the dimension of each place, worked out by hand for small graphs."""
 
-from mtmc.graph.model import check
-from mtmc.graph.toml_format import loads
+from mtmc.graph.model import check_graph
+from mtmc.graph.toml_format import loads_graph
 from mtmc.graph.units import place_dimension
 
 TEXT = """
@@ -77,7 +77,7 @@ out = "l"
 
 
 def test_dimensions_follow_the_ops():
-    plan = check(loads(TEXT))
+    plan = check_graph(loads_graph(TEXT))
     expected = {
         ("a", "value"): (1, 0),  # a point: coordinates are lengths
         ("ab", "value"): (1, 0),  # vector b - a

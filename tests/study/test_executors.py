@@ -140,8 +140,8 @@ def test_library_models_are_picklable(name):
     elif study.kind == "artefact":
         model = study_model(study.study)[0]
     else:
-        from mtmc.graph.model import check
+        from mtmc.graph.model import check_graph
 
-        model = graph_model(check(study.graph), study.outputs[0])[0]
+        model = graph_model(check_graph(study.graph), study.outputs[0])[0]
     again = pickle.loads(pickle.dumps(model))
     assert type(again) is type(model)

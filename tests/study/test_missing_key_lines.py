@@ -16,7 +16,7 @@ import pytest
 
 from mtmc.artefact.artefact import loads_artefact
 from mtmc.errors import MtmcError
-from mtmc.graph.toml_format import loads as loads_graph
+from mtmc.graph.toml_format import loads_graph as loads_graph
 from mtmc.study import loads_study
 
 ROOT = Path(__file__).resolve().parents[2]

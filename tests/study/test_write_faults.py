@@ -113,3 +113,22 @@ def test_outdir_link_to_a_folder_is_followed(tmp_path, result):
     assert link.is_symlink()
     assert (link / "result.json").is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "real"]
+
+
+def test_a_full_disk_names_the_file(tmp_path, monkeypatch):
+    import numpy as np
+
+    def full(*_args, **_kwargs):
+        raise OSError("1000000 requested and 259568 written")  # NumPy's words on ENOSPC
+
+    monkeypatch.setattr(np, "save", full)
+    kept = load_study(STUDY).run(trials=100, seed=3, samples=True)
+    assert kept.samples
+    out = tmp_path / "out"
+    with pytest.raises(OSError, match="requested") as info:
+        write_result(kept, out, report=False)
+    name = next(iter(kept.samples))
+    assert str(info.value) == (
+        f"{out / 'samples' / name}.npy: cannot write: 1000000 requested and 259568 written"
+    )
+    assert not out.exists()

@@ -151,3 +151,92 @@ def test_study_mpe_noise_is_scaled_once(conversion: str, k: float) -> None:
     assert u.tolist() == pytest.approx([10.6e-3 / k, 13.5e-6 / k, 13.5e-6 / k], rel=1e-14)
     assert n.source.endswith("ADM ±(10 µm + 0.3 µm/m), transverse ±(15 µm + 6 µm/m)")
     assert all(t.noise == n for t in s.trackers.values())
+
+
+def _identify_rows() -> tuple[Path, list[str]]:
+    study = STUDIES / "aguado2017.toml"
+    ver = load_study(study).study.verification()
+    rows = ["X,Y,Z,x_lt,y_lt,z_lt"]
+    rows += [
+        ",".join(f"{v:.9f}" for v in (*q, *p)) for q, p in zip(ver.q, ver.readings(), strict=True)
+    ]
+    return study, rows
+
+
+@pytest.mark.parametrize(
+    ("row", "where", "what"),
+    [
+        (
+            "0,5,0,0,0,0,271,7,-842,9,-677,1",
+            ":2:",
+            "expected 6 cells, one per header column, got 12",
+        ),
+        ("1_0,0,0,271.7,-842.9,-677.1", ":2:1: field X:", "plain decimal number"),
+        ("\u0661,0,0,271.7,-842.9,-677.1", ":2:1: field X:", "plain decimal number"),
+        ("\uff11,0,0,271.7,-842.9,-677.1", ":2:1: field X:", "plain decimal number"),
+        ("0,\u00a00,0,271.7,-842.9,-677.1", ":2:2: field Y:", "plain decimal number"),
+        ("0,0,0,271.7,-842.9,-677.1,5", ":2:", "expected 6 cells, one per header column, got 7"),
+        ("0,0,0,271.7,-842.9", ":2:", "expected 6 cells, one per header column, got 5"),
+        ("0,0,0,271.7,-842.9,nan", ":2:6: field z_lt:", "plain decimal number"),
+        ("0,0,0,271.7,-842.9,inf", ":2:6: field z_lt:", "plain decimal number"),
+        ("0,0,0,271.7,-842.9,1e400", ":2:6: field z_lt:", "finite number"),
+    ],
+)
+def test_identify_takes_plain_decimals_one_per_column(  # type: ignore[no-untyped-def]
+    tmp_path: Path, capsys, row: str, where: str, what: str
+) -> None:
+    study, rows = _identify_rows()
+    rows[1] = row
+    data = tmp_path / "data.csv"
+    data.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    assert main(["verify", "identify", str(data), "--study", str(study)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert f"{data}{where}" in err
+    assert what in err
+
+
+@pytest.mark.parametrize("how", ["not converged", "non-finite"])
+def test_identify_refuses_a_run_that_did_not_converge(  # type: ignore[no-untyped-def]
+    tmp_path: Path, capsys, monkeypatch, how: str
+) -> None:
+    import dataclasses
+
+    import mtmc.verification.identify as ident
+
+    real = ident.identify
+
+    def broken(*args, **kwargs):  # type: ignore[no-untyped-def]
+        r = real(*args, **kwargs)
+        if how == "not converged":
+            return dataclasses.replace(r, status=np.zeros_like(r.status))
+        est = np.array(r.estimate)
+        est[0, 0] = np.inf
+        return dataclasses.replace(r, estimate=est)
+
+    monkeypatch.setattr(ident, "identify", broken)
+    study, rows = _identify_rows()
+    data = tmp_path / "data.csv"
+    data.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    assert main(["verify", "identify", str(data), "--study", str(study), "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.count("\n") == 1
+    assert err.startswith(f"mtmc: error: {data}: the identification ")
+    assert "check that the readings are in mm" in err
+
+
+def test_oversized_simulation_names_the_option(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    import mtmc.uncertainty.montecarlo as mc
+
+    monkeypatch.setattr(mc, "_memory_bytes", lambda: 2**20)
+    study = STUDIES / "aguado2017.toml"
+    assert main(["verify", "simulate", str(study), "--trials", "5000"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "keep=False" not in err
+    assert err.startswith("mtmc: error: keeping the samples of 5000 trials needs ")
+    assert err.endswith(
+        "the verification keeps the volumetric errors and coefficients of every trial: run "
+        f"fewer trials (--trials N, or trials in the [run] table of {study})\n"
+    )

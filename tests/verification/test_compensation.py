@@ -301,3 +301,71 @@ def test_plain_csv_errors(
     assert t.sign == "correction"
     assert t.constants == {"EC0Y": 1e-05}
     assert math.isclose(t.curve("EXX").values[1], 0.002)
+
+
+@pytest.mark.parametrize(
+    ("writer", "reader"),
+    [(isg_csv_text, read_isg_csv), (etalon_text, read_etalon), (plain_csv_text, read_plain_csv)],
+)
+def test_every_truncation_is_refused_or_the_whole_table(writer, reader) -> None:  # type: ignore[no-untyped-def]
+    model, theta = _model()
+    t = compensation_table(model, GRID, theta=theta)
+    text = writer(t)
+    assert reader(text) == t
+    where: list[tuple[str | None, bool, bool]] = []
+    for k in range(len(text) + 1):
+        prefix = text[:k]
+        try:
+            back = reader(prefix, "cut.txt")
+        except ParseError as exc:
+            where.append((exc.file, exc.line is not None, "\n" in str(exc)))
+            continue
+        # read only when nothing but trailing whitespace is missing, and then the same table
+        assert prefix.rstrip() == text.rstrip(), k
+        assert back == t
+    # every refusal is one line naming the file and the line
+    assert set(where) == {("cut.txt", True, False)}
+
+
+_CSV_HEAD = "error,axis,position,position_unit,value,value_unit\n"
+
+
+@pytest.mark.parametrize(
+    ("reader", "text", "line", "message"),
+    [
+        (read_isg_csv, "", 1, "no table"),
+        (read_isg_csv, "// only a comment\n\n", 1, "no table"),
+        (read_etalon, "// only a comment\n", 1, "no table"),
+        (read_plain_csv, "# only a comment\n", 1, "no header"),
+        (read_plain_csv, "# sign = error\n" + _CSV_HEAD, 2, "no table"),
+        (read_isg_csv, ISG.replace("sign = error", "sign = foo"), 1, "'sign = foo'"),
+        (read_isg_csv, ISG.replace("sign = error", "sign = corrections"), 1, "corrections"),
+        (read_etalon, "// sign = errors\n" + ETALON, 1, "'sign = errors'"),
+        (read_plain_csv, CSV.replace("sign = correction", "sign = foo"), 1, "'sign = foo'"),
+        (read_plain_csv, CSV + "# sign = error\n", 6, "second sign line"),
+        (
+            read_plain_csv,
+            CSV + "EYX,X,0.0,mm,0.1,mm\n",
+            6,
+            "EYX has 1 positions of axis X, EXX 2",
+        ),
+    ],
+)
+def test_tables_that_are_not_whole_are_refused(  # type: ignore[no-untyped-def]
+    reader, text: str, line: int, message: str
+) -> None:
+    with pytest.raises(ParseError, match=message) as info:
+        reader(text, "comp.txt")
+    assert (info.value.file, info.value.line) == ("comp.txt", line)
+
+
+def test_a_value_cut_inside_its_exponent_is_refused(tmp_path: Path) -> None:
+    t = CompensationTable({"EC0Y": 4.6017387716398277e-05})
+    for fmt, cut in (("etalon", "e-05\n"), ("isg", "e-05\n"), ("csv", "e-05,rad\n")):
+        whole = write_compensation(t, tmp_path / f"comp.{fmt}", fmt).read_text()
+        assert load_compensation(tmp_path / f"comp.{fmt}", fmt) == t
+        short = tmp_path / f"short.{fmt}"
+        short.write_text(whole[: whole.index(cut)])
+        with pytest.raises(ParseError, match=r"not whole|cut short|expected 6 fields") as info:
+            load_compensation(short, fmt)
+        assert info.value.file == str(short)

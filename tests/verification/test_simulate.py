@@ -192,3 +192,17 @@ def test_a_verification_is_the_same_bits_whatever_the_evaluation_block(setup, mo
     for ve, coef in out[1:]:
         np.testing.assert_array_equal(ve, out[0][0])
         np.testing.assert_array_equal(coef, out[0][1])
+
+
+def test_the_model_sent_to_a_worker_gives_the_same_bits(setup) -> None:  # type: ignore[no-untyped-def]
+    # a worker process gets the model pickled: its arrays must have the layout they have
+    # here (a view pickles as a contiguous copy, and a product then sums in another order)
+    import pickle
+
+    ver = _ver(setup)
+    vm = VerificationModel.build(ver, reference_identification(ver))
+    sent = pickle.loads(pickle.dumps(vm))
+    z = np.random.default_rng(np.random.SeedSequence(3)).normal(size=(100, 3 * ver.n_points))
+    here, there = vm(z), sent(z)
+    for key in ("ve", "coef", "comp"):
+        np.testing.assert_array_equal(here[key], there[key])

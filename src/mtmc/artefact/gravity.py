@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import read_text
+from mtmc.document import MAX_MM, read_text
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
 
@@ -177,6 +177,14 @@ def read_gravity(path: str | Path) -> GravityEffect:
                 file=str(p),
                 line=lineno,
             ) from None
+        for name, v in zip("xyz", (x, y, z), strict=True):
+            if abs(v) > MAX_MM:
+                raise InputError(
+                    f"expected a coordinate at most {MAX_MM:g} mm in size, got {v!r}",
+                    file=str(p),
+                    line=lineno,
+                    field=name,
+                )
         o = fields[0].upper()
         if o not in ORIENTATIONS:
             raise InputError(

@@ -7,6 +7,7 @@ written atomically.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +26,7 @@ from mtmc.cli.common import (
     progress_bar,
     with_u,
 )
-from mtmc.errors import MtmcError
+from mtmc.errors import InputError, MtmcError
 
 app = typer.Typer(
     help="Fiducial artefacts (Wang, Cheung and Kong 2022): simulate a study, fit probed balls.",
@@ -158,6 +159,17 @@ def fit_cmd(
         f = fit_points(P, None if radius is None else radius * UNITS[units])
     except MtmcError as exc:
         fail(exc)
+    u_all = (*f.u_centre, f.u_radius)
+    if not all(math.isfinite(v) for v in u_all):
+        k = 3 if f.radius_known else 4
+        fail(
+            InputError(
+                f"{f.n} points leave no residual to give the fit's uncertainty ({k} parameters): "
+                f"probe at least {k + 1} points"
+                + ("" if f.radius_known else ", or give the calibrated radius (--radius)"),
+                file=str(points),
+            )
+        )
     if as_json:
         print_json(
             {

@@ -168,6 +168,25 @@ def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
+def check_trials(trials: int | None) -> None:
+    """Refuse ``--trials`` above the most a study's ``[run] trials`` may ask (10⁹).
+
+    Parameters
+    ----------
+    trials : int or None
+        The option's value (None: not given).
+
+    Raises
+    ------
+    typer.Exit
+        Through :func:`fail`, with one line naming the option.
+    """
+    from mtmc.study.spec import MAX_TRIALS
+
+    if trials is not None and trials > MAX_TRIALS:
+        fail(f"--trials: expected at most {MAX_TRIALS} trials, got {trials}")
+
+
 def warn(lines: Iterable[str]) -> None:
     """Print each warning as one line ``mtmc: warning: ...`` on stderr."""
     for line in lines:
@@ -272,6 +291,7 @@ def progress_bar(
 __all__ = [
     "NAN_POLICY_OPTION",
     "PROGRESS_OPTION",
+    "check_trials",
     "engine_message",
     "nan_policy",
     "quiet_numpy",

@@ -20,6 +20,7 @@ from mtmc.cli.common import (
     PROGRESS_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
+    check_trials,
     engine_message,
     fail,
     nan_policy,
@@ -57,10 +58,10 @@ def _read(path: Path) -> Graph:
 @app.command("check")
 def check_cmd(file: Path = FILE) -> None:
     """Validate FILE and print its places, transitions and firing order."""
-    from mtmc.graph.model import check
+    from mtmc.graph.model import check_graph
 
     try:
-        plan = check(_read(file))
+        plan = check_graph(_read(file))
     except MtmcError as exc:
         fail(exc)
     warn(plan.warnings)
@@ -81,7 +82,7 @@ def draw_cmd(
     ),
 ) -> None:
     """Draw FILE: places as circles, transitions as boxes, markers as dots."""
-    from mtmc.graph.draw import draw, to_dot
+    from mtmc.graph.draw import draw_graph, graph_to_dot
     from mtmc.io import atomic_path
 
     suffix = output.suffix.lower()
@@ -90,10 +91,10 @@ def draw_cmd(
     try:
         g = _read(file)
         if suffix == ".dot":
-            write_output(output, to_dot(g))
+            write_output(output, graph_to_dot(g))
         else:
             with atomic_path(output) as tmp:
-                draw(g, tmp)
+                draw_graph(g, tmp)
     except MtmcError as exc:
         fail(exc)
     except OSError as exc:
@@ -111,10 +112,10 @@ def export_cmd(
 ) -> None:
     """Print FILE as Stryczek's assertion database, as TOML or as DOT."""
     from mtmc.graph.assertions import dumps_assertions
-    from mtmc.graph.draw import to_dot
-    from mtmc.graph.toml_format import dumps
+    from mtmc.graph.draw import graph_to_dot
+    from mtmc.graph.toml_format import dumps_graph
 
-    writers = {"assertions": dumps_assertions, "toml": dumps, "dot": to_dot}
+    writers = {"assertions": dumps_assertions, "toml": dumps_graph, "dot": graph_to_dot}
     if to not in writers:
         fail(f"--to: expected one of {', '.join(writers)}, got {to!r}")
     try:
@@ -146,12 +147,13 @@ def run_cmd(
     The table gives lengths in the graph's units (``units`` of the file), angles in rad;
     ``--json`` gives the library's result as it is (mm, rad).
     """
-    from mtmc.graph.model import check
+    from mtmc.graph.model import check_graph
     from mtmc.graph.run import run_graph
     from mtmc.graph.units import file_unit
 
+    check_trials(trials)
     try:
-        plan = check(_read(file))
+        plan = check_graph(_read(file))
         warn(plan.warnings)
         with progress_bar(f"{file.name}: Monte Carlo", progress) as bar, quiet_numpy():
             res = run_graph(
@@ -240,7 +242,7 @@ def sweep_cmd(
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Run FILE on a grid and fit the surrogate u^2 = c0 + sum c_i sigma_i^2 (Stryczek eq. 31)."""
-    from mtmc.graph.sweep import parse_range, sweep
+    from mtmc.graph.sweep import parse_range, sweep_graph
 
     try:
         ranges = {}
@@ -251,7 +253,7 @@ def sweep_cmd(
             ranges[key.strip()] = parse_range(rng, field=f"--vary {key.strip()}")
         g = _read(file)
         with progress_bar(f"{file.name}: sweep", progress) as bar:
-            res = sweep(
+            res = sweep_graph(
                 g,
                 ranges,
                 quantity,

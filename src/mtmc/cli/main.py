@@ -20,6 +20,7 @@ import typer
 
 from mtmc import __version__
 from mtmc.cli import artefact, graph, kinematics, positioning, propagate, run, verify
+from mtmc.cli.common import quiet_numpy
 
 app = typer.Typer(
     name="mtmc",
@@ -147,7 +148,9 @@ def _main(argv: list[str] | None = None) -> int:
         # standalone_mode=False: the parser raises instead of exiting, and a typer.Exit
         # raised by a subcommand (cli.common.fail) comes back as its exit code.
         args = sys.argv[1:] if argv is None else list(argv)
-        with warnings.catch_warnings():
+        # NumPy's floating-point warnings off (quiet_numpy): a NaN or an overflow is reported
+        # once, as one line, by the engine's check of the model values
+        with warnings.catch_warnings(), quiet_numpy():
             # printed as one line by the subcommands (Plan.warnings), not with source lines
             from mtmc.errors import ConditioningWarning
 

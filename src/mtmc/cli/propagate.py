@@ -19,6 +19,7 @@ from mtmc.cli.common import (
     PROGRESS_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
+    check_trials,
     engine_message,
     fail,
     nan_policy,
@@ -116,6 +117,7 @@ def propagate(
     from mtmc.uncertainty.gum import gum, validate
     from mtmc.uncertainty.montecarlo import monte_carlo
 
+    check_trials(trials)
     try:
         model = expression(expr)
         dists = parse_inputs(model, inputs)

@@ -20,6 +20,7 @@ from mtmc.cli.common import (
     EXECUTOR_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
+    check_trials,
     fail,
     parallel_options,
     progress_bar,
@@ -99,6 +100,7 @@ def run_cmd(
     """Run STUDY and write its result folder and HTML report."""
     if trials is not None and trials < 2:
         fail(f"--trials: expected an integer >= 2, got {trials}")
+    check_trials(trials)
     out = outdir if outdir is not None else default_outdir(study)
     try:
         result = run_study_file(
@@ -146,6 +148,7 @@ def demo_cmd(
 
     if trials is not None and trials < 2:
         fail(f"--trials: expected an integer >= 2, got {trials}")
+    check_trials(trials)
 
     def bar(label: str) -> Any:
         return progress_bar(f"{label}: Monte Carlo", False if quiet else None)

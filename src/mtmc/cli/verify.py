@@ -175,6 +175,8 @@ def simulate_cmd(
         with progress_bar(f"{study.name}: verifications", progress) as bar:
             r = st.simulate(m, s, points=points, tracker=tracker, progress=bar, **par)
     except MtmcError as exc:
+        if exc.field == "trials" and exc.message.endswith("run fewer trials"):
+            fail(f"{exc.message} (--trials N, or trials in the [run] table of {study})")
         fail(exc)
     coefs = {}
     gum_u = {}
@@ -247,6 +249,31 @@ def simulate_cmd(
     typer.echo(f"calibration u per point: max {mx} µm, mean {mean} µm (MC)")
 
 
+def _check_identified(r: Any, data: Path) -> None:
+    """Refuse an identification that did not converge or gives non-finite numbers."""
+    import numpy as np
+
+    from mtmc.errors import ConvergenceError
+
+    check = (
+        "check that the readings are in mm and in the tracker's frame, that the axis columns "
+        "match the study's axes, and the tracker position (--tracker)"
+    )
+    if not bool(r.converged[0]):
+        raise ConvergenceError(
+            f"the identification did not converge ({r.messages()[0]} after "
+            f"{int(r.iterations[0])} iterations): {check}",
+            file=str(data),
+        )
+    values = (r.estimate[0], r.u[0], r.initial_ve[0], r.residual_ve[0])
+    if not all(np.all(np.isfinite(v)) for v in values):
+        raise ConvergenceError(
+            f"the identification gives non-finite coefficients, uncertainties or volumetric "
+            f"errors: {check}",
+            file=str(data),
+        )
+
+
 @app.command("identify")
 def identify_cmd(
     data: Path = typer.Argument(
@@ -288,6 +315,7 @@ def identify_cmd(
             d, st.machine, st.trackers, ver.tracker, self_calibrated=self_cal
         )
         r = identify(st.model, q, meas, lt, pose=st.pose or self_cal, fixed=st.fixed)
+        _check_identified(r, data)
         if export is not None and out is not None:
             table = compensation_table(st.model, measured_grid(st.model, q), theta=r.theta[0])
             write_compensation(table, out, export)

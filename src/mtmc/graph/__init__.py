@@ -8,24 +8,19 @@ Stryczek's assertion database (Table 1), drawn as SVG or DOT, swept over paramet
 a surrogate formula fitted to the sweep (Stryczek eq. 31). This package knows nothing of
 machines.
 
-The names exported to :mod:`mtmc` carry ``graph`` where a bare name would be ambiguous
-(``load_graph``, ``check_graph``); the modules keep the short names.
+Each function has one name, in its module and here: the ones that would be ambiguous at
+the top of :mod:`mtmc` carry ``graph`` (``load_graph``, ``check_graph``).
 """
 
 from mtmc.graph.assertions import dumps_assertions, load_assertions, loads_assertions
-from mtmc.graph.draw import draw as draw_graph
-from mtmc.graph.draw import to_dot as graph_to_dot
+from mtmc.graph.draw import draw_graph, graph_to_dot
 from mtmc.graph.files import load_graph
-from mtmc.graph.model import Graph, Plan, Step
-from mtmc.graph.model import check as check_graph
+from mtmc.graph.model import Graph, Plan, Step, check_graph
 from mtmc.graph.ops import rotary_axis
 from mtmc.graph.places import Place, ProbeDefaults, Transition
 from mtmc.graph.run import GraphResult, PlaceSummary, graph_model, run_graph
-from mtmc.graph.sweep import Surrogate, SweepResult, fit_surrogate
-from mtmc.graph.sweep import sweep as sweep_graph
-from mtmc.graph.toml_format import dump as dump_graph
-from mtmc.graph.toml_format import dumps as dumps_graph
-from mtmc.graph.toml_format import loads as loads_graph
+from mtmc.graph.sweep import Surrogate, SweepResult, fit_surrogate, sweep_graph
+from mtmc.graph.toml_format import dump_graph, dumps_graph, loads_graph
 from mtmc.graph.units import file_unit, place_dimension, unit_of
 
 __all__: list[str] = [

@@ -54,7 +54,7 @@ from types import MappingProxyType
 from typing import Any
 
 from mtmc.errors import GraphError, MtmcError, ParseError
-from mtmc.graph.model import Graph, check
+from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import Place, ProbeDefaults, Transition
 from mtmc.io import decode_utf8
 
@@ -263,7 +263,7 @@ def loads_assertions(text: str, *, file: str | None = None, validate: bool = Tru
     transitions = c.transitions({p.name: p.type for p in places})
     graph = Graph(tuple(places), tuple(transitions), c.title, c.units, c.probe, file=file)
     if validate:
-        check(graph)
+        check_graph(graph)
     return graph
 
 
@@ -507,7 +507,7 @@ def dumps_assertions(graph: Graph) -> str:
     str
         One fact per line.
     """
-    plan = check(graph)
+    plan = check_graph(graph)
     at_of = {}
     for s in plan.steps:
         if s.transition.op == "meas":

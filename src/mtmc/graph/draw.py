@@ -13,9 +13,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtmc.graph.model import Graph, Plan, check
+from mtmc.graph.model import Graph, Plan, check_graph
 
-__all__ = ["layout", "to_dot", "draw"]
+__all__ = ["layout", "graph_to_dot", "draw_graph"]
 
 #: Size of the place and transition labels, pt: read at the drawing's own size (the
 #: report shows it unscaled, in a box that scrolls).
@@ -64,7 +64,7 @@ def _q(s: str) -> str:
     return '"' + s.replace('"', "'") + '"'
 
 
-def to_dot(graph: Graph | Plan) -> str:
+def graph_to_dot(graph: Graph | Plan) -> str:
     r"""The graph as Graphviz DOT text.
 
     Places are ``shape=circle`` labelled ``name`` and type (a marked place is drawn with a
@@ -85,10 +85,10 @@ def to_dot(graph: Graph | Plan) -> str:
     >>> from mtmc.graph.places import Place, Transition
     >>> g = Graph(places=(Place("a", "real", 1.0),),
     ...           transitions=(Transition("t1", "ratio", ("a", "a"), "b"),))
-    >>> print(to_dot(g).splitlines()[3])
+    >>> print(graph_to_dot(g).splitlines()[3])
       "a" [shape=circle, label="a\nreal\n●"];
     """
-    plan = graph if isinstance(graph, Plan) else check(graph)
+    plan = graph if isinstance(graph, Plan) else check_graph(graph)
     g = plan.graph
     marked = set(plan.marked)
     out = [f"digraph {_q(g.title or 'graph')} {{", "  rankdir=LR;", "  node [fontsize=10];"]
@@ -107,7 +107,7 @@ def to_dot(graph: Graph | Plan) -> str:
     return "\n".join(out) + "\n"
 
 
-def draw(graph: Graph | Plan, path: str | Path) -> None:
+def draw_graph(graph: Graph | Plan, path: str | Path) -> None:
     """Draw the graph to a file with Matplotlib (format from the suffix: svg, png, pdf).
 
     Parameters
@@ -121,7 +121,7 @@ def draw(graph: Graph | Plan, path: str | Path) -> None:
     from matplotlib.patches import Circle as CirclePatch
     from matplotlib.patches import FancyArrowPatch, Rectangle
 
-    plan = graph if isinstance(graph, Plan) else check(graph)
+    plan = graph if isinstance(graph, Plan) else check_graph(graph)
     g = plan.graph
     pos = layout(plan)
     xs = [p[0] for p in pos.values()]

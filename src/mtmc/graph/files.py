@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from mtmc.document import read_text
 from mtmc.graph.assertions import load_assertions
 from mtmc.graph.model import Graph
-from mtmc.graph.toml_format import load
+from mtmc.graph.toml_format import loads_graph
 
 __all__ = ["load_graph", "ASSERTION_SUFFIXES"]
 
@@ -31,10 +32,12 @@ def load_graph(path: str | Path, *, validate: bool = True) -> Graph:
 
     Raises
     ------
+    InputError
+        If the file cannot be read.
     ParseError, GraphError
-        As :func:`mtmc.graph.toml_format.load` or
-        :func:`mtmc.graph.assertions.load_assertions`.
+        As :func:`mtmc.graph.loads_graph` or :func:`mtmc.graph.assertions.load_assertions`.
     """
-    if Path(path).suffix.lower() in ASSERTION_SUFFIXES:
-        return load_assertions(path, validate=validate)
-    return load(path, validate=validate)
+    p = Path(path)
+    if p.suffix.lower() in ASSERTION_SUFFIXES:
+        return load_assertions(p, validate=validate)
+    return loads_graph(read_text(p, "graph file"), file=p.name, validate=validate)

@@ -31,7 +31,7 @@ from mtmc.frozen import frozen_mapping
 from mtmc.graph import ops
 from mtmc.graph.places import COORDINATE_TYPES, Place, ProbeDefaults, Transition
 
-__all__ = ["Graph", "Plan", "Step", "check", "LENGTH_UNITS"]
+__all__ = ["Graph", "Plan", "Step", "check_graph", "LENGTH_UNITS"]
 
 #: Length units a graph file may use, and their size in mm.
 LENGTH_UNITS: Mapping[str, float] = MappingProxyType({"mm": 1.0, "um": 1e-3})
@@ -169,7 +169,7 @@ def _err(graph: Graph, msg: str, line: int | None, fld: str | None = None) -> Gr
     return GraphError(msg, file=graph.file, line=line, field=fld)
 
 
-def check(graph: Graph, *, nominal: bool = True) -> Plan:
+def check_graph(graph: Graph, *, nominal: bool = True) -> Plan:
     """Validate a graph and compute its types, bound variants and firing order.
 
     With ``nominal`` (default) the nominal configuration is then checked too
@@ -203,10 +203,10 @@ def check(graph: Graph, *, nominal: bool = True) -> Plan:
     ...     places=(Place("a", "real", 1.0), Place("b", "real", 2.0)),
     ...     transitions=(Transition("t1", "middle", ("a", "b"), "c"),),
     ... )
-    >>> plan = check(g)
+    >>> plan = check_graph(g)
     >>> plan.types["c"], plan.generations
     ('real', (('t1',),))
-    >>> check(g) is plan  # a graph is immutable: checked once, its plan kept
+    >>> check_graph(g) is plan  # a graph is immutable: checked once, its plan kept
     True
     """
     if nominal:

@@ -30,7 +30,7 @@ from mtmc.errors import GraphError, InputError, MtmcError
 from mtmc.frozen import frozen_array, frozen_mapping, read_only
 from mtmc.graph import ops as _ops
 from mtmc.graph import probe as _probe
-from mtmc.graph.model import Graph, Plan, check
+from mtmc.graph.model import Graph, Plan, check_graph
 from mtmc.graph.places import SCALAR_TYPES, VECTOR_TYPES, Place
 from mtmc.graph.values import PARTS, flatten, marked_value, place_factor, unflatten
 from mtmc.parallel import ExecutorKind
@@ -445,7 +445,7 @@ def _fire(
 
 
 def _as_plan(graph: Graph | Plan) -> Plan:
-    return graph if isinstance(graph, Plan) else check(graph)
+    return graph if isinstance(graph, Plan) else check_graph(graph)
 
 
 #: The input a graph without random inputs is given, so that the engine's blocks know

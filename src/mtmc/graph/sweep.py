@@ -38,7 +38,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import GraphError, InputError, MtmcError
-from mtmc.graph.model import Graph, check
+from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import SCALAR_TYPES, ProbeDefaults
 from mtmc.graph.run import run_graph
 from mtmc.parallel import ExecutorKind, map_blocks
@@ -49,7 +49,7 @@ __all__ = [
     "Surrogate",
     "apply_setting",
     "parse_range",
-    "sweep",
+    "sweep_graph",
     "fit_surrogate",
 ]
 
@@ -340,7 +340,7 @@ class _SweepPoint:
         return summary.u, summary.estimate
 
 
-def sweep(
+def sweep_graph(
     graph: Graph,
     vary: Mapping[str, npt.ArrayLike],
     output: str,
@@ -390,7 +390,7 @@ def sweep(
     InputError, GraphError
         On an unknown key, a non-scalar output, or an invalid graph.
     """
-    plan = check(graph)
+    plan = check_graph(graph)
     if output not in plan.types:
         raise InputError(f"the graph has no place {output}", file=graph.file, field=output)
     if plan.types[output] not in SCALAR_TYPES:

@@ -1,13 +1,13 @@
 """The TOML graph file: reading (with file and line in every error) and writing.
 
 The format is documented in ``docs/graph-format.md``. Reading is in two steps kept apart:
-:func:`mtmc.document.parse_toml` parses the text, then :func:`loads` turns the tables into
+:func:`mtmc.document.parse_toml` parses the text, then :func:`loads_graph` turns the tables into
 :class:`Place`, :class:`Transition` and :class:`Graph` objects, checking every key; nothing
 is skipped silently. TOML does not report lines, so the text is scanned for the ``[[place]]`` /
 ``[[transition]]`` headers and ``key =`` lines, and each entry and field keeps its line for
 the messages (``ball_centre.toml:23: field op: transition t5: ...``).
 
-:func:`dumps` writes a graph back; ``loads(dumps(g)) == g`` for every valid graph.
+:func:`dumps_graph` writes a graph back; ``loads_graph(dumps_graph(g)) == g`` for every valid graph.
 """
 
 from __future__ import annotations
@@ -18,13 +18,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from mtmc.document import KeyPath, parse_toml, read_text
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, KeyPath, parse_toml
 from mtmc.errors import GraphError, MtmcError
-from mtmc.graph.model import Graph, check
-from mtmc.graph.places import Place, ProbeDefaults, Transition
+from mtmc.graph.model import Graph, check_graph
+from mtmc.graph.places import MAX_MAGNITUDE, Place, ProbeDefaults, Transition
 from mtmc.io import write_text_atomic
 
-__all__ = ["load", "loads", "dump", "dumps"]
+__all__ = ["dump_graph", "dumps_graph", "loads_graph"]
 
 _TOP_KEYS = ("title", "units", "probe", "place", "transition")
 _PLACE_KEYS = ("name", "type", "value", "u", "dist", "unit", "pos")
@@ -57,7 +57,7 @@ class _Lines:
             self.entries[table] = entries
 
 
-def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
+def loads_graph(text: str, *, file: str | None = None, validate: bool = True) -> Graph:
     """Read a graph from TOML text.
 
     Parameters
@@ -84,7 +84,7 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
 
     Examples
     --------
-    >>> g = loads('''
+    >>> g = loads_graph('''
     ... [[place]]
     ... name = "a"
     ... type = "real"
@@ -105,11 +105,11 @@ def loads(text: str, *, file: str | None = None, validate: bool = True) -> Graph
         return GraphError(msg, file=file, line=line, field=fld)
 
     title, units, probe = _header(data, lines, err)
-    places = _places(data, lines, err)
+    places = _places(data, lines, err, units)
     transitions = _transitions(data, lines, err)
     graph = Graph(tuple(places), tuple(transitions), title, units, probe, file=file)
     if validate:
-        check(graph)
+        check_graph(graph)
     return graph
 
 
@@ -145,6 +145,13 @@ def _header(data: dict[str, Any], lines: _Lines, err: _Err) -> tuple[str, str, P
             )
     try:
         probe = ProbeDefaults(**probe_data, line=lines.probe_line)
+        limit, unit = _limit(None, units)
+        for key in _PROBE_KEYS:
+            if getattr(probe, key) > limit:
+                raise GraphError(
+                    f"probe: expected {key} at most {limit:g} {unit}, got {probe_data[key]!r}",
+                    field=key,
+                )
     except MtmcError as exc:
         raise err(
             exc.message, lines.probe.get(exc.field or "", lines.probe_line), exc.field
@@ -153,7 +160,38 @@ def _header(data: dict[str, Any], lines: _Lines, err: _Err) -> tuple[str, str, P
     return title, units, probe
 
 
-def _places(data: dict[str, Any], lines: _Lines, err: _Err) -> list[Place]:
+def _limit(unit: str | None, units: str) -> tuple[float, str]:
+    """The largest size of a number of a place of ``unit`` in a file of ``units``."""
+    if unit == "rad":
+        return MAX_RAD, "rad"
+    if unit == "deg":
+        return MAX_DEG, "deg"
+    if unit == "1":
+        return MAX_MAGNITUDE, ""
+    return (MAX_MM * 1e3, "um") if units == "um" else (MAX_MM, "mm")
+
+
+def _check_place_range(place: Place, units: str, keys: dict[str, int], line: int | None) -> None:
+    """Refuse a value or u of a place beyond :func:`_limit`, or a pos beyond ``MAX_MM``."""
+    limit, unit = _limit(place.unit, units)
+    for key, v, lim, u in (
+        ("value", place.value, limit, unit),
+        ("u", place.u, limit, unit),
+        ("pos", place.pos, MAX_MM, ""),
+    ):
+        if v is None:
+            continue
+        xs = v if isinstance(v, tuple) else (v,)
+        if any(abs(float(x)) > lim for x in xs):
+            raise GraphError(
+                f"place {place.name}: expected {key} at most {lim:g}{' ' + u if u else ''} "
+                f"in size, got {list(xs) if len(xs) > 1 else xs[0]!r}",
+                line=keys.get(key, line),
+                field=key,
+            )
+
+
+def _places(data: dict[str, Any], lines: _Lines, err: _Err, units: str = "mm") -> list[Place]:
     """The ``[[place]]`` tables as places, errors at the line of the offending key."""
     places = []
     raw_places = data.get("place", [])
@@ -173,9 +211,11 @@ def _places(data: dict[str, Any], lines: _Lines, err: _Err) -> list[Place]:
             if key not in entry:
                 raise err(f"place {entry.get('name', '#' + str(i + 1))}: missing {key}", line, key)
         try:
-            places.append(Place(**entry, line=line))
+            place = Place(**entry, line=line)
+            _check_place_range(place, units, keys, line)
         except MtmcError as exc:
             raise err(exc.message, keys.get(exc.field or "", line), exc.field) from None
+        places.append(place)
 
     return places
 
@@ -217,32 +257,6 @@ def _transitions(data: dict[str, Any], lines: _Lines, err: _Err) -> list[Transit
     return transitions
 
 
-def load(path: str | Path, *, validate: bool = True) -> Graph:
-    """Read a graph file (see :func:`loads`).
-
-    Parameters
-    ----------
-    path : str or Path
-        The TOML file.
-    validate : bool
-        Also validate the graph.
-
-    Returns
-    -------
-    Graph
-        The graph, its ``file`` set to the file's name.
-
-    Raises
-    ------
-    InputError
-        If the file cannot be read.
-    ParseError, GraphError
-        As :func:`loads`.
-    """
-    p = Path(path)
-    return loads(read_text(p, "graph file"), file=p.name, validate=validate)
-
-
 def _fmt(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
@@ -261,8 +275,8 @@ def _fmt(v: Any) -> str:
     raise TypeError(f"cannot write {v!r} to TOML")
 
 
-def dumps(graph: Graph) -> str:
-    """Write a graph as TOML text (``loads(dumps(g)) == g``).
+def dumps_graph(graph: Graph) -> str:
+    """Write a graph as TOML text (``loads_graph(dumps_graph(g)) == g``).
 
     Parameters
     ----------
@@ -306,8 +320,8 @@ def dumps(graph: Graph) -> str:
     return "\n".join(out) + "\n"
 
 
-def dump(graph: Graph, path: str | Path) -> None:
-    """Write a graph to a TOML file (see :func:`dumps`).
+def dump_graph(graph: Graph, path: str | Path) -> None:
+    """Write a graph to a TOML file (see :func:`dumps_graph`).
 
     Parameters
     ----------
@@ -316,4 +330,4 @@ def dump(graph: Graph, path: str | Path) -> None:
     path : str or Path
         The file to write (atomically, :func:`mtmc.io.write_text_atomic`).
     """
-    write_text_atomic(path, dumps(graph))
+    write_text_atomic(path, dumps_graph(graph))

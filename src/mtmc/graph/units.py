@@ -62,7 +62,7 @@ def place_dimension(plan: Plan, name: str, part: str = "value") -> tuple[int, in
     Parameters
     ----------
     plan : Plan
-        A checked graph (:func:`mtmc.graph.model.check`).
+        A checked graph (:func:`mtmc.graph.check_graph`).
     name : str
         The place.
     part : str
@@ -79,12 +79,12 @@ def place_dimension(plan: Plan, name: str, part: str = "value") -> tuple[int, in
     Examples
     --------
     >>> from mtmc.graph.places import Place, Transition
-    >>> from mtmc.graph.model import Graph, check
+    >>> from mtmc.graph.model import Graph, check_graph
     >>> g = Graph(
     ...     places=(Place("a", "point", [0, 0, 0]), Place("b", "point", [1, 0, 0])),
     ...     transitions=(Transition("t", "distance", ("a", "b"), "d"),),
     ... )
-    >>> place_dimension(check(g), "d"), place_dimension(check(g), "a", "value")
+    >>> place_dimension(check_graph(g), "d"), place_dimension(check_graph(g), "a", "value")
     ((1, 0), (1, 0))
     """
     if part == "value":

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import read_text
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, read_text
 from mtmc.errors import InputError
 
 __all__ = [
@@ -234,10 +234,27 @@ def _header(
     return where, len(header)
 
 
+#: The largest size of a target or a deviation, by its unit (:data:`mtmc.document.MAX_MM`,
+#: :data:`mtmc.document.MAX_DEG`).
+_LIMITS: Mapping[str, float] = {
+    "mm": MAX_MM,
+    "um": MAX_MM * 1e3,
+    "deg": MAX_DEG,
+    "arcsec": MAX_DEG * 3600.0,
+    "urad": MAX_RAD * 1e6,
+}
+
+
 def _reading(
-    cells: list[str], where: Mapping[str, int], width: int, file: str, k: int
+    cells: list[str],
+    where: Mapping[str, int],
+    width: int,
+    file: str,
+    k: int,
+    units: tuple[str, str] = ("mm", "um"),
 ) -> tuple[tuple[float, int, int], float]:
     """``((target, run, direction), deviation)`` of one row; errors name line ``k``."""
+    limits = {"target": _LIMITS[units[0]], "deviation": _LIMITS[units[1]]}
     if len(cells) < width:
         raise InputError(f"expected {width} fields, got {len(cells)}", file=file, line=k)
 
@@ -251,6 +268,13 @@ def _reading(
             raise InputError(
                 f"expected a finite number, got {text!r}", file=file, line=k, field=key
             ) from None
+        if abs(v) > limits[key]:
+            raise InputError(
+                f"expected a number at most {limits[key]:g} in size, got {text!r}",
+                file=file,
+                line=k,
+                field=key,
+            )
         return v
 
     target = number("target")
@@ -290,7 +314,7 @@ def parse_positioning_csv(
     where, width = _header(lines[0], delim, file, columns)
     seen: dict[tuple[float, int, int], tuple[float, int]] = {}
     for k, line in lines[1:]:
-        key3, deviation = _reading(_cells(line, delim), where, width, file, k)
+        key3, deviation = _reading(_cells(line, delim), where, width, file, k, (t_unit, d_unit))
         if key3 in seen:
             raise InputError(
                 f"a second reading at target {key3[0]:g}, run {key3[1]}, direction "

@@ -174,19 +174,19 @@ def region_svg(r: dict[str, Any]) -> str:
 
 
 def graph_svg(toml_text: str, name: str | None = None) -> str:
-    """The drawing of a measurement graph (:func:`mtmc.graph.draw.draw`) from its TOML text."""
+    """The drawing of a measurement graph (:func:`mtmc.graph.draw_graph`) from its TOML text."""
     import tempfile
     from pathlib import Path
 
     import matplotlib
 
-    from mtmc.graph.draw import draw
-    from mtmc.graph.toml_format import loads
+    from mtmc.graph.draw import draw_graph
+    from mtmc.graph.toml_format import loads_graph
 
-    graph = loads(toml_text, file=name)
+    graph = loads_graph(toml_text, file=name)
     with tempfile.TemporaryDirectory() as d, matplotlib.rc_context({"svg.hashsalt": "graph"}):
         path = Path(d) / "graph.svg"
-        draw(graph, path)
+        draw_graph(graph, path)
         text = path.read_text(encoding="utf-8")
     start = text.find("<svg")
     return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()

@@ -25,11 +25,11 @@ from numpy.typing import NDArray
 from mtmc.document import Fields, check_number
 from mtmc.errors import MtmcError
 from mtmc.geometry.constructions import normal_plane_basis
-from mtmc.graph.model import Graph, Plan, check
+from mtmc.graph import load_graph
+from mtmc.graph.model import Graph, Plan, check_graph
 from mtmc.graph.places import SCALAR_TYPES
 from mtmc.graph.run import graph_model, random_inputs, run_graph
-from mtmc.graph.sweep import Surrogate, apply_setting, sweep
-from mtmc.graph.toml_format import load
+from mtmc.graph.sweep import Surrogate, apply_setting, sweep_graph
 from mtmc.graph.units import place_dimension, unit_of
 from mtmc.graph.values import PARTS
 from mtmc.study.base import (
@@ -145,7 +145,7 @@ class GraphStudy(Study):
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Monte Carlo and GUM of every output, then the sweep (module docstring)."""
-        plan = check(self.graph)
+        plan = check_graph(self.graph)
         quantities: list[Quantity] = []
         regions: list[Region] = []
         samples: dict[str, NDArray[np.float64]] = {}
@@ -240,7 +240,7 @@ class GraphStudy(Study):
     ) -> tuple[dict[str, Any], Table]:
         spec = self.sweep
         assert spec is not None
-        sw = sweep(
+        sw = sweep_graph(
             self.graph,
             spec.vary,
             spec.output,
@@ -252,7 +252,7 @@ class GraphStudy(Study):
         fit = sw.fit(intercept=spec.intercept)
         fit0 = sw.fit(intercept=False)
         pred = fit.predict(sw.grid)
-        plan = check(self.graph)
+        plan = check_graph(self.graph)
         factor = self.graph.factor
         d = {
             "output": sw.output,
@@ -379,10 +379,10 @@ def _load(top: Fields, kind: str) -> GraphStudy:
     top.only(("kind", "title", "graph", "outputs", "run", "sweep"))
     path = top.source.resolve(top.text("graph"), ("graph",))
     try:
-        graph = load(path)
+        graph = load_graph(path)
     except MtmcError as exc:
         raise top.error(f"{exc}", "graph") from None
-    plan = check(graph)
+    plan = check_graph(graph)
     if kind == "graph":
         outputs = top.texts("outputs")
     else:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import Fields, check_number
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, Fields, check_number
 from mtmc.errors import InputError, MtmcError
 from mtmc.kinematics.library import library_machine, library_names
 from mtmc.kinematics.machine import Machine
@@ -171,6 +171,25 @@ class KinematicsStudy(Study):
         )
 
 
+def _pose_limits(machine: Machine, angles: str) -> list[float]:
+    """The largest size of each coordinate of a pose: mm, or deg / rad for a rotary axis."""
+    rot = MAX_DEG if angles == "deg" else MAX_RAD
+    return [rot if is_rotary(a) else MAX_MM for a in machine.axes]
+
+
+def _check_error_size(et: Fields, name: str, d: Distribution, machine: Machine) -> None:
+    """Refuse an error whose mean or standard deviation is beyond a machine's (mm, rad)."""
+    angular = bool(machine.error_term(name).angular)
+    limit, unit = (MAX_RAD, "rad") if angular else (MAX_MM, "mm")
+    mean, std = float(d.mean), float(d.std)
+    if abs(mean) > limit or (math.isfinite(std) and std > limit):
+        raise et.error(
+            f"expected an error of mean and standard deviation at most {limit:g} {unit} in "
+            f"size, got {d}",
+            name,
+        )
+
+
 @register_kind("kinematics", "ISO 230 geometric errors through a machine's forward kinematics")
 def load_kinematics(top: Fields) -> KinematicsStudy:
     """Validate a ``kinematics`` study file (see ``docs/study-format.md``)."""
@@ -205,7 +224,10 @@ def load_kinematics(top: Fields) -> KinematicsStudy:
         def err(msg: str, _i: int = i) -> InputError:
             return top.error(f"pose {_i + 1}: {msg}", "poses")
 
-        row = [check_number(v, err) for v in pose]
+        row = [
+            check_number(v, err, -lim, lim)
+            for v, lim in zip(pose, _pose_limits(machine, angles), strict=True)
+        ]
         given.append(tuple(row))
         poses.append(
             [
@@ -224,6 +246,7 @@ def load_kinematics(top: Fields) -> KinematicsStudy:
                 f"expected one of {', '.join(accepted)}",
                 e,
             )
+        _check_error_size(et, e, errors[e], machine)
     return KinematicsStudy(
         title=top.text("title", f"{name}: geometric errors through the kinematics"),
         source=top.source,

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from mtmc.errors import InputError
-from mtmc.io import _umask, deferred_interrupt
+from mtmc.io import _umask, deferred_interrupt, naming_os_errors
 from mtmc.study.base import StudyResult
 
 __all__ = ["LIBRARIES", "now", "provenance", "write_result"]
@@ -158,6 +158,12 @@ def _dump(obj: Any) -> str:
     return json.dumps(obj, indent=1, ensure_ascii=False, allow_nan=False) + "\n"
 
 
+def _write(tmp: Path, dest: Path, name: str, text: str) -> None:
+    """Write ``tmp/name``; an error of the file system names ``dest/name``."""
+    with naming_os_errors(dest / name):
+        (tmp / name).write_text(text, encoding="utf-8")
+
+
 def write_result(
     result: StudyResult,
     outdir: str | os.PathLike[str],
@@ -198,24 +204,26 @@ def write_result(
     dest = Path(outdir)
     if dest.is_symlink():  # a link is followed, for a folder as for a file
         dest = Path(os.path.realpath(dest))
-    _check_destination(dest)
     dest.parent.mkdir(parents=True, exist_ok=True)
+    # checked under the lock: another writer's swap leaves OUTDIR absent for a moment
     with _folder_lock(dest.parent):
+        _check_destination(dest)
         _remove_stale(dest)
         tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(dest), dir=dest.parent))
     try:
         doc = result.to_dict()
-        (tmp / "result.json").write_text(_dump(doc), encoding="utf-8")
+        _write(tmp, dest, "result.json", _dump(doc))
         for name, text in result.csv_tables().items():
-            (tmp / name).write_text(text, encoding="utf-8")
+            _write(tmp, dest, name, text)
         if result.samples:
             (tmp / "samples").mkdir()
             for name, arr in result.samples.items():
-                np.save(tmp / "samples" / f"{name}.npy", np.asarray(arr))
+                with naming_os_errors(dest / "samples" / f"{name}.npy"):
+                    np.save(tmp / "samples" / f"{name}.npy", np.asarray(arr))
         if study_text is not None:
-            (tmp / "study.toml").write_text(study_text, encoding="utf-8")
+            _write(tmp, dest, "study.toml", study_text)
         prov = provenance(result, started=started, argv=argv)
-        (tmp / "provenance.json").write_text(_dump(prov), encoding="utf-8")
+        _write(tmp, dest, "provenance.json", _dump(prov))
         if report:
             from mtmc.report import render
 

@@ -30,7 +30,15 @@ position or orientation of the tool relative to the workpiece, as in
 :mod:`mtmc.kinematics`); a correction is its negative, the value a control adds to the
 commanded position. The ISG kernel reads errors and compensates them itself (its
 ``negate`` parameter flips the sign), so ``sign="error"`` is the default. A file without
-a sign line (one written elsewhere) is read as errors.
+a sign line (one written elsewhere) is read as errors; a sign line that says anything but
+``sign = error`` or ``sign = correction`` is refused.
+
+**Whole files only.** A wrong table moves a machine, so a reader refuses a file that is
+not whole: an empty or comment-only file, a block not closed, and, in a file written by
+mtmc, a missing or different last line ``end of table: N values`` (a comment that counts
+the constants and the values of the curves; a file cut anywhere, even inside a number,
+lacks it or disagrees with it). A file without that line (written elsewhere) must give
+the component errors of each axis at the same positions.
 """
 
 from __future__ import annotations
@@ -75,7 +83,9 @@ __all__ = [
 FORMATS = ("isg", "etalon", "csv")
 #: What the values of a table are: ISO 230-1 errors, or corrections (their negatives).
 SIGNS = ("error", "correction")
-_SIGN_LINE = re.compile(r"\bsign\s*[=:]\s*(error|correction)\b", re.IGNORECASE)
+_SIGN_LINE = re.compile(r"\bsign\s*[=:]\s*([^\s:;,.]*)", re.IGNORECASE)
+_END = "end of table"
+_END_LINE = re.compile(r"end of table: ([0-9]+) values")
 _DEG = 180.0 / math.pi
 
 
@@ -430,6 +440,12 @@ def _header(table: CompensationTable, prefix: str, fmt: str) -> list[str]:
     ]
 
 
+def _end_line(table: CompensationTable) -> str:
+    """The last line of a written table (after its comment marker): the count of values."""
+    n = len(table.constants) + sum(c.values.size for c in table.curves)
+    return f"{_END}: {n} values"
+
+
 def _columns(rows: list[list[str]]) -> list[str]:
     widths = [max(len(r[j]) for r in rows) for j in range(len(rows[0]))]
     return ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows]
@@ -480,6 +496,7 @@ def isg_csv_text(table: CompensationTable) -> str:
         if i:
             out.append("#")
         out += b
+    out.append(f"// {_end_line(table)}")
     return "\n".join(out) + "\n"
 
 
@@ -525,6 +542,7 @@ def etalon_text(table: CompensationTable) -> str:
         out += [f"[{c.name}]", "Gridpoints = {"]
         out += [f"{_num(q[i])} {_num(c.values[i])}" for i in range(q.size)]
         out.append("}")
+    out.append(f"// {_end_line(table)}")
     return "\n".join(out) + "\n"
 
 
@@ -560,6 +578,7 @@ def plain_csv_text(table: CompensationTable) -> str:
             f"{c.name},{c.axis},{_num(q[i])},{punit},{_num(c.values[i])},{unit}"
             for i in range(q.size)
         ]
+    out.append(f"# {_end_line(table)}")
     return "\n".join(out) + "\n"
 
 
@@ -600,14 +619,91 @@ def _strip(line: str, marker: str) -> str:
     return line.split(marker, 1)[0].strip()
 
 
-def _sign_of(lines: list[str], marker: str) -> str:
-    for line in lines:
+def _sign_of(lines: list[str], marker: str, file: str) -> str:
+    """The sign of the ``sign = ...`` comment lines ("error" without one)."""
+    sign: str | None = None
+    for n, line in enumerate(lines, start=1):
         s = line.strip()
         if s.startswith(marker):
             m = _SIGN_LINE.search(s)
-            if m:
-                return m.group(1).lower()
-    return "error"
+            if m is None:
+                continue
+            word = m.group(1).lower()
+            if word not in SIGNS:
+                raise ParseError(
+                    f"expected 'sign = error' or 'sign = correction', got 'sign = {m.group(1)}'",
+                    file=file, line=n, field="sign",
+                )  # fmt: skip
+            if sign is not None and word != sign:
+                raise ParseError(
+                    f"a second sign line says {word}, the first {sign}",
+                    file=file, line=n, field="sign",
+                )  # fmt: skip
+            sign = word
+    return sign or "error"
+
+
+def _check_whole(
+    lines: list[str],
+    marker: str,
+    file: str,
+    consts: Mapping[str, object],
+    curves: list[_Curve],
+) -> None:
+    """Refuse a text that is not a whole table (see the module notes)."""
+    last = 0  # the last line that is not blank
+    ends: list[tuple[int, str]] = []
+    for n, raw in enumerate(lines, start=1):
+        s = raw.strip()
+        if not s:
+            continue
+        last = n
+        body = s[len(marker) :].strip()
+        if s.startswith(marker) and body.startswith(_END):
+            ends.append((n, body))
+    count = len(consts) + sum(len(v) for _, _, v, _ in curves)
+    if not count:
+        raise ParseError(
+            "no table: the file is empty, holds only comments or no values",
+            file=file, line=max(last, 1),
+        )  # fmt: skip
+    if ends:
+        n, body = ends[-1]
+        m = _END_LINE.fullmatch(body)
+        if len(ends) > 1 or n != last or m is None:
+            raise ParseError(
+                f"expected one last line '{marker} {_END}: N values', got {body!r} "
+                f"{'before other lines' if n != last else ''}".rstrip()
+                + ": the file is not whole",
+                file=file, line=n,
+            )  # fmt: skip
+        if int(m.group(1)) != count:
+            raise ParseError(
+                f"the last line declares {m.group(1)} values, the file holds {count}: "
+                "the file is not whole",
+                file=file, line=n,
+            )  # fmt: skip
+        return
+    first = next(s.strip() for s in lines if s.strip())
+    if first.startswith(f"{marker} mtmc compensation table"):
+        raise ParseError(
+            f"no last line '{marker} {_END}: N values': the file was cut short",
+            file=file, line=last,
+        )  # fmt: skip
+    grids: dict[str, tuple[str, list[float], int]] = {}
+    for name, q, _, line in curves:
+        try:
+            axis = parse_error_name(name).axis
+        except InputError:
+            continue  # named by the table's own checks
+        if axis in grids and grids[axis][1] != q:
+            other, q0, _ = grids[axis]
+            raise ParseError(
+                f"{name} has {len(q)} positions of axis {axis}, {other} {len(q0)} or others: "
+                "every component error of an axis needs the same positions (is the file whole?)",
+                file=file, line=line, field=name,
+            )  # fmt: skip
+        grids.setdefault(axis, (name, q, line))
 
 
 def _float(text: str, file: str, line: int, fld: str) -> float:
@@ -701,7 +797,8 @@ def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:
             curves += _isg_components(header, header_line, rows, file)
         else:
             _isg_positions(header, header_line, rows, file, consts)
-    return _table(consts, curves, _sign_of(lines, "//"), file)
+    _check_whole(lines, "//", file, consts, curves)
+    return _table(consts, curves, _sign_of(lines, "//", file), file)
 
 
 def _isg_blocks(lines: list[str], file: str) -> Iterator[tuple[list[str], int, _Rows]]:
@@ -851,7 +948,8 @@ def read_etalon(text: str, file: str = "<etalon>") -> CompensationTable:
         if s:
             reader.line(n, s)
     reader.finish()
-    return _table(reader.consts, reader.curves, _sign_of(lines, "//"), file)
+    _check_whole(lines, "//", file, reader.consts, reader.curves)
+    return _table(reader.consts, reader.curves, _sign_of(lines, "//", file), file)
 
 
 class _EtalonReader:
@@ -1066,12 +1164,9 @@ def read_plain_csv(text: str, file: str = "<csv>") -> CompensationTable:
         entry[1].append(v)
     if not header_seen:
         raise ParseError(f"no header line {_CSV_HEADER!r}", file=file, line=1)
-    return _table(
-        consts,
-        [(k, q, v, line) for k, (q, v, line) in curves.items()],
-        _sign_of(lines, "#"),
-        file,
-    )
+    rows = [(k, q, v, line) for k, (q, v, line) in curves.items()]
+    _check_whole(lines, "#", file, consts, rows)
+    return _table(consts, rows, _sign_of(lines, "#", file), file)
 
 
 _READERS = {"isg": read_isg_csv, "etalon": read_etalon, "csv": read_plain_csv}

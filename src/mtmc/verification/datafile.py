@@ -26,6 +26,7 @@ Examples
 from __future__ import annotations
 
 import csv
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,6 +50,10 @@ __all__ = [
 _F = NDArray[np.float64]
 
 COORDINATES: tuple[str, ...] = ("x_lt", "y_lt", "z_lt")
+
+# a plain decimal number: ASCII digits, one point, an optional exponent (no ``1_0``,
+# no other scripts' digits, no decimal comma, no ``nan`` or ``inf``)
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 
 @dataclass(frozen=True)
@@ -76,7 +81,7 @@ def _rows(text: str) -> list[tuple[int, list[str]]]:
     out = []
     for i, line in enumerate(text.splitlines()):
         if line.strip() and not line.lstrip().startswith("#"):
-            out.append((i + 1, [c.strip() for c in next(csv.reader([line]))]))
+            out.append((i + 1, [c.strip(" \t") for c in next(csv.reader([line]))]))
     return out
 
 
@@ -102,8 +107,10 @@ def parse_identification_csv(
     Raises
     ------
     InputError
-        On a missing column, an unknown station, fewer than three stations, or a cell that
-        is not a number (naming the file and line).
+        On a missing column, an unknown station, fewer than three stations, a row whose
+        cells are not one per header column, or a cell that is not a plain decimal number
+        (ASCII digits, ``.`` as the decimal point, an optional exponent) of at most
+        ``MAX_MM`` in size (naming the file, line, column and field).
     """
     rows = _rows(text)
     if not rows:
@@ -143,12 +150,20 @@ def parse_identification_csv(
     idx = [header.index(c) for c in (*axes, *cols)]
     vals = []
     for ln, cells in rows[1:]:
-        try:
-            vals.append([float(cells[j]) for j in idx])
-        except (ValueError, IndexError):
+        if len(cells) != len(header):
             raise InputError(
-                f"expected {len(header)} numbers, got {','.join(cells)!r}", file=file, line=ln
-            ) from None
+                f"expected {len(header)} cells, one per header column, got {len(cells)}: "
+                f"{','.join(cells)!r}",
+                file=file, line=ln,
+            )  # fmt: skip
+        for j in idx:
+            if not _NUMBER.fullmatch(cells[j]):
+                raise InputError(
+                    f"expected a plain decimal number (digits 0-9, a point, an optional "
+                    f"exponent), got {cells[j]!r}",
+                    file=file, line=ln, column=j + 1, field=header[j],
+                )  # fmt: skip
+        vals.append([float(cells[j]) for j in idx])
         for j, v in zip(idx, vals[-1], strict=True):
             if not abs(v) <= MAX_MM:
                 raise InputError(

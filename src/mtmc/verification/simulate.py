@@ -278,9 +278,11 @@ class VerificationModel:
         A = np.linalg.solve(R, Q.T)
         Ri = np.linalg.inv(R)
         m = ver.model
-        Jp = m.jacobian(ver.q, th[0], exact=ver.exact)[:, :, prob.free]
+        # C-ordered copies: a view here would be a contiguous array in a worker process
+        # (pickling copies), and the products of the model would sum in another order
+        Jp = np.ascontiguousarray(m.jacobian(ver.q, th[0], exact=ver.exact)[:, :, prob.free])
         eq = ver.q if ver.eval_q is None else ver.eval_q
-        Jpe = m.jacobian(eq, th[0], exact=ver.exact)[:, :, prob.free]
+        Jpe = np.ascontiguousarray(m.jacobian(eq, th[0], exact=ver.exact)[:, :, prob.free])
         pu = np.zeros(6) if pose_u is None else np.asarray(pose_u, dtype=np.float64)
         if pu.shape != (6,) or np.any(pu < 0):
             raise InputError("expected 6 standard uncertainties >= 0", field="pose_u")
@@ -751,17 +753,28 @@ def simulate(
         reflector_u=reflector_u,
         refine=refine,
     )
-    res = monte_carlo(
-        vm,
-        vm.inputs(),
-        trials,
-        seed,
-        keep=["ve", "coef"],
-        workers=workers,
-        executor=executor,
-        scheduler=scheduler,
-        progress=progress,
-    )
+    try:
+        res = monte_carlo(
+            vm,
+            vm.inputs(),
+            trials,
+            seed,
+            keep=["ve", "coef"],
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            progress=progress,
+        )
+    except InputError as exc:
+        # the verification keeps its samples, so the engine's advice to keep none is not ours
+        head, cut, _ = exc.message.partition("; run with keep=False")
+        if exc.field != "trials" or not cut:
+            raise
+        raise InputError(
+            f"{head}; the verification keeps the volumetric errors and coefficients of every "
+            "trial: run fewer trials",
+            field="trials",
+        ) from None
     ve, coef, comp = res["ve"], res["coef"], res["comp"]
     cu = np.asarray(comp.u_vector).reshape(-1, 3)
     return VerificationMC(

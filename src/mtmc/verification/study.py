@@ -69,7 +69,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import Fields
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, Fields
 from mtmc.errors import InputError, MtmcError
 from mtmc.instruments.laser_tracker import LaserTracker, TrackerLimits, TrackerNoise
 from mtmc.kinematics.functions import (
@@ -212,7 +212,14 @@ def _is_angle(machine: Machine, name: str) -> bool:
 MAX_DEGREE = 20
 
 
-def _vector(f: Fields, key: str, n: int = 3) -> _F:
+#: The largest value in µm (an uncertainty, an MPE, an error coefficient): :data:`MAX_MM`.
+_MAX_UM = MAX_MM * 1e3
+#: The largest value in µrad (an uncertainty, an angular error): :data:`MAX_RAD`.
+_MAX_URAD = MAX_RAD * 1e6
+
+
+def _vector(f: Fields, key: str, n: int = 3, limit: float = MAX_MM) -> _F:
+    """``n`` finite numbers, each at most ``limit`` in size (mm unless the key says)."""
     v = f.data.get(key)
     if v is None:
         raise f.error(f"missing {key}", key)
@@ -220,17 +227,26 @@ def _vector(f: Fields, key: str, n: int = 3) -> _F:
         not isinstance(v, list)
         or len(v) != n
         or not all(
-            isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v
+            isinstance(x, int | float)
+            and not isinstance(x, bool)
+            and (isinstance(x, int) or math.isfinite(x))
+            for x in v
         )
     ):
         raise f.error(f"expected an array of {n} finite numbers, got {v!r}", key)
+    if any(abs(x) > limit for x in v):
+        raise f.error(
+            f"expected an array of {n} numbers each at most {limit:g} in size, got {v!r}", key
+        )
     return np.array(v, dtype=np.float64)
 
 
-def _pair(f: Fields, key: str, default: tuple[float, float]) -> tuple[float, float]:
+def _pair(
+    f: Fields, key: str, default: tuple[float, float], limit: float = MAX_MM
+) -> tuple[float, float]:
     if key not in f.data:
         return default
-    v = _vector(f, key, 2)
+    v = _vector(f, key, 2, limit)
     if not v[0] <= v[1]:
         raise f.error(f"expected low <= high, got {v.tolist()}", key)
     return float(v[0]), float(v[1])
@@ -252,7 +268,7 @@ def _travel(mf: Fields, topo_axes: tuple[str, ...]) -> dict[str, tuple[float, fl
 
 def _mpe_mm(nf: Fields, key: str) -> tuple[float, float]:
     """An MPE ``[A_um, B_um_per_m]`` of the file as ``(A, B)`` in mm and mm/mm."""
-    v = _vector(nf, key, 2)
+    v = _vector(nf, key, 2, _MAX_UM)
     return v[0] * 1e-3, v[1] * 1e-6
 
 
@@ -271,10 +287,10 @@ def _noise(tf: Fields) -> TrackerNoise:
         return TrackerNoise.from_mpe(adm=adm, transverse=tr, conversion=conv)
     nf.only(("radial_a_um", "radial_b_um_per_m", "azimuth_urad", "elevation_urad"))
     return TrackerNoise(
-        nf.number("radial_a_um", low=0.0) * 1e-3,
-        nf.number("radial_b_um_per_m", low=0.0) * 1e-6,
-        nf.number("azimuth_urad", low=0.0) * 1e-6,
-        nf.number("elevation_urad", low=0.0) * 1e-6,
+        nf.number("radial_a_um", low=0.0, high=_MAX_UM) * 1e-3,
+        nf.number("radial_b_um_per_m", low=0.0, high=_MAX_UM) * 1e-6,
+        nf.number("azimuth_urad", low=0.0, high=_MAX_URAD) * 1e-6,
+        nf.number("elevation_urad", low=0.0, high=_MAX_URAD) * 1e-6,
         0.0,
         "study file",
     )
@@ -323,7 +339,7 @@ def read_trackers(tf: Fields) -> tuple[dict[str, LaserTracker], TrackerLimits | 
         one = pf.table(name)
         assert one is not None
         one.only(("position", "euler_deg"))
-        position, euler = _vector(one, "position"), _vector(one, "euler_deg")
+        position, euler = _vector(one, "position"), _vector(one, "euler_deg", limit=MAX_DEG)
         try:
             trackers[name] = LaserTracker.from_euler(
                 position, euler, seq=seq, degrees=True, noise=noise, name=name
@@ -337,9 +353,9 @@ def read_trackers(tf: Fields) -> tuple[dict[str, LaserTracker], TrackerLimits | 
     if lf is not None:
         lf.only(("azimuth_deg", "elevation_deg", "height_mm", "acceptance_deg"))
         d = TrackerLimits()
-        az = _pair(lf, "azimuth_deg", tuple(math.degrees(x) for x in d.azimuth))  # type: ignore[arg-type]
-        el = _pair(lf, "elevation_deg", tuple(math.degrees(x) for x in d.elevation))  # type: ignore[arg-type]
-        ac = _pair(lf, "acceptance_deg", tuple(math.degrees(x) for x in d.acceptance))  # type: ignore[arg-type]
+        az = _pair(lf, "azimuth_deg", tuple(math.degrees(x) for x in d.azimuth), MAX_DEG)  # type: ignore[arg-type]
+        el = _pair(lf, "elevation_deg", tuple(math.degrees(x) for x in d.elevation), MAX_DEG)  # type: ignore[arg-type]
+        ac = _pair(lf, "acceptance_deg", tuple(math.degrees(x) for x in d.acceptance), MAX_DEG)  # type: ignore[arg-type]
         limits = TrackerLimits(
             azimuth=(math.radians(az[0]), math.radians(az[1])),
             elevation=(math.radians(el[0]), math.radians(el[1])),
@@ -443,9 +459,14 @@ def _truth(
             continue
         name = _term_name(machine, tr, key)
         scale = 1e-6 if _is_angle(machine, name) else 1e-3
+        limit = _MAX_URAD if _is_angle(machine, name) else _MAX_UM
         if isinstance(v, list):
             if not v or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v):
                 raise tr.error(f"expected an array of numbers, got {v!r}", key)
+            if not all(abs(x) <= limit for x in v):  # NaN and infinities too
+                raise tr.error(
+                    f"expected finite numbers each at most {limit:g} in size, got {v!r}", key
+                )
             term = machine.error_term(name)
             if term.axis not in travel or term.kind != "component":
                 raise tr.error(f"{name} is not a component error of an axis: give a number", key)
@@ -454,7 +475,7 @@ def _truth(
             c0 = -float(f0(np.array([lo]))[0])  # zero at the start of travel
             truth[name] = _function(tkind, [c0, *(float(x) * scale for x in v)], lo, hi)
         else:
-            truth[name] = tr.number(key) * scale
+            truth[name] = tr.number(key, low=-limit, high=limit) * scale
     return truth
 
 
@@ -495,8 +516,8 @@ def _run(
     return {
         "default_points": dp,
         "default_tracker": dt,
-        "repeatability": rf.number("repeatability_um", 0.0, low=0.0) * 1e-3,
-        "reflector_u": rf.number("reflector_um", 0.0, low=0.0) * 1e-3,
+        "repeatability": rf.number("repeatability_um", 0.0, low=0.0, high=_MAX_UM) * 1e-3,
+        "reflector_u": rf.number("reflector_um", 0.0, low=0.0, high=_MAX_UM) * 1e-3,
         "pose_u": pose_u,
     }
 
