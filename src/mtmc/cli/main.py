@@ -20,7 +20,6 @@ import typer
 
 from mtmc import __version__
 from mtmc.cli import artefact, graph, kinematics, positioning, propagate, run, verify
-from mtmc.cli.common import quiet_numpy
 
 app = typer.Typer(
     name="mtmc",
@@ -148,9 +147,15 @@ def _main(argv: list[str] | None = None) -> int:
         # standalone_mode=False: the parser raises instead of exiting, and a typer.Exit
         # raised by a subcommand (cli.common.fail) comes back as its exit code.
         args = sys.argv[1:] if argv is None else list(argv)
-        # NumPy's floating-point warnings off (quiet_numpy): a NaN or an overflow is reported
-        # once, as one line, by the engine's check of the model values
-        with warnings.catch_warnings(), quiet_numpy():
+        # NumPy's floating-point warnings not shown: a NaN or an overflow is reported once,
+        # as one line, by the engine's check of the model values (a filter, not
+        # numpy.errstate: `mtmc --help` imports no NumPy)
+        with warnings.catch_warnings():
+            warnings.filterwarnings(
+                "ignore",
+                message=r"(overflow|invalid value|divide by zero|underflow) encountered",
+                category=RuntimeWarning,
+            )
             # printed as one line by the subcommands (Plan.warnings), not with source lines
             from mtmc.errors import ConditioningWarning
 
