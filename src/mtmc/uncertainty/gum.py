@@ -426,6 +426,8 @@ def coverage_factor(p: float, dof: float) -> float:
     2.12
     >>> round(coverage_factor(0.95, math.inf), 4)
     1.96
+    >>> round(coverage_factor(0.95, 1e300), 4)  # ν_eff of an input far larger than the rest
+    1.96
     """
     p = check_probability(p)
     if not dof > 0:
@@ -435,7 +437,8 @@ def coverage_factor(p: float, dof: float) -> float:
     q = 0.5 * (1.0 + p)
     if math.isinf(dof):
         return float(stats.norm.ppf(q))
-    return float(stats.t.ppf(q, max(1.0, math.floor(dof))))
+    # as a float: the floor of a huge ν is an integer too large for SciPy's t
+    return float(stats.t.ppf(q, max(1.0, float(math.floor(dof)))))
 
 
 def welch_satterthwaite(variances: npt.ArrayLike, dofs: npt.ArrayLike) -> float:
