@@ -21,6 +21,7 @@ from mtmc.cli.common import (
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
+    load_study_of_kind,
     parallel_options,
     print_json,
     progress_bar,
@@ -62,17 +63,11 @@ def simulate_cmd(
 ) -> None:
     """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties."""
     from mtmc.artefact.study import simulate_artefact
-    from mtmc.errors import InputError
-    from mtmc.study import load_study
 
     if figure is not None and figure.suffix.lower() not in FIG_SUFFIXES:
         fail(f"{figure}: expected a file ending in {', '.join(FIG_SUFFIXES)}")
     try:
-        kind: Any = load_study(study)  # the study as ``mtmc run`` reads it
-        if kind.kind != "artefact":
-            raise InputError(
-                f"expected an artefact study, got kind {kind.kind!r}", file=str(study), field="kind"
-            )
+        kind = load_study_of_kind(study, "artefact")  # the study as ``mtmc run`` reads it
         st = kind.study
         with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
             res = simulate_artefact(

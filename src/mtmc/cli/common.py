@@ -67,6 +67,28 @@ def quiet_numpy() -> Iterator[None]:
         yield
 
 
+def load_study_of_kind(path: Path, kind: str) -> Any:
+    """The study of ``path`` as ``mtmc run`` reads it, which must be of ``kind``.
+
+    Raises
+    ------
+    InputError
+        For another kind (naming the file and the field ``kind``), or as
+        :func:`mtmc.study.load_study`.
+    """
+    from mtmc.errors import InputError
+    from mtmc.study import load_study
+
+    study = load_study(path)
+    if study.kind != kind:
+        raise InputError(
+            f"expected a{'n' if kind[0] in 'aeiou' else ''} {kind} study, got kind {study.kind!r}",
+            file=str(path),
+            field="kind",
+        )
+    return study
+
+
 def engine_message(exc: BaseException) -> str:
     """The text of an engine error, with its ``nan_policy`` advice in CLI terms."""
     return str(exc).replace("nan_policy='omit'", "--nan-policy omit")
@@ -293,6 +315,7 @@ __all__ = [
     "PROGRESS_OPTION",
     "check_trials",
     "engine_message",
+    "load_study_of_kind",
     "nan_policy",
     "quiet_numpy",
     "MtmcError",

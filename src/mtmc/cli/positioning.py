@@ -24,6 +24,7 @@ from mtmc.cli.common import (
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
+    load_study_of_kind,
     parallel_options,
     print_json,
     progress_bar,
@@ -63,17 +64,12 @@ def _study(
     type_a: str | None,
 ) -> Any:
     from mtmc.positioning import UncertaintyModel, read_positioning_csv
-    from mtmc.study import load_study
-    from mtmc.study.positioning import PositioningStudy, positioning_study
+    from mtmc.study.positioning import positioning_study
 
     if study_file is None:
         model = {} if type_a is None else {"type_a": type_a}
         return positioning_study(data, units=units, columns=columns, axis=axis or "X", model=model)
-    s = load_study(study_file)
-    if not isinstance(s, PositioningStudy):
-        raise InputError(
-            f"expected a positioning study, got kind {s.kind!r}", file=str(study_file), field="kind"
-        )
+    s = load_study_of_kind(study_file, "positioning")
     test = read_positioning_csv(data, columns=columns, units=units)
     model = s.model if type_a is None else dataclasses.replace(s.model, type_a=type_a)
     if not isinstance(model, UncertaintyModel):  # pragma: no cover - the study's own type

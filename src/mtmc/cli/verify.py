@@ -17,6 +17,7 @@ from mtmc.cli.common import (
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
+    load_study_of_kind,
     parallel_options,
     print_json,
     progress_bar,
@@ -35,15 +36,7 @@ STUDY = typer.Argument(..., help="The verification study (TOML).")
 
 def _load(path: Path) -> Any:
     """The study of ``path`` as ``mtmc run`` reads it; it must be a verification study."""
-    from mtmc.errors import InputError
-    from mtmc.study import load_study
-
-    st = load_study(path)
-    if st.kind != "verification":
-        raise InputError(
-            f"expected a verification study, got kind {st.kind!r}", file=str(path), field="kind"
-        )
-    return st
+    return load_study_of_kind(path, "verification")
 
 
 JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
