@@ -30,17 +30,34 @@ from mtmc.errors import *  # noqa: F403
 __version__ = "0.1.0"
 
 # Imported after the version, which the result folders record.
+from mtmc import report as _report
 from mtmc.report import render_report as render_report
+
+
+def _study_result(result: Any) -> Any:
+    """The result of :func:`monte_carlo` as a study result, for :func:`render_report`."""
+    from mtmc.study.load import study_result
+
+    return study_result(result)
+
+
+# the report draws study results; the study layer, above it, makes them of plain results
+_report.result_adapter = _study_result
 
 #: The names resolved on first access, and the subpackage each comes from.
 _NAMES: dict[str, str] = {
     "load_study": "mtmc.study",
     "loads_study": "mtmc.study",
     "write_result": "mtmc.study",
+    "load_result": "mtmc.study",
     "StudyResult": "mtmc.study",
     "monte_carlo": "mtmc.uncertainty",
     "gum": "mtmc.uncertainty",
+    "conformity": "mtmc.uncertainty",
+    "Conformity": "mtmc.uncertainty",
     "validate": "mtmc.uncertainty",
+    "monte_carlo_budget": "mtmc.uncertainty",
+    "sobol_indices": "mtmc.uncertainty",
     "expression": "mtmc.uncertainty",
     "parse_distribution": "mtmc.uncertainty",
     "MonteCarloResult": "mtmc.uncertainty",
@@ -58,6 +75,10 @@ _NAMES: dict[str, str] = {
     "Trapezoidal": "mtmc.uncertainty",
     "Triangular": "mtmc.uncertainty",
     "Uniform": "mtmc.uncertainty",
+    "TypeA": "mtmc.uncertainty",
+    "WithDof": "mtmc.uncertainty",
+    "type_a": "mtmc.uncertainty",
+    "with_dof": "mtmc.uncertainty",
     "load_graph": "mtmc.graph",
     "loads_graph": "mtmc.graph",
     "check_graph": "mtmc.graph",
@@ -80,10 +101,15 @@ __all__: list[str] = [
     "load_study",
     "loads_study",
     "write_result",
+    "load_result",
     "StudyResult",
     "monte_carlo",
     "gum",
+    "conformity",
+    "Conformity",
     "validate",
+    "monte_carlo_budget",
+    "sobol_indices",
     "expression",
     "parse_distribution",
     "MonteCarloResult",
@@ -101,6 +127,10 @@ __all__: list[str] = [
     "Trapezoidal",
     "Triangular",
     "Uniform",
+    "TypeA",
+    "WithDof",
+    "type_a",
+    "with_dof",
     "load_graph",
     "loads_graph",
     "check_graph",
@@ -137,9 +167,12 @@ if TYPE_CHECKING:
     from mtmc.kinematics.machine import Machine as Machine
     from mtmc.kinematics.topology import parse_topology as parse_topology
     from mtmc.study.base import StudyResult as StudyResult
+    from mtmc.study.load import load_result as load_result
     from mtmc.study.spec import load_study as load_study
     from mtmc.study.spec import loads_study as loads_study
     from mtmc.study.write import write_result as write_result
+    from mtmc.uncertainty.conformity import Conformity as Conformity
+    from mtmc.uncertainty.conformity import conformity as conformity
     from mtmc.uncertainty.distributions import IID as IID
     from mtmc.uncertainty.distributions import Arcsine as Arcsine
     from mtmc.uncertainty.distributions import Constant as Constant
@@ -160,6 +193,12 @@ if TYPE_CHECKING:
     from mtmc.uncertainty.montecarlo import monte_carlo as monte_carlo
     from mtmc.uncertainty.results import MonteCarloResult as MonteCarloResult
     from mtmc.uncertainty.results import MonteCarloResults as MonteCarloResults
+    from mtmc.uncertainty.sensitivity import monte_carlo_budget as monte_carlo_budget
+    from mtmc.uncertainty.sensitivity import sobol_indices as sobol_indices
+    from mtmc.uncertainty.typea import TypeA as TypeA
+    from mtmc.uncertainty.typea import WithDof as WithDof
+    from mtmc.uncertainty.typea import type_a as type_a
+    from mtmc.uncertainty.typea import with_dof as with_dof
 
 
 def __getattr__(name: str) -> Any:

@@ -32,7 +32,9 @@ Examples
 
 from __future__ import annotations
 
+import collections
 import concurrent.futures as cf
+import itertools
 import pickle
 from collections.abc import Callable, Iterable, Iterator
 from typing import TYPE_CHECKING, Any, Literal, TypeVar
@@ -50,6 +52,12 @@ ExecutorKind = Literal["thread", "process", "dask"]
 
 #: Blocks submitted ahead per Dask worker (bounds the memory of results in flight).
 DASK_AHEAD: int = 4
+
+#: Blocks submitted ahead per worker of a local thread or process pool: the results
+#: waiting to be merged in order are at most this many per worker, whatever the number
+#: of blocks (all submitted at once, the finished blocks of a run of 2·10⁸ trials piled
+#: up in memory while the first ones were merged).
+POOL_AHEAD: int = 4
 
 
 #: glibc ``malloc`` settings for Dask worker processes. Dask's nanny sets
@@ -163,6 +171,19 @@ def _dask_map(fn: Callable[[T], R], tasks: list[T], client: Any) -> Iterator[R]:
             pending.append(client.submit(fn, nxt, pure=False))
 
 
+def _pool_map(pool: cf.Executor, fn: Callable[[T], R], tasks: list[T], ahead: int) -> Iterator[R]:
+    """Submit ``fn(task)`` to ``pool`` at most ``ahead`` at a time; yield in task order."""
+    pending: collections.deque[cf.Future[R]] = collections.deque()
+    it = iter(tasks)
+    for task in itertools.islice(it, ahead):
+        pending.append(pool.submit(fn, task))
+    while pending:
+        result = pending.popleft().result()
+        for task in itertools.islice(it, 1):
+            pending.append(pool.submit(fn, task))
+        yield result
+
+
 def map_blocks(
     fn: Callable[[T], R],
     tasks: Iterable[T],
@@ -244,7 +265,7 @@ def map_blocks(
     else:
         pool = cf.ThreadPoolExecutor(max_workers=workers)
     try:
-        yield from pool.map(fn, task_list)
+        yield from _pool_map(pool, fn, task_list, POOL_AHEAD * workers)
     except BaseException:
         # interrupted (Ctrl-C, SIGTERM) or closed early: no block is started any more, and
         # worker processes are stopped now rather than left to finish (or to outlive us)

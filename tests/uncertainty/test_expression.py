@@ -99,7 +99,7 @@ def test_broadcasting_vector_inputs():
     ("text", "fragment", "column"),
     [
         ("x.real", "attribute access", 1),
-        ("a + x[0]", "subscripts", 5),
+        ("a + x[0][1]", "subscripts of anything but a variable name", 5),
         ("lambda: 1", "lambda", 1),
         ("__import__('os')", "'__import__'", 1),
         ("a + open('f')", "the function 'open'", 5),

@@ -6,28 +6,43 @@ package knows nothing of machines or geometry.
 """
 
 # The modules are bound under private names: the star imports below rebind the public
-# names ``expression`` and ``gum`` to the functions of the same name.
+# names ``conformity``, ``expression`` and ``gum`` to the functions of the same name.
+from mtmc.uncertainty import conformity as _conformity
+from mtmc.uncertainty import copula as _copula
 from mtmc.uncertainty import distributions as _distributions
 from mtmc.uncertainty import expression as _expression
 from mtmc.uncertainty import gum as _gum
+from mtmc.uncertainty import joint as _joint
 from mtmc.uncertainty import montecarlo as _montecarlo
 from mtmc.uncertainty import results as _results
 from mtmc.uncertainty import sampling as _sampling
+from mtmc.uncertainty import sensitivity as _sensitivity
 from mtmc.uncertainty import tolerance as _tolerance
+from mtmc.uncertainty import typea as _typea
+from mtmc.uncertainty.conformity import *  # noqa: F403
+from mtmc.uncertainty.copula import *  # noqa: F403
 from mtmc.uncertainty.distributions import *  # noqa: F403
 from mtmc.uncertainty.expression import *  # noqa: F403
 from mtmc.uncertainty.gum import *  # noqa: F403
+from mtmc.uncertainty.joint import *  # noqa: F403
 from mtmc.uncertainty.montecarlo import *  # noqa: F403
 from mtmc.uncertainty.results import *  # noqa: F403
 from mtmc.uncertainty.sampling import *  # noqa: F403
+from mtmc.uncertainty.sensitivity import *  # noqa: F403
 from mtmc.uncertainty.tolerance import *  # noqa: F403
+from mtmc.uncertainty.typea import *  # noqa: F403
 
 __all__: list[str] = [
+    *_conformity.__all__,
+    *_copula.__all__,
     *_distributions.__all__,
     *_expression.__all__,
     *_gum.__all__,
+    *_joint.__all__,
     *_montecarlo.__all__,
     *_results.__all__,
     *_sampling.__all__,
+    *_sensitivity.__all__,
     *_tolerance.__all__,
+    *_typea.__all__,
 ]

@@ -63,6 +63,7 @@ __all__ = [
     "distribution_names",
     "parse_distribution",
     "register_distribution",
+    "register_modifier",
     "standard_normal",
 ]
 
@@ -219,6 +220,44 @@ def register_distribution(*names: str) -> Callable[[_D], _D]:
             _REGISTRY[nm] = cls
         cls.name = names[0]
         return cls
+
+    return decorate
+
+
+#: Keywords that the text of any distribution may end with (``dof=``, ``u_rel_u=``), each
+#: with the function that applies it: ``apply(dist, **given) -> Distribution``.
+_MODIFIERS: dict[str, Callable[..., Distribution]] = {}
+_F = TypeVar("_F", bound="Callable[..., Distribution]")
+
+
+def register_modifier(*keywords: str) -> Callable[[_F], _F]:
+    """Function decorator registering keywords that the text of any distribution may take.
+
+    ``parse_distribution("normal(0, 1, dof=8)")`` reads ``normal(0, 1)``, then calls the
+    function registered for ``dof`` with that distribution and the keywords given:
+    ``apply(Normal(0, 1), dof=8.0)``. A keyword that is a parameter of the distribution
+    itself stays its parameter. A keyword already taken raises :class:`DistributionError`.
+
+    Parameters
+    ----------
+    *keywords : str
+        Identifiers, e.g. ``"dof", "u_rel_u"``.
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
+
+    def decorate(fn: _F) -> _F:
+        for kw in keywords:
+            if not kw.isidentifier() or kw in _MODIFIERS:
+                raise DistributionError(
+                    f"expected a new identifier as a modifier keyword, got {kw!r}", field="name"
+                )
+        for kw in keywords:
+            _MODIFIERS[kw] = fn
+        return fn
 
     return decorate
 
@@ -1385,6 +1424,7 @@ class _Reader:
         kwargs = {self.at[start + k.col_offset]: self.value(k.value, start) for k in node.keywords}
         params = [f for f in dataclasses.fields(cast(Any, cls)) if f.init]
         names = [f.name for f in params]
+        modifiers = {k: kwargs.pop(k) for k in list(kwargs) if k in _MODIFIERS and k not in names}
         required = [
             f.name
             for f in params
@@ -1400,7 +1440,8 @@ class _Reader:
         for key in kwargs:
             if key not in names:
                 self.fail(
-                    f"{cls.name} has no parameter {key!r}; expected one of {', '.join(names)}",
+                    f"{cls.name} has no parameter {key!r}; expected one of "
+                    f"{', '.join([*names, *sorted(_MODIFIERS)])}",
                     col,
                 )
             if names.index(key) < len(args):
@@ -1409,7 +1450,11 @@ class _Reader:
         if missing:
             self.fail(f"{cls.name} is missing parameter(s) {', '.join(missing)} ({signature})", col)
         try:
-            return cls(*args, **kwargs)
+            dist = cls(*args, **kwargs)
+            for apply in dict.fromkeys(_MODIFIERS[k] for k in modifiers):
+                given = {k: v for k, v in modifiers.items() if _MODIFIERS[k] is apply}
+                dist = apply(dist, **given)
+            return dist
         except DistributionError as exc:
             raise DistributionError(
                 f"{exc.message} in {self.text.strip()!r}",
@@ -1449,7 +1494,13 @@ def parse_distribution(
     ``mvnormal([m1, ...], [[v11, ...], ...])``             :class:`MultivariateNormal`
     ``constant(value)``                                    :class:`Constant`
     ``iid(dist, k)``                                       :class:`IID`
+    ``type_a([x1, x2, ...][, pooled_s=s, pooled_dof=ν])``  :class:`~mtmc.uncertainty.typea.TypeA`
     =====================================================  ===========================
+
+    Any distribution's text may end with ``dof=ν`` or ``u_rel_u=r`` (the degrees of
+    freedom of its standard uncertainty, given or as ``ν = ½ r⁻²`` from its relative
+    uncertainty, JCGM 100 G.4.2): ``"normal(0, 1, dof=8)"``, ``"uniform(-1, 1,
+    u_rel_u=0.25)"`` (:func:`~mtmc.uncertainty.typea.with_dof`).
 
     Parameters
     ----------

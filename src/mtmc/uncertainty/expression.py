@@ -1,7 +1,8 @@
 """Measurement models written as text: a safe, vectorised expression language.
 
 ``expression("m_rc + dm_rc")`` parses a formula with Python's :mod:`ast` module and
-accepts only a whitelist of node types: numbers, variable names, the binary operators
+accepts only a whitelist of node types: numbers, variable names, components of vector
+variables by a whole-number index (``x[0]``, ``x[1]``), the binary operators
 ``+ - * / **``, unary ``+``/``-``, parentheses, and calls of a fixed set of NumPy
 functions. Nothing is ever passed to :func:`eval`: the tree is walked by
 :class:`Expression` itself, so a formula can do arithmetic on arrays and nothing else.
@@ -36,6 +37,7 @@ __all__ = [
     "Expression",
     "expression",
     "check_variables",
+    "check_components",
     "ALLOWED_FUNCTIONS",
     "ALLOWED_CONSTANTS",
 ]
@@ -80,8 +82,8 @@ _UNARY: dict[type[ast.unaryop], Callable[[Any], Any]] = {
 }
 
 _ALLOWED_TEXT = (
-    "numbers, variable names, + - * / **, unary -, parentheses, the constants pi and e, "
-    "and calls to " + ", ".join(ALLOWED_FUNCTIONS)
+    "numbers, variable names, components x[0], x[1], ... of vector variables, + - * / **, "
+    "unary -, parentheses, the constants pi and e, and calls to " + ", ".join(ALLOWED_FUNCTIONS)
 )
 
 _MAX_LENGTH = 10_000
@@ -162,6 +164,56 @@ def check_variables(model: Any, given: Iterable[str], *, what: str = "input") ->
         raise ExpressionError("; ".join(parts), field=(missing or extra)[0])
 
 
+def check_components(model: Any, dims: Mapping[str, int]) -> None:
+    """Refuse a component index that the given input cannot serve, naming the expression.
+
+    A variable taken by components in the model (``x[0]``, ``x[2]``) must be a vector
+    input with more components than its largest index; a model that is not an
+    :class:`Expression` (or takes no components) is not checked.
+
+    Parameters
+    ----------
+    model : Expression or object with ``components``
+        The model.
+    dims : mapping of str to int
+        Each input's number of components: ``0`` for a scalar input, ``k`` for a
+        ``k``-variate one (the ``dim`` of its distribution).
+
+    Raises
+    ------
+    ExpressionError
+        ``"x[2] in 'x[0] + x[2]' is out of range: x has 2 component(s), x[0] to x[1]"``,
+        or ``"... x is a scalar input"``; ``field`` is the variable.
+
+    Examples
+    --------
+    >>> check_components(expression("x[0] + x[2]"), {"x": 2})
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.ExpressionError: field x: x[2] in 'x[0] + x[2]' is out of range: x has 2 ...
+    """
+    components: Mapping[str, int] = getattr(model, "components", {})
+    text = getattr(model, "text", None)
+    where = f" in {text!r}" if text is not None else ""
+    for name, need in components.items():
+        if name not in dims:
+            continue  # a missing input is check_variables' to report
+        k = int(dims[name])
+        if k == 0:
+            raise ExpressionError(
+                f"{name}[{need - 1}]{where} takes a component of {name}, but {name} is a "
+                "scalar input; give it a k-variate distribution (mvnormal(...), "
+                "iid(..., k)) or write it without an index",
+                field=name,
+            )
+        if need > k:
+            raise ExpressionError(
+                f"{name}[{need - 1}]{where} is out of range: {name} has {k} component(s), "
+                f"{name}[0] to {name}[{k - 1}]",
+                field=name,
+            )
+
+
 @dataclass(frozen=True)
 class Expression:
     """A parsed model expression, callable on arrays.
@@ -170,6 +222,14 @@ class Expression:
     formula element-wise with NumPy broadcasting: give each variable as an array whose
     leading axis is the trial, ``(M,)``, and get ``(M,)`` back (a formula without
     variables gives an array broadcast to the inputs' shape, or a 0-d array).
+
+    A variable taken by components, ``x[i]``, is a vector input: its value has the trial
+    axis first and the components last, ``(M, k)`` (as :func:`mtmc.monte_carlo` and
+    :func:`mtmc.gum` pass a ``k``-variate input), and ``x[i]`` is ``x[..., i]``, the
+    ``(M,)`` array of component ``i`` of every trial. Indices are whole numbers from 0
+    (``x[0]`` to ``x[k-1]``); a negative index is refused rather than counted from the
+    end, so that every component a model uses is named by one number only. A variable is
+    used either by components or whole, not both.
 
     Attributes
     ----------
@@ -184,6 +244,10 @@ class Expression:
         True if every function used is analytic in its arguments, so the complex-step
         derivative of :func:`mtmc.gum` is exact; False for ``abs``, ``arctan2`` and
         ``hypot``.
+    components : mapping of str to int
+        For each variable taken by components, the number of components its largest
+        index needs (``{"x": 3}`` for ``x[0] + x[2]``); read-only, empty for a model of
+        scalar variables.
     """
 
     text: str
@@ -191,9 +255,15 @@ class Expression:
     functions: tuple[str, ...]
     complex_safe: bool
     _tree: ast.Expression = field(repr=False, compare=False)
+    _components: tuple[tuple[str, int], ...] = field(default=(), repr=False)
 
     def __str__(self) -> str:
         return self.text
+
+    @property
+    def components(self) -> Mapping[str, int]:
+        """For each variable taken by components, the number its largest index needs."""
+        return MappingProxyType(dict(self._components))
 
     def __call__(self, **arrays: npt.ArrayLike) -> NDArray[Any]:
         """Evaluate the formula.
@@ -214,7 +284,8 @@ class Expression:
         ------
         ExpressionError
             If a variable of the formula is missing, or an argument is not one of its
-            variables.
+            variables, or a variable taken by components is not an array ``(M, k)`` with
+            ``k`` greater than its largest index.
         """
         check_variables(self, arrays, what="value")
         values = {}
@@ -222,6 +293,14 @@ class Expression:
             arr = np.asarray(value)
             if not np.iscomplexobj(arr):
                 arr = arr.astype(np.float64, copy=False)
+            need = self.components.get(name)
+            if need is not None and (arr.ndim < 2 or arr.shape[-1] < need):
+                raise ExpressionError(
+                    f"{name}[{need - 1}] in {self.text!r} needs {name} as an array "
+                    f"(M, k) of k >= {need} components, trial axis first; got shape "
+                    f"{arr.shape}",
+                    field=name,
+                )
             values[name] = arr
         return np.asarray(self._eval(self._tree.body, values))
 
@@ -232,6 +311,12 @@ class Expression:
             if node.id in values:
                 return values[node.id]
             return ALLOWED_CONSTANTS[node.id]
+        if isinstance(node, ast.Subscript):
+            # checked: a variable name and a whole-number index >= 0; the components
+            # are the last axis, the trials the leading ones
+            base = cast(ast.Name, node.value)
+            index = cast(int, cast(ast.Constant, node.slice).value)
+            return values[base.id][..., index]
         if isinstance(node, ast.BinOp):
             left = self._eval(node.left, values)
             right = self._eval(node.right, values)
@@ -244,6 +329,13 @@ class Expression:
         raise AssertionError(f"unchecked node {type(node).__name__}")  # pragma: no cover
 
 
+def _mixed(name: str, index: int) -> str:
+    return (
+        f"using {name} both whole and by components ({name}[{index}]) (a vector variable "
+        f"is used by components only: {name}[0], {name}[1], ...)"
+    )
+
+
 class _Checker(ast.NodeVisitor):
     """Walk a parsed tree, refuse every node outside the whitelist, collect names."""
 
@@ -251,6 +343,8 @@ class _Checker(ast.NodeVisitor):
         self.text = text
         self.names: list[str] = []
         self.functions: list[str] = []
+        self.components: dict[str, int] = {}
+        self.whole: set[str] = set()
 
     def _fail(self, node: ast.AST, what: str) -> None:
         col = getattr(node, "col_offset", 0) + 1
@@ -276,8 +370,53 @@ class _Checker(ast.NodeVisitor):
             self._fail(node, f"the name {node.id!r} (names starting with '_' are)")
         if node.id in ALLOWED_FUNCTIONS:
             self._fail(node, f"the function name {node.id!r} used as a value")
-        if node.id not in ALLOWED_CONSTANTS and node.id not in self.names:
-            self.names.append(node.id)
+        if node.id not in ALLOWED_CONSTANTS:
+            if node.id in self.components:
+                self._fail(node, _mixed(node.id, self.components[node.id] - 1))
+            self.whole.add(node.id)
+            if node.id not in self.names:
+                self.names.append(node.id)
+
+    def visit_Subscript(self, node: ast.Subscript) -> None:
+        base = node.value
+        if not isinstance(base, ast.Name):
+            self._fail(node, "subscripts of anything but a variable name (x[0])")
+            return
+        name = base.id
+        if name.startswith("_"):
+            self._fail(base, f"the name {name!r} (names starting with '_' are)")
+        if name in ALLOWED_FUNCTIONS or name in ALLOWED_CONSTANTS:
+            self._fail(node, f"subscripts of {name!r} (only of a variable)")
+        index = node.slice
+        if isinstance(index, ast.Slice):
+            self._fail(index, f"slices in subscripts of {name} (one component at a time)")
+        if (
+            isinstance(index, ast.UnaryOp)
+            and isinstance(index.op, ast.USub)
+            and isinstance(index.operand, ast.Constant)
+        ):
+            self._fail(
+                index,
+                f"the negative index in {name}[-{index.operand.value!r}] (components are "
+                f"numbered from 0: {name}[0], {name}[1], ...)",
+            )
+        if not (
+            isinstance(index, ast.Constant)
+            and isinstance(index.value, int)
+            and not isinstance(index.value, bool)
+        ):
+            shown = ast.get_source_segment(self.text, index) or type(index).__name__
+            self._fail(
+                index,
+                f"the index {shown} of {name} in subscripts (an index is a whole number: "
+                f"{name}[0], {name}[1], ...)",
+            )
+            return
+        if name in self.whole:
+            self._fail(node, _mixed(name, index.value))
+        self.components[name] = max(self.components.get(name, 0), index.value + 1)
+        if name not in self.names:
+            self.names.append(name)
 
     def visit_BinOp(self, node: ast.BinOp) -> None:
         if type(node.op) not in _BINARY:
@@ -367,11 +506,12 @@ def expression(text: str) -> Expression:
     Parameters
     ----------
     text : str
-        A formula in Python syntax restricted to: numbers, variable names, the binary
-        operators ``+ - * / **``, unary ``-`` and ``+``, parentheses, the constants
-        ``pi`` and ``e``, and calls to ``sqrt, sin, cos, tan, arcsin, arccos, arctan,
-        arctan2, exp, log, log10, abs, hypot`` (angles in rad). Variable names must not
-        start with ``_``.
+        A formula in Python syntax restricted to: numbers, variable names, components
+        of vector variables by a whole-number index from 0 (``x[0]``, ``x[1]``; see
+        :class:`Expression`), the binary operators ``+ - * / **``, unary ``-`` and
+        ``+``, parentheses, the constants ``pi`` and ``e``, and calls to ``sqrt, sin,
+        cos, tan, arcsin, arccos, arctan, arctan2, exp, log, log10, abs, hypot`` (angles
+        in rad). Variable names must not start with ``_``.
 
     Returns
     -------
@@ -382,8 +522,9 @@ def expression(text: str) -> Expression:
     ------
     ExpressionError
         If the text is empty, does not parse, or uses anything outside the whitelist
-        (attribute access, subscripts, lambdas, unknown functions, ``__import__``,
-        strings, comparisons, ...). The message gives the column and what is allowed.
+        (attribute access, slices, negative or computed indices, lambdas, unknown
+        functions, ``__import__``, strings, comparisons, ...). The message gives the
+        column and what is allowed.
 
     Examples
     --------
@@ -413,4 +554,5 @@ def expression(text: str) -> Expression:
         functions=tuple(checker.functions),
         complex_safe=not (_NOT_COMPLEX_SAFE & set(checker.functions)),
         _tree=tree,
+        _components=tuple(checker.components.items()),
     )

@@ -27,7 +27,7 @@ import math
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -35,11 +35,16 @@ from numpy.typing import NDArray
 
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_value
+from mtmc.uncertainty import copula as _copula
 from mtmc.uncertainty import distributions as _distributions
 from mtmc.uncertainty import tolerance as _tolerance
+from mtmc.uncertainty import typea as _typea
 from mtmc.uncertainty.checks import check_probability
-from mtmc.uncertainty.expression import check_variables
+from mtmc.uncertainty.expression import check_components, check_variables
 from mtmc.uncertainty.results import MonteCarloResult
+
+if TYPE_CHECKING:
+    from mtmc.uncertainty.conformity import Conformity
 
 __all__ = [
     "BudgetEntry",
@@ -322,6 +327,40 @@ class GumResult:
         big_u = self.expanded_uncertainty(p)
         return self.estimate - big_u, self.estimate + big_u
 
+    def conformity(
+        self,
+        lower: float | None = None,
+        upper: float | None = None,
+        *,
+        rule: Literal["simple", "guarded"] = "simple",
+        guard: float | None = None,
+        max_consumer_risk: float | None = None,
+        prior: Any = None,
+        coverage_factor: float = 2.0,
+    ) -> Conformity:
+        """The conformity decision for tolerance limits (JCGM 106:2012).
+
+        :func:`mtmc.uncertainty.conformity.conformity` of this result: ``p_c`` from the
+        normal PDF of ``estimate`` and ``u``, or the t PDF scaled by ``u`` for a finite
+        ``ν_eff`` (JCGM 100 G.3).
+
+        Returns
+        -------
+        Conformity
+        """
+        from mtmc.uncertainty.conformity import conformity
+
+        return conformity(
+            self,
+            lower,
+            upper,
+            rule=rule,
+            guard=guard,
+            max_consumer_risk=max_consumer_risk,
+            prior=prior,
+            coverage_factor=coverage_factor,
+        )
+
 
 @dataclass(frozen=True)
 class Validation:
@@ -499,7 +538,12 @@ class _Input:
 def _gum_input(name: str, obj: Any) -> _Input:
     dist = _distributions.as_distribution(obj, field=name)
     mean = np.atleast_1d(np.asarray(dist.mean, dtype=np.float64))
-    if isinstance(dist, _distributions.StudentT):
+    stated = _typea.stated_moments(dist)
+    if stated is not None:
+        # a Type A input, or u with ν (JCGM 100 §4.2, G.4): x̄ and u as stated, not the
+        # moments of the PDF that Monte Carlo draws (infinite for ν <= 2)
+        mean, cov = stated
+    elif isinstance(dist, _distributions.StudentT):
         # JCGM 101 §6.4.9 / JCGM 100 §4.2: the GUM takes u(x) = s/√n (the scale) with
         # ν = n - 1 degrees of freedom; the t PDF's own standard deviation,
         # s/√n · sqrt(ν/(ν-2)), is what Monte Carlo propagates.
@@ -544,6 +588,7 @@ def gum(
     inputs: Mapping[str, Any],
     *,
     p: float = 0.95,
+    correlation: Any = None,
 ) -> GumResult:
     """Propagate standard uncertainties through ``model`` by the GUM (first order).
 
@@ -578,9 +623,21 @@ def gum(
         The input quantities (anything :func:`~mtmc.uncertainty.distributions.as_distribution`
         accepts). Estimate = the PDF's expectation; standard uncertainty = its standard
         deviation, except for a scaled-and-shifted t (a Type A evaluation, JCGM 101
-        §6.4.9), where the GUM's ``u = s/√n`` (the ``scale``) is used with ``ν = df``.
+        §6.4.9), where the GUM's ``u = s/√n`` (the ``scale``) is used with ``ν = df``,
+        for :func:`~mtmc.uncertainty.typea.type_a` (``x̄``, ``u = s/√n``, ``ν = n - 1``)
+        and for :func:`~mtmc.uncertainty.typea.with_dof` (the base PDF's moments, ``ν``
+        as given): :func:`~mtmc.uncertainty.typea.stated_moments`.
     p : float, default 0.95, keyword-only
         Coverage probability.
+    correlation : Correlation or mapping, optional, keyword-only
+        Correlation coefficients ``r(x_i, x_j)`` between scalar inputs,
+        ``{("a", "b"): 0.8}`` or a :class:`~mtmc.uncertainty.copula.Correlation`: the
+        off-diagonal terms ``u(x_i, x_j) = r(x_i, x_j) u(x_i) u(x_j)`` of ``U_x``
+        (JCGM 100 §5.2.2, eq. (13) and (14)), so that ``u²(y) = Σ_i Σ_j c_i c_j u(x_i)
+        u(x_j) r(x_i, x_j)``. The budget's contributions and shares stay those of each
+        input alone: with correlation they no longer add up to ``u²(y)``, the rest being
+        the cross terms. The Welch–Satterthwaite formula (JCGM 100 G.4.1) assumes
+        independent inputs; it is applied as is, with the correlated ``u(y)``.
 
     Returns
     -------
@@ -598,6 +655,7 @@ def gum(
         raise InputError("expected at least one input quantity", field="inputs")
     check_variables(model, inputs)
     items = [_gum_input(str(name), obj) for name, obj in inputs.items()]
+    check_components(model, {i.name: 0 if i.scalar else i.estimate.size for i in items})
     offsets: list[int] = []
     n = 0
     for inp in items:
@@ -608,6 +666,13 @@ def gum(
     for inp, start in zip(items, offsets, strict=True):
         size = inp.estimate.size
         ux[start : start + size, start : start + size] = inp.cov
+    corr = _copula.as_correlation(correlation)
+    if corr is not None:  # JCGM 100 eq. (14): u(x_i, x_j) = r(x_i, x_j) u(x_i) u(x_j)
+        corr.check_inputs({inp.name: inp.dist for inp in items}, quantiles=False)
+        at = {inp.name: start for inp, start in zip(items, offsets, strict=True)}
+        for a, b, r in corr.pairs():
+            ia, ib = at[a], at[b]
+            ux[ia, ib] = ux[ib, ia] = r * math.sqrt(ux[ia, ia] * ux[ib, ib])
     std = np.sqrt(np.diag(ux))
     scale = np.where(std > 0, std, np.maximum(np.abs(x0), 1.0) * 1e-6)
     h_cs = _COMPLEX_STEP * scale

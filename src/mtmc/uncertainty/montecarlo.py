@@ -23,7 +23,7 @@ import functools
 import math
 import os
 from collections.abc import Callable, Container, Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal, overload
 
 import numpy as np
@@ -33,12 +33,14 @@ from numpy.typing import NDArray
 from mtmc.errors import ConvergenceError, InputError
 from mtmc.parallel import ExecutorKind, map_blocks
 from mtmc.uncertainty.checks import check_probability
+from mtmc.uncertainty.copula import _JointSampler, joint_sampler
 from mtmc.uncertainty.distributions import Distribution, NormalMethod
 from mtmc.uncertainty.results import (
     MAX_COV_DIM,
     Moments,
     MonteCarloResult,
     MonteCarloResults,
+    Trace,
 )
 from mtmc.uncertainty.sampling import (
     DEFAULT_BLOCK_SIZE,
@@ -97,6 +99,48 @@ Outputs = dict[str, NDArray[np.float64]]
 #: ``keep="auto"`` keeps the samples of a run while they take at most this many bytes.
 KEEP_AUTO_BYTES: int = 2 * 2**30
 
+#: Seed blocks whose quantile sketches are merged into one before the run's sketch: in
+#: trial order within each group of this many seed blocks, then group by group. A task
+#: that holds a whole group merges it where it ran and hands back one sketch of about
+#: 50 000 values instead of the 2²⁰ values of its seed blocks; the merges are the same,
+#: so are the bits, wherever they are done.
+SKETCH_GROUP: int = 64
+
+#: Most bytes of the values of one reduction block of a group of outputs (see
+#: :func:`reduction_block_trials`): what waits in memory for a block to be complete.
+REDUCE_BYTES: int = 32 * 2**20
+
+
+def reduction_block_trials(width: int) -> int:
+    """Trials whose moments are formed together, for outputs of ``width`` values a trial.
+
+    A seed block (:data:`SEED_BLOCK_SIZE` trials) while its values take at most
+    :data:`REDUCE_BYTES` (``width <= 256``); for wider outputs (the 16 224 values of a
+    verification's errors at 5408 points) the largest power of two of trials that fits,
+    at least one. Fixed by the width alone, so the moments are the same bits whatever
+    the evaluation blocks or the workers, and the values held for an unfinished block
+    are bounded whatever the number of trials.
+
+    Examples
+    --------
+    >>> reduction_block_trials(1), reduction_block_trials(256), reduction_block_trials(16224)
+    (16384, 16384, 256)
+    """
+    fit = max(1, REDUCE_BYTES // (8 * max(1, width)))
+    return min(SEED_BLOCK_SIZE, 1 << (fit.bit_length() - 1))
+
+
+#: Tasks a worker gets of a run on a pool or a cluster (see :func:`_blocks_per_task`).
+TASKS_PER_WORKER: int = 8
+
+#: Most bytes of kept values and sketch values one task hands back.
+TASK_BYTES: int = 64 * 2**20
+
+#: Ratio of consecutive numbers of trials at which the convergence curve of an output
+#: whose samples are not kept is read (20 points a decade; the curve of 10⁹ trials has
+#: about 100 points, whatever the number of seed blocks).
+TRACE_STEP: float = 10 ** (1 / 20)
+
 #: The name of the output of a model that returns one array rather than a mapping.
 _SINGLE = ""
 
@@ -141,14 +185,15 @@ def _evaluate(
 class _Digest:
     """What one evaluation block hands back, in this process or from a worker.
 
-    ``rows``: the finite rows of the kept outputs. ``pieces``: for each seed block the
-    evaluation block touches (in order), ``(k, complete, part)``. When the evaluation
-    block holds all of the seed block (``complete``), ``part`` maps each group of outputs
-    (:func:`_groups`) to their :class:`Moments`, side by side, and the sketches of its
-    outputs; else it maps each output to the ``(d, rows)`` values of the piece it holds,
-    which the collector joins with the neighbouring pieces. Either way the moments of a
-    seed block come from the same C-ordered arrays, so they are the same bits wherever
-    computed.
+    ``rows``: the finite rows of the kept outputs. ``pieces``: for each group of outputs
+    (:func:`_groups`) and each of its reduction blocks (:func:`reduction_block_trials`
+    trials: a seed block, or a power-of-two part of one for wide outputs) that the
+    evaluation block touches, in order, ``(group, k, complete, part)``. When the
+    evaluation block holds all of reduction block ``k`` (``complete``), ``part`` is the
+    group's :class:`Moments`, side by side, and the sketches of its outputs; else the
+    ``(d, rows)`` values of the piece it holds, one array per output, which the collector
+    joins with the neighbouring pieces. Either way the moments of a reduction block come
+    from the same C-ordered arrays, so they are the same bits wherever computed.
     """
 
     start: int
@@ -158,7 +203,10 @@ class _Digest:
     omitted: int
     first_bad: int | None
     bad_outputs: tuple[str, ...]
-    pieces: list[tuple[int, bool, dict[Any, Any]]]
+    pieces: list[tuple[tuple[str, ...], int, bool, Any]]
+    #: sketches of whole groups of :data:`SKETCH_GROUP` seed blocks, merged where the
+    #: blocks ran (by group number; the pieces of those seed blocks then carry none)
+    merged: dict[int, dict[str, QuantileSketch]] = field(default_factory=dict)
 
 
 #: Moments of a group of outputs and the sketches of its outputs (``None`` if no rows).
@@ -213,29 +261,26 @@ def _digest(
     m = next(iter(outs.values())).shape[0]
     kept = [n for n in outs if keep is True or (keep is not False and n in keep)]
     groups = _groups_of(tuple((n, arr.shape[1:]) for n, arr in outs.items()), tuple(kept))
-    s = SEED_BLOCK_SIZE
-    spans: list[tuple[int, int, int, bool]] = []  # seed block, rows lo..hi, complete
-    lo = 0
-    while lo < m:
-        k = (start + lo) // s
-        hi = min(m, (k + 1) * s - start)
-        spans.append((k, lo, hi, start + lo == k * s and start + hi == min((k + 1) * s, total)))
-        lo = hi
-    # the reduced outputs as C-ordered (d, rows) arrays per seed block, and their row
-    # sums: the sum of finite values is finite (but for an overflow, which then takes
-    # the row-by-row check), so one pass checks the values and gives the means
+    # the reduced outputs, group by group, as C-ordered (d, rows) arrays per reduction
+    # block, and their row sums: the sum of finite values is finite (but for an
+    # overflow, which then takes the row-by-row check), so one pass checks the values
+    # and gives the means
     cols = {n: outs[n].reshape(m, -1).T for g in groups for n in g}
-    width = sum(x.shape[0] for x in cols.values())
-    blocks = [{n: _block_array([x[:, lo:hi]]) for n, x in cols.items()} for _, lo, hi, _ in spans]
-    sums = np.empty((len(spans), width))
-    for xb, row in zip(blocks, sums, strict=True):
-        i = 0
-        for x in xb.values():
-            np.add.reduce(x, axis=1, out=row[i : i + x.shape[0]])
-            i += x.shape[0]
-    finite = math.isfinite(float(sums.sum())) and all(
-        math.isfinite(float(outs[n].sum())) for n in kept
-    )
+    plan = []  # per group: its reduction blocks (k, lo, hi, complete), arrays and sums
+    finite = all(math.isfinite(float(outs[n].sum())) for n in kept)
+    for g in groups:
+        s = reduction_block_trials(sum(cols[n].shape[0] for n in g))
+        spans: list[tuple[int, int, int, bool]] = []  # block, rows lo..hi, complete
+        lo = 0
+        while lo < m:
+            k = (start + lo) // s
+            hi = min(m, (k + 1) * s - start)
+            spans.append((k, lo, hi, start + lo == k * s and start + hi == min((k + 1) * s, total)))
+            lo = hi
+        blocks = [[_block_array([cols[n][:, lo:hi]]) for n in g] for _, lo, hi, _ in spans]
+        sums = [np.stack([np.add.reduce(x, axis=1) for x in xb]) for xb in blocks]
+        finite = finite and all(math.isfinite(float(t.sum())) for t in sums)
+        plan.append((g, spans, blocks, sums))
     ok = np.ones(m, dtype=np.bool_)
     nbad = 0
     if not finite:
@@ -248,22 +293,16 @@ def _digest(
     if nbad:
         bad = tuple(n for n, arr in outs.items() if not np.isfinite(arr).all())
     rows = {n: (outs[n][ok] if nbad else outs[n]) for n in kept}
-    pieces: list[tuple[int, bool, dict[Any, Any]]] = []
-    for (k, lo, hi, complete), xb, row in zip(spans, blocks, sums, strict=True):
-        if nbad:
-            sel = ok[lo:hi]
-            xb = {n: _block_array([x[:, sel]]) for n, x in xb.items()}
-        part: dict[Any, Any] = {}
-        i = 0
-        for g in groups:
-            xs = [xb[n] for n in g]
-            j = i + sum(x.shape[0] for x in xs)
+    pieces: list[tuple[tuple[str, ...], int, bool, Any]] = []
+    for g, spans, blocks, sums in plan:
+        for (k, lo, hi, complete), xs, t in zip(spans, blocks, sums, strict=True):
+            if nbad:
+                sel = ok[lo:hi]
+                xs = [_block_array([x[:, sel]]) for x in xs]
             if complete:
-                part[g] = _reduce(g, xs, sketch, None if nbad else row[i:j].reshape(len(g), -1))
+                pieces.append((g, k, True, _reduce(g, xs, sketch, None if nbad else t)))
             else:
-                part.update(zip(g, xs, strict=True))
-            i = j
-        pieces.append((k, complete, part))
+                pieces.append((g, k, False, xs))
     return _Digest(
         start=start,
         m=m,
@@ -288,12 +327,78 @@ class _BlockJob:
     total: int
     sketch: frozenset[str]
     sampling: Sampling = "random"
+    joint: _JointSampler | None = None
 
     def __call__(self, span: tuple[int, int]) -> _Digest:
         a, b = span
-        samples = _BlockSource(self.dists, self.seed, self.method, self.sampling).trials(a, b)
+        source = _BlockSource(self.dists, self.seed, self.method, self.sampling, self.joint)
+        samples = source.trials(a, b)
         outs = _evaluate(self.model, samples, a, b)
         return _digest(a, outs, self.keep, self.total, self.sketch)
+
+
+@dataclass(frozen=True)
+class _TaskJob:
+    """Consecutive evaluation blocks as one task of a pool or cluster: their digests.
+
+    The digests are those each block gives alone, in order, so the run is the same bits
+    however the blocks are grouped into tasks; one task draws its seed blocks once for
+    all its evaluation blocks and pays the scheduler once.
+    """
+
+    job: _BlockJob
+
+    def __call__(self, spans: tuple[tuple[int, int], ...]) -> list[_Digest]:
+        j = self.job
+        source = _BlockSource(j.dists, j.seed, j.method, j.sampling, j.joint)
+        out = []
+        for a, b in spans:
+            outs = _evaluate(j.model, source.trials(a, b), a, b)
+            out.append(_digest(a, outs, j.keep, j.total, j.sketch))
+        if j.sketch:
+            _merge_groups(out, spans[0][0], spans[-1][1], j.total)
+        return out
+
+
+def _merge_groups(digests: list[_Digest], lo: int, hi: int, total: int) -> None:
+    """Merge the sketches of each whole group of seed blocks in ``digests`` (in place).
+
+    A group of :data:`SKETCH_GROUP` seed blocks whose blocks are all complete pieces of
+    these digests is merged in trial order, as :class:`_Collector` merges it; the
+    merged sketch goes with the digest holding the group's last seed block.
+    """
+    s, g = SEED_BLOCK_SIZE, SKETCH_GROUP
+    where = {  # the complete seed blocks of the outputs with sketches (scalars)
+        k: (i, p)
+        for i, d in enumerate(digests)
+        for p, (_, k, complete, part) in enumerate(d.pieces)
+        if complete and part[1]
+    }
+    last_block = (total - 1) // s
+    for grp in range(lo // s // g, (hi - 1) // s // g + 1):
+        blocks = range(grp * g, min((grp + 1) * g - 1, last_block) + 1)
+        if not all(k in where for k in blocks):
+            continue
+        merged: dict[str, QuantileSketch] = {}
+        for k in blocks:
+            i, p = where[k]
+            outputs, _, _, (mom, sketches) = digests[i].pieces[p]
+            for n, sk in sketches.items():
+                merged[n] = merged[n].merge(sk) if n in merged else sk
+            digests[i].pieces[p] = (outputs, k, True, (mom, {}))
+        digests[where[blocks[-1]][0]].merged[grp] = merged
+
+
+def _blocks_per_task(blocks: int, workers: int, block_bytes: int) -> int:
+    """Evaluation blocks per task: about :data:`TASKS_PER_WORKER` tasks a worker.
+
+    Fewer, larger tasks where each is cheap to send back (a scheduler's overhead is
+    paid per task: 3–14 ms on Dask), but at most :data:`TASK_BYTES` of kept values and
+    quantile-sketch values a task, so that what waits to be merged stays bounded.
+    """
+    by_count = blocks // (TASKS_PER_WORKER * max(1, workers))
+    by_bytes = TASK_BYTES // max(1, block_bytes)
+    return max(1, min(by_count, by_bytes))
 
 
 def _memory_bytes() -> int:
@@ -328,6 +433,8 @@ class _Collector:
         self.sketch_spec = sketch
         self.sketch: frozenset[str] = frozenset()
         self.sketches: dict[str, QuantileSketch | None] = {}
+        # the sketch of the seed blocks of the current sketch group, by output
+        self.group_sketch: dict[str, QuantileSketch] = {}
         self.shapes: dict[str, tuple[int, ...]] | None = None
         self.kept: dict[str, NDArray[np.float64]] = {}
         self.filled = 0  # rows written to the kept arrays
@@ -336,7 +443,12 @@ class _Collector:
         self.bad_outputs: set[str] = set()
         self.buffer: dict[str, list[NDArray[np.float64]]] = {}
         self.groups: list[tuple[str, ...]] = []
+        self.widths: dict[tuple[str, ...], int] = {}  # values a trial of each group
         self.moments: dict[tuple[str, ...], Moments] = {}
+        # the streamed convergence curve of the scalar outputs not kept: (m, means, u)
+        # of each group at seed-block ends, the next when m reaches ``trace_next``
+        self.traces: dict[tuple[str, ...], list[tuple[int, NDArray[np.float64]]]] = {}
+        self.trace_next: dict[tuple[str, ...], int] = {}
 
     def setup(self, shapes: dict[str, tuple[int, ...]]) -> None:
         self.shapes = shapes
@@ -383,20 +495,40 @@ class _Collector:
         self.groups = _groups(shapes, self.kept)
         for g in self.groups:
             w = max(1, math.prod(shapes[g[0]]))
+            self.widths[g] = len(g) * w
             self.moments[g] = Moments(
                 0, np.zeros((len(g), w)), np.zeros((len(g), w, w) if w <= MAX_COV_DIM else w)
             )
             for n in g:
                 self.buffer[n] = []
                 self.sketches[n] = None
+            if not shapes[g[0]]:
+                self.traces[g] = []
+                self.trace_next[g] = 0
 
     def _merge(self, g: tuple[str, ...], reduced: _Reduced) -> None:
         mom, sketches = reduced
         if mom is not None:
             self.moments[g] = self.moments[g].merge(mom)
+            got = self.moments[g]
+            if g in self.traces and got.n >= max(2, self.trace_next[g]):
+                self.traces[g].append((got.n, np.stack([got.mean[:, 0], got.m2.reshape(-1)])))
+                self.trace_next[g] = math.ceil(got.n * TRACE_STEP)
         for n, sk in sketches.items():
-            prev = self.sketches[n]
-            self.sketches[n] = sk if prev is None else prev.merge(sk)
+            acc = self.group_sketch.get(n)
+            self.group_sketch[n] = sk if acc is None else acc.merge(sk)
+
+    def _end_of_group(self, k: int, merged: dict[int, dict[str, QuantileSketch]]) -> None:
+        """After seed block ``k``: at the end of its sketch group, merge the group's sketch."""
+        if (k + 1) % SKETCH_GROUP and (k + 1) * SEED_BLOCK_SIZE < self.total:
+            return
+        whole = merged.get(k // SKETCH_GROUP, {})
+        for n in self.sketch:
+            here = self.group_sketch.pop(n, None)  # merged here, block by block
+            sk = whole.get(n, here)  # or where the group's blocks ran
+            if sk is not None:
+                prev = self.sketches[n]
+                self.sketches[n] = sk if prev is None else prev.merge(sk)
 
     def add(self, d: _Digest) -> None:
         if self.shapes is None:
@@ -417,24 +549,26 @@ class _Collector:
         for n, kept in self.kept.items():
             kept[self.filled : self.filled + good] = d.rows[n]
         self.filled += good
-        s = SEED_BLOCK_SIZE
-        for k, complete, part in d.pieces:
+        for g, k, complete, part in d.pieces:
+            scalar = not self.shapes[g[0]]  # reduced by seed block, its sketches too
             if complete:
-                for g, reduced in part.items():
-                    self._merge(g, reduced)
-                continue
-            for n, value in part.items():
-                self.buffer[n].append(value)
-            if d.start + d.m >= min((k + 1) * s, self.total):
-                self._close()
+                self._merge(g, part)
+            else:
+                for n, value in zip(g, part, strict=True):
+                    self.buffer[n].append(value)
+                s = reduction_block_trials(self.widths[g])
+                if d.start + d.m < min((k + 1) * s, self.total):
+                    continue
+                self._close(g)
+            if scalar:
+                self._end_of_group(k, d.merged)
 
-    def _close(self) -> None:
-        for g in self.groups:
-            if self.buffer[g[0]]:
-                xs = [_block_array(self.buffer[n]) for n in g]
-                self._merge(g, _reduce(g, xs, self.sketch))
-                for n in g:
-                    self.buffer[n].clear()
+    def _close(self, g: tuple[str, ...]) -> None:
+        if self.buffer[g[0]]:
+            xs = [_block_array(self.buffer[n]) for n in g]
+            self._merge(g, _reduce(g, xs, self.sketch))
+            for n in g:
+                self.buffer[n].clear()
 
     def check(self) -> None:
         """Raise for the non-finite values seen under ``nan_policy="raise"``."""
@@ -451,10 +585,26 @@ class _Collector:
     def results(self, **run: Any) -> dict[str, MonteCarloResult]:
         assert self.shapes is not None
         self.check()
-        self._close()
+        for g in self.groups:
+            if self.buffer[g[0]]:
+                self._close(g)
+                if not self.shapes[g[0]]:
+                    self._end_of_group((self.total - 1) // SEED_BLOCK_SIZE, {})
         moments = {
             n: mom for g in self.groups for n, mom in zip(g, self.moments[g].unstack(), strict=True)
         }
+        traces: dict[str, Trace] = {}
+        for g, points in self.traces.items():
+            got = self.moments[g]
+            if got.n >= 2 and (not points or points[-1][0] != got.n):
+                points.append((got.n, np.stack([got.mean[:, 0], got.m2.reshape(-1)])))
+            if not points:
+                continue
+            m = np.array([n for n, _ in points], dtype=np.int64)
+            both = np.stack([v for _, v in points], axis=-1)  # (2, len(g), points)
+            u = np.sqrt(np.clip(both[1] / (m - 1), 0.0, None))
+            for i, n in enumerate(g):
+                traces[n] = Trace(m=m, estimate=both[0, i].copy(), u=u[i].copy())
         out: dict[str, MonteCarloResult] = {}
         for n, shape in self.shapes.items():
             if n in self.kept:
@@ -466,6 +616,7 @@ class _Collector:
                     samples=None,
                     moments=moments[n],
                     sketch=self.sketches[n],
+                    trace=traces.get(n),
                     scalar=len(shape) == 0,
                     omitted=self.omitted,
                     **run,
@@ -491,12 +642,14 @@ class _Runner:
         executor: ExecutorKind | Any,
         scheduler: Any = None,
         sampling: Sampling = "random",
+        joint: _JointSampler | None = None,
     ) -> None:
         self.model, self.dists, self.seed, self.method = model, dists, seed, method
         self.block_size = evaluation_block_size(dists, block_size)
         self.workers, self.executor, self.scheduler = workers, executor, scheduler
         self.sampling = sampling
-        self.source = _BlockSource(dists, seed, method, sampling)
+        self.joint = joint
+        self.source = _BlockSource(dists, seed, method, sampling, joint)
         #: trials per seed block (quasi-random points are scrambled block by block)
         self.seed_block = next(iter(self.source.sizes.values()), SEED_BLOCK_SIZE)
 
@@ -527,26 +680,63 @@ class _Runner:
         keep, sketch = collector.keep, collector.sketch
         assert keep != "auto"
         serial = self.workers == 1 and self.executor in ("thread", "process")
+        tasks: list[tuple[tuple[int, int], ...]]
+        run_task: Callable[[tuple[tuple[int, int], ...]], list[_Digest]]
         if serial:
+            # in this process, one evaluation block at a time, drawing from self.source
+            # (whose last seed block carries over to the next evaluation block)
+            tasks = [(span,) for span in spans]
 
-            def fn(span: tuple[int, int]) -> _Digest:
-                outs = _evaluate(self.model, self.source.trials(*span), *span)
-                return _digest(span[0], outs, keep, total, sketch)
+            def here(task: tuple[tuple[int, int], ...]) -> list[_Digest]:
+                ((a, b),) = task
+                outs = _evaluate(self.model, self.source.trials(a, b), a, b)
+                return [_digest(a, outs, keep, total, sketch)]
+
+            run_task = here
 
         else:
-            fn = _BlockJob(
-                self.model, self.dists, self.seed, self.method, keep, total, sketch, self.sampling
+            job = _BlockJob(
+                self.model,
+                self.dists,
+                self.seed,
+                self.method,
+                keep,
+                total,
+                sketch,
+                self.sampling,
+                self.joint,
             )
-        for (_, b), digest in zip(
-            spans,
+            assert collector.shapes is not None
+            shapes = collector.shapes
+            width = sum(max(1, math.prod(shapes[n])) for n in collector.kept) + len(sketch)
+            workers = max(self.workers, 2) if self.executor == "dask" else self.workers
+            bs = self.block_size
+            per = _blocks_per_task(len(spans), workers, 8 * bs * width)
+            group = SKETCH_GROUP * SEED_BLOCK_SIZE
+            if sketch and group % bs == 0:  # whole sketch groups in a task
+                q = group // bs
+                per = -(-per // q) * q
+            # tasks cut at multiples of per·bs trials from trial 0, as the groups are
+            cut: dict[int, list[tuple[int, int]]] = {}
+            for span in spans:
+                cut.setdefault(span[0] // (per * bs), []).append(span)
+            tasks = [tuple(t) for t in cut.values()]
+            run_task = _TaskJob(job)
+        for task, digests in zip(
+            tasks,
             map_blocks(
-                fn, spans, workers=self.workers, executor=self.executor, scheduler=self.scheduler
+                run_task,
+                tasks,
+                workers=self.workers,
+                executor=self.executor,
+                scheduler=self.scheduler,
             ),
             strict=True,
         ):
-            collector.add(digest)
-            if progress is not None:
-                progress(b, stop)
+            for (_, b), digest in zip(task, digests, strict=True):
+                collector.add(digest)
+                if progress is not None:
+                    progress(b, stop)
 
 
 def _check_names(value: Any, field: str, allowed: tuple[Any, ...]) -> Any:
@@ -588,6 +778,8 @@ def monte_carlo(
     keep: bool | Literal["auto"] | Iterable[str] = "auto",
     sketch: bool | Iterable[str] | None = None,
     sampling: Sampling = "random",
+    correlation: Any = None,
+    copula: Any = "gaussian",
 ) -> MonteCarloResults: ...
 
 
@@ -614,6 +806,8 @@ def monte_carlo(
     keep: bool | Literal["auto"] | Iterable[str] = "auto",
     sketch: bool | Iterable[str] | None = None,
     sampling: Sampling = "random",
+    correlation: Any = None,
+    copula: Any = "gaussian",
 ) -> MonteCarloResult: ...
 
 
@@ -639,6 +833,8 @@ def monte_carlo(
     keep: bool | Literal["auto"] | Iterable[str] = "auto",
     sketch: bool | Iterable[str] | None = None,
     sampling: Sampling = "random",
+    correlation: Any = None,
+    copula: Any = "gaussian",
 ) -> MonteCarloResult | MonteCarloResults:
     """Propagate the input distributions through a vectorised model (JCGM 101 §7).
 
@@ -729,6 +925,18 @@ def monte_carlo(
         blocks stay independent, so the adaptive procedure works on them as it does
         on pseudo-random blocks (see Notes). ``trials`` should then be a multiple of the
         seed block (a power of two): the points are balanced only in whole blocks.
+    correlation : Correlation or mapping, optional, keyword-only
+        Correlation coefficients between scalar inputs, ``{("a", "b"): 0.8}`` or a
+        :class:`~mtmc.uncertainty.copula.Correlation` (``Correlation.from_matrix(R,
+        order)``): the correlation matrix of the copula that joins their marginal PDFs
+        (:mod:`mtmc.uncertainty.copula`, ``docs/correlation.md``). Without it, or with
+        every coefficient 0 under the Gaussian copula, the inputs are independent and
+        drawn exactly as without the argument.
+    copula : "gaussian", ("t", dof), mapping or Copula, default "gaussian", keyword-only
+        The copula that joins the correlated inputs: Gaussian, or Student t with ``dof``
+        degrees of freedom (``{"kind": "t", "dof": 4}``), stronger dependence in the
+        tails. Like the rest of the sampling, the numbers depend on neither
+        ``block_size`` nor ``workers``.
 
     Returns
     -------
@@ -809,8 +1017,9 @@ def monte_carlo(
         raise InputError(f"expected 'shortest' or 'symmetric', got {kind!r}", field="kind")
     keep_set = _check_names(keep, "keep", (True, False, "auto"))
     sketch_set = _check_names(sketch, "sketch", (True, False, None))
+    joint = joint_sampler(correlation, copula, dists)
     runner = _Runner(
-        model, dists, seed_int, method, block_size, workers, executor, scheduler, sampling
+        model, dists, seed_int, method, block_size, workers, executor, scheduler, sampling, joint
     )
 
     if adaptive:

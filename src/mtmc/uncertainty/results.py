@@ -32,7 +32,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +42,9 @@ from mtmc.errors import InputError
 from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.sketch import QuantileSketch
 
+if TYPE_CHECKING:
+    from mtmc.uncertainty.conformity import Conformity
+
 __all__ = [
     "convergence",
     "MAX_COV_DIM",
@@ -50,6 +53,7 @@ __all__ = [
     "MonteCarloResults",
     "Histogram",
     "MonteCarloResult",
+    "Trace",
     "coverage_indices",
 ]
 
@@ -255,6 +259,31 @@ def _row_dots(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.floa
     return acc
 
 
+@dataclass(frozen=True, eq=False)
+class Trace:
+    """The estimate and ``u`` of the first ``m`` trials of a run, for some ``m``.
+
+    Streamed by the engine for a scalar output whose samples are not kept: the moments
+    merged in trial order are read at the end of seed blocks spaced about evenly on a log
+    scale, so the curve is the same bits whatever the workers.
+
+    Attributes
+    ----------
+    m : ndarray of int
+        Numbers of trials, ascending.
+    estimate, u : ndarray
+        Mean and standard deviation (divisor ``m - 1``) of the first ``m`` values.
+    """
+
+    m: NDArray[np.int64]
+    estimate: NDArray[np.float64]
+    u: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for a in (self.m, self.estimate, self.u):
+            a.setflags(write=False)
+
+
 @dataclass(frozen=True)
 class Moments:
     """Count, mean and second central moments of a set of values, mergeable.
@@ -451,6 +480,10 @@ class MonteCarloResult:
         With ``samples=None``, for a scalar output: a mergeable quantile sketch of the
         values, from which coverage intervals are read (each endpoint within
         ``sketch.rank_error`` ranks of the exact order statistic; :attr:`rank_error`).
+    trace : Trace or None
+        With ``samples=None``, for a scalar output: the estimate and ``u`` of the first
+        ``m`` trials at seed-block ends spaced about evenly on a log scale (the
+        convergence curve of :meth:`convergence`, streamed).
     """
 
     samples: NDArray[np.float64] | None = field(repr=False)
@@ -466,6 +499,7 @@ class MonteCarloResult:
     moments: Moments | None = field(default=None, repr=False)
     scalar: bool = True
     sketch: QuantileSketch | None = field(default=None, repr=False)
+    trace: Trace | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if self.block_trials == 0:
@@ -800,16 +834,55 @@ class MonteCarloResult:
         Parameters
         ----------
         bins : int or str, default "auto"
-            As ``numpy.histogram``.
+            As ``numpy.histogram``. Where the samples were not kept, an integer: the
+            histogram is then that of the quantile sketch's weighted values, each bin's
+            count within :attr:`rank_error` of the count of all values in it (twice that
+            for a bin with two inner edges), its range that of the sketch's values.
 
         Returns
         -------
         Histogram
         """
         self._require_scalar("a histogram")
+        if self.samples is None and self.sketch is not None:
+            if not isinstance(bins, int):
+                raise InputError(
+                    "the samples were not kept: expected a number of bins for the histogram "
+                    "of the quantile sketch",
+                    field="bins",
+                )
+            vals, wts = self.sketch.weighted_values()
+            c, edges = np.histogram(vals, bins=bins, weights=wts)
+            counts = np.rint(c).astype(np.int64)
+            return Histogram(edges=edges, counts=counts, density=c / (self.m * np.diff(edges)))
         counts, edges = np.histogram(self.values, bins=bins)
         density = counts / (self.m * np.diff(edges))
         return Histogram(edges=edges, counts=counts.astype(np.int64), density=density)
+
+    def convergence(
+        self, points: int = 60
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+        """The estimate and ``u`` of the first ``m`` trials, for ``m`` up to ``M``.
+
+        From the kept samples (:func:`convergence`), or, where they were not kept, from
+        the curve the engine streamed at seed-block ends (:attr:`trace`: ``m`` from one
+        seed block of trials, ``points`` is then not used).
+
+        Returns
+        -------
+        m : ndarray of int
+        estimate, u : ndarray
+        """
+        self._require_scalar("a convergence curve")
+        if self.samples is None:
+            if self.trace is None:
+                raise InputError(
+                    "the samples of this output were not kept and no convergence curve was "
+                    "streamed for it",
+                    field="samples",
+                )
+            return self.trace.m, self.trace.estimate, self.trace.u
+        return convergence(self.samples, points)
 
     # ------------------------------------------------------------------ vector outputs
     def coverage_ellipsoid(
@@ -911,6 +984,40 @@ class MonteCarloResult:
             out["cov"] = self.cov.tolist()
         return out
 
+    def conformity(
+        self,
+        lower: float | None = None,
+        upper: float | None = None,
+        *,
+        rule: Literal["simple", "guarded"] = "simple",
+        guard: float | None = None,
+        max_consumer_risk: float | None = None,
+        prior: Any = None,
+        coverage_factor: float = 2.0,
+    ) -> Conformity:
+        """The conformity decision for tolerance limits (JCGM 106:2012).
+
+        :func:`mtmc.uncertainty.conformity.conformity` of this result: ``p_c`` is the
+        fraction of the values in ``[lower, upper]`` (or read from the sketch, or from
+        the normal of ``estimate`` and ``u`` where neither was kept).
+
+        Returns
+        -------
+        Conformity
+        """
+        from mtmc.uncertainty.conformity import conformity
+
+        return conformity(
+            self,
+            lower,
+            upper,
+            rule=rule,
+            guard=guard,
+            max_consumer_risk=max_consumer_risk,
+            prior=prior,
+            coverage_factor=coverage_factor,
+        )
+
 
 @dataclass(frozen=True, eq=False)
 class MonteCarloResults(Mapping[str, MonteCarloResult]):
@@ -964,6 +1071,10 @@ class MonteCarloResults(Mapping[str, MonteCarloResult]):
         return len(self.outputs)
 
 
+#: Values summed at a time by :func:`convergence` (its memory, whatever ``M``).
+CONVERGENCE_CHUNK: int = 1 << 20
+
+
 def convergence(
     samples: npt.ArrayLike, points: int = 60
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
@@ -997,9 +1108,21 @@ def convergence(
     start = min(10, big_m)
     m = np.unique(np.round(np.geomspace(max(start, 2), big_m, points)).astype(np.int64))
     shift = float(np.mean(x[: min(big_m, 100)]))
-    d = x - shift
-    s1 = np.cumsum(d)[m - 1]
-    s2 = np.cumsum(d * d)[m - 1]
+    # running sums in chunks, each chunk's cumsum starting from the carry of the one
+    # before: the same additions in the same order as one cumsum of all M values (so the
+    # same bits), in memory of a chunk rather than four arrays of M values
+    s1 = np.empty(m.size)
+    s2 = np.empty(m.size)
+    carry = np.zeros(2)
+    for lo in range(0, big_m, CONVERGENCE_CHUNK):
+        hi = min(big_m, lo + CONVERGENCE_CHUNK)
+        d = x[lo:hi] - shift
+        c1 = np.cumsum(np.concatenate([carry[:1], d]))[1:]
+        c2 = np.cumsum(np.concatenate([carry[1:], d * d]))[1:]
+        at = (m > lo) & (m <= hi)
+        s1[at] = c1[m[at] - 1 - lo]
+        s2[at] = c2[m[at] - 1 - lo]
+        carry = np.array([c1[-1], c2[-1]])
     est = shift + s1 / m
     var = np.clip((s2 - s1 * s1 / m) / (m - 1), 0.0, None)
     return m, est, np.sqrt(var)

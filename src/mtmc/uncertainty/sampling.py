@@ -41,6 +41,15 @@ pseudo-random draws, no number depends on the evaluation blocks or the workers, 
 first ``M`` trials of a run are those of any longer run with the same seed; the points
 are balanced in whole seed blocks, so ``M`` should be a multiple of the seed block.
 
+Correlated inputs
+-----------------
+Inputs joined by a copula (``correlation`` of
+:func:`~mtmc.uncertainty.montecarlo.monte_carlo`, :mod:`mtmc.uncertainty.copula`) are
+drawn together, seed block by seed block, from the standard normals of their own
+streams (or of their own Sobol coordinates); a t copula's common ``W`` has a stream of
+its own (one more Sobol coordinate, after those of every input). The contract above
+holds for them unchanged, and every other input draws what it draws without them.
+
 Examples
 --------
 >>> from mtmc.uncertainty.distributions import Normal, Uniform
@@ -56,7 +65,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterator, Mapping
-from typing import Any, Literal, cast
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -68,6 +77,9 @@ from mtmc.uncertainty.distributions import (
     NormalMethod,
     as_distribution,
 )
+
+if TYPE_CHECKING:
+    from mtmc.uncertainty.copula import _JointSampler
 
 __all__ = [
     "DEFAULT_BLOCK_SIZE",
@@ -381,6 +393,10 @@ class _BlockSource:
     evaluation block draws the seed blocks it needs and keeps only its own trials, so
     the memory of a run is bounded by the evaluation block, whatever the number of
     inputs (at the price of drawing a seed block again for each evaluation block in it).
+
+    ``joint`` (:mod:`mtmc.uncertainty.copula`) draws the inputs of a correlated group
+    together, seed block by seed block, from their own streams (or coordinates); a t
+    copula's ``W`` takes one more quasi-random coordinate, after every input's.
     """
 
     def __init__(
@@ -389,12 +405,16 @@ class _BlockSource:
         seed: int,
         method: NormalMethod,
         sampling: Sampling = "random",
+        joint: _JointSampler | None = None,
     ):
         self.dists, self.seed, self.method, self.sampling = dists, seed, method, sampling
+        self.joint = joint
         self.block_trials = SEED_BLOCK_SIZE
         if sampling == "sobol":
             self.layout = sobol_layout(dists)
             self.dims = sum(k for _, k in self.layout.values())
+            self.w_column = self.dims  # a t copula's W: the coordinate after the inputs'
+            self.dims += 0 if joint is None else joint.extra_dims
             if self.dims > MAX_SOBOL_DIMS:
                 raise InputError(
                     f"the inputs take {self.dims} quasi-random dimensions, more than the "
@@ -426,8 +446,13 @@ class _BlockSource:
         if self.prefix:
             n = min(n, 1 << max(0, need - 1).bit_length())
         u = sobol_points(self.seed, k, self.dims, n)
+        together = (
+            {} if self.joint is None else self.joint.from_points(u, self.layout, self.w_column)
+        )
         for name, (first, count) in self.layout.items():
-            arr = self.dists[name].from_uniform(u[:, first : first + count])
+            arr = together.get(name)
+            if arr is None:
+                arr = self.dists[name].from_uniform(u[:, first : first + count])
             arr.setflags(write=False)
             self.cached[name] = (k, arr)
 
@@ -440,6 +465,12 @@ class _BlockSource:
         if self.sampling == "sobol":
             self._sobol_block(k, want)
             return self.cached[name][1]
+        if self.joint is not None and name in self.joint.names:  # the group, drawn together
+            group = self.joint.draw(self.seed, k, self.sizes[name], self.method)
+            for member, drawn in group.items():
+                drawn.setflags(write=False)
+                self.cached[member] = (k, drawn)
+            return self.cached[name][1]
         arr = self.dists[name].sample(
             input_generator(self.seed, k, name), self.sizes[name], normal_method=self.method
         )
@@ -449,11 +480,10 @@ class _BlockSource:
         return arr
 
     def trials(self, start: int, stop: int) -> dict[str, NDArray[np.float64]]:
-        if (
-            self.sampling == "sobol"
-            and (stop - 1) // self.block_trials != start // self.block_trials
-        ):
-            # several seed blocks: each point set is made once, for every input
+        several = (stop - 1) // self.block_trials != start // self.block_trials
+        if several and (self.sampling == "sobol" or self.joint is not None):
+            # several seed blocks: each point set (each joint draw of a correlated group)
+            # is made once, for every input
             whole = {
                 name: np.empty((stop - start, *((d.dim,) if d.dim else ())))
                 for name, d in self.dists.items()
@@ -493,8 +523,15 @@ class _BlockSource:
                 for name in self.dists:
                     self.fill_one(name, out[name], lo, hi, offset)
             return
+        group = () if self.joint is None else self.joint.names
         for name in self.dists:
-            self.fill_one(name, out[name], start, stop, offset)
+            if name not in group:
+                self.fill_one(name, out[name], start, stop, offset)
+        s = self.block_trials  # a correlated group: seed block by seed block, drawn once each
+        for k in range(start // s, (stop - 1) // s + 1) if group else ():
+            lo, hi = max(start, k * s), min(stop, (k + 1) * s)
+            for name in group:
+                self.fill_one(name, out[name], lo, hi, offset)
 
 
 def evaluation_block_size(dists: Mapping[str, Distribution], block_size: int) -> int:

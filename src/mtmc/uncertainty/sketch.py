@@ -54,7 +54,9 @@ def _compact(
     i = 0
     while i < len(levels):
         if levels[i].size > capacity:
-            a = np.sort(levels[i], kind="stable")
+            # values alone: any sort gives the same array (zeros are all +0.0, see
+            # QuantileSketch.of), and the default one is 2–17 times faster than "stable"
+            a = np.sort(levels[i])
             odd = a.size % 2
             body, rest = (a[:-1], a[-1:]) if odd else (a, a[:0])
             promoted = body[flips[i] :: 2]
@@ -102,7 +104,8 @@ class QuantileSketch:
         """The sketch of a set of values (exact while there are at most ``capacity``)."""
         if isinstance(capacity, bool) or not isinstance(capacity, int) or capacity < 2:
             raise InputError(f"expected a capacity >= 2, got {capacity!r}", field="capacity")
-        x = np.array(values, dtype=np.float64).reshape(-1)
+        # -0.0 + 0.0 is +0.0: one zero, so that the order of equal values cannot show
+        x = np.array(values, dtype=np.float64).reshape(-1) + 0.0
         levels, flips, err = _compact([x], [0], capacity)
         return cls(tuple(levels), tuple(flips), int(x.size), err, capacity)
 
@@ -125,6 +128,13 @@ class QuantileSketch:
             self.rank_error + other.rank_error + err,
             self.capacity,
         )
+
+    def weighted_values(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The sketch's values, ascending, and the weight (number of values) of each."""
+        vals = np.concatenate(self.levels)
+        wts = np.concatenate([np.full(a.size, 2.0**i) for i, a in enumerate(self.levels)])
+        order = np.argsort(vals, kind="stable")
+        return vals[order], wts[order]
 
     def _weighted(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         vals = np.concatenate(self.levels)
