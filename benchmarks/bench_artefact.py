@@ -33,7 +33,11 @@ def main() -> int:
     ap.add_argument("--workers", type=int, nargs="*", default=[1, 2])
     ap.add_argument("--repeat", type=int, default=1)
     args = ap.parse_args()
-    print(f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} CPUs")
+    threads = os.environ.get("OPENBLAS_NUM_THREADS", "not set (BLAS default)")
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} CPUs, "
+        f"OPENBLAS_NUM_THREADS {threads}, load average {os.getloadavg()[0]:.1f}"
+    )
     study = load_study(STUDY).study
     t0 = time.perf_counter()
     model, inputs, pr = study_model(study, split=True)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import os
 import platform
 import resource
@@ -149,13 +150,44 @@ def big_run(m: int) -> None:
     print(f"{m} {dt:.3f} {peak / 2**20:.1f} {rss:.1f} {r.u:.5f} {lo:.4f} {hi:.4f}")
 
 
+METHODS: dict[str, Callable[[dict[str, Any], int], tuple[float, float, tuple[float, float]]]] = {
+    "numpy script": numpy_script,
+    "mtmc": mtmc_run,
+    "mtmc command": mtmc_run,  # with the allocator setting of the mtmc command
+    "suncal": suncal_run,
+}
+
+
+def child(method: str, case: str, m: int) -> None:
+    """In a fresh process, as a user runs it: best of REPEAT; print time and results."""
+    if method == "mtmc command":
+        keep_heap()  # as the mtmc command does when it starts; a Python script does not
+    dt, (y, u, (lo, hi)) = best_of(lambda: METHODS[method](CASES[case], m), REPEAT)
+    print(json.dumps([dt, y, u, lo, hi]))
+
+
+def in_child(method: str, case: str, m: int) -> tuple[float, Any]:
+    out = subprocess.run(
+        [sys.executable, __file__, "--child", method, case, "--trials", str(m)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    dt, y, u, lo, hi = json.loads(out)
+    return dt, (y, u, (lo, hi))
+
+
 def main() -> int:
-    keep_heap()  # as the mtmc command does when it starts
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--big", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--trials", type=int, default=M)
     args = ap.parse_args()
+    if args.child:
+        child(args.child[0], args.child[1], args.trials)
+        return 0
     if args.big:
+        keep_heap()  # as the mtmc command does when it starts
         big_run(args.big)
         return 0
 
@@ -167,6 +199,12 @@ def main() -> int:
     print(
         f"M = {m} trials, best of {REPEAT}; everything included (draw, model, y, u, shortest 95 %)"
     )
+    print(
+        "each method in a fresh process, as a user runs it, with this environment "
+        f"(OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}, "
+        f"load average {os.getloadavg()[0]:.1f}); 'mtmc command' with the allocator setting "
+        "of the mtmc command (mtmc.uncertainty.heap.keep_heap)"
+    )
     suncal_ok = have_suncal()
     if not suncal_ok:
         print("suncal not installed: its column is skipped (pip install suncal)")
@@ -177,18 +215,18 @@ def main() -> int:
     print(header)
     print("-" * len(header))
     for name, case in CASES.items():
+        del case
+        labels = ["numpy script", "mtmc", "mtmc command"] + (["suncal"] if suncal_ok else [])
         runs: list[tuple[str, Callable[[], Any]]] = [
-            ("numpy script", lambda case=case: numpy_script(case, m)),
-            ("mtmc", lambda case=case: mtmc_run(case, m)),
+            (label, lambda label=label, name=name: in_child(label, name, m)) for label in labels
         ]
-        if suncal_ok:
-            runs.append(("suncal", lambda case=case: suncal_run(case, m)))
-        # interleaved repeats, best of each: load changes hit every method alike
+        # two rounds of fresh processes, interleaved, best of each: load changes hit every
+        # method alike
         best = {label: float("inf") for label, _ in runs}
         outs: dict[str, Any] = {}
-        for _ in range(REPEAT):
+        for _ in range(2):
             for label, fn in runs:
-                dt, outs[label] = best_of(fn, 1)
+                dt, outs[label] = fn()
                 best[label] = min(best[label], dt)
         t_ref = best["numpy script"]
         for label, _ in runs:

@@ -210,6 +210,24 @@ def test_batched_equals_one_trial_at_a_time(study) -> None:  # type: ignore[no-u
             np.testing.assert_allclose(batch[k][i], one[k][0], rtol=0, atol=2e-14)
 
 
+@pytest.mark.parametrize(("rows", "k", "n"), [(1, 90, 3), (2067, 90, 3), (333, 18, 135)])
+def test_thin_products_in_slices_against_exact_sums(rows: int, k: int, n: int) -> None:
+    """The row slices of the thin products against correctly rounded sums (math.fsum)."""
+    import math
+
+    from mtmc.artefact.study import _thin_matmul
+
+    rng = np.random.default_rng(np.random.SeedSequence(rows))
+    a = rng.normal(size=(rows, 2, k))[:, 1]  # a strided view, as the model's slices are
+    b = rng.normal(size=(k, n))
+    got = _thin_matmul(a, b, np.empty((rows, n)))
+    ref = np.array([[math.fsum(a[i] * b[:, j]) for j in range(n)] for i in range(rows)])
+    # a sum of k products rounded in any order is within k·eps·Σ|a_i b_i| of the exact
+    # one (Higham, Accuracy and Stability, §3.1); exact products are within eps of theirs
+    bound = (k + 1) * np.finfo(float).eps * (np.abs(a) @ np.abs(b))
+    assert np.all(np.abs(got - ref) <= bound)
+
+
 def test_linear_fit_map_against_exact_fits(study) -> None:  # type: ignore[no-untyped-def]
     lin, inputs, _ = study_model(study)
     exact, _, _ = study_model(study, exact_fit=True)

@@ -107,6 +107,40 @@ def test_noise_covariance_against_monte_carlo() -> None:
     assert np.allclose(res.cov, C, rtol=0.05, atol=0.03 * np.abs(C).max())
 
 
+def test_noise_at_fixed_points_is_perturb_of_every_trial_bit_for_bit() -> None:
+    """The spherical coordinates of fixed points, computed once, give perturb's very bits.
+
+    Reference: the formula of Aguado et al. 2016 eqs. 22–24 written out here with NumPy on
+    the points repeated for every trial (what perturb did for every block of trials).
+    """
+    from mtmc.instruments.laser_tracker import NoiseAt
+
+    n = TrackerNoise.from_mpe(adm=(0.010, 0.3e-6), transverse=(0.015, 6e-6), conversion="typical")
+    rng = np.random.default_rng(np.random.SeedSequence(8))
+    x = rng.uniform(-3000.0, 3000.0, size=(57, 3))
+    z = rng.normal(size=(11, 57, 3))
+    xx = np.broadcast_to(x, z.shape)
+    h = np.hypot(xx[..., 0], xx[..., 1])
+    L = np.sqrt(h * h + xx[..., 2] ** 2)
+    az, el = np.arctan2(xx[..., 1], xx[..., 0]), np.arctan2(xx[..., 2], h)
+    uL = n.radial_a + n.radial_b * L
+    ua, ue = n.azimuth + n.transverse_a / L, n.elevation + n.transverse_a / L
+    L2, az2, el2 = L + uL * z[..., 0], az + ua * z[..., 1], el + ue * z[..., 2]
+    ref = np.stack(
+        [L2 * np.cos(el2) * np.cos(az2), L2 * np.cos(el2) * np.sin(az2), L2 * np.sin(el2)],
+        axis=-1,
+    )
+    at = n.at(x)
+    assert isinstance(at, NoiseAt)
+    assert at.spherical.shape == (57, 3)
+    assert not at.spherical.flags.writeable
+    assert not at.u.flags.writeable
+    np.testing.assert_array_equal(at.perturb(z), ref)
+    np.testing.assert_array_equal(n.perturb(xx, z), ref)
+    with pytest.raises(InputError, match="one shape"):
+        NoiseAt(at.spherical, at.u[:3])
+
+
 def test_visibility_names_failing_points_and_limits() -> None:
     lt = LaserTracker.from_euler([-1000.0, 0.0, 500.0], [0.0, 0.0, 0.0])
     pts = np.array([[0.0, 0.0, 0.0], [400.0, 0.0, 0.0], [0.0, 3000.0, 0.0], [0.0, 0.0, 2500.0]])

@@ -336,6 +336,32 @@ def test_analytic_jacobian_matches_central_differences(name: str, exact: bool) -
         np.testing.assert_allclose(J[:, :, k], fd, atol=2e-6 * scale, err_msg=n)
 
 
+@pytest.mark.parametrize("name", ["table-table", "head-head", "table-head", "wbzfxyct", "xfyz"])
+@pytest.mark.parametrize("exact", [False, True])
+def test_jacobian_transpose_is_the_jacobian_times_a_vector(name: str, exact: bool) -> None:
+    # reverse mode against the forward-mode Jacobian (itself tested against central
+    # differences above), per-trial and constant errors, rotary and linear axes
+    base = library_machine(name)
+    mach = Machine.from_topology(
+        base.topology,
+        tool=(12.0, -7.0, -180.0),
+        workpiece=(40.0, 30.0, 25.0),
+        pivots={ax: (10.0, -20.0, 30.0) for ax in base.axes},
+    )
+    rng = _rng(13)
+    q = _random_q(mach, 9, rng)
+    errs = _random_errors(mach, rng, 9)
+    names = mach.accepted_error_names
+    w = rng.normal(size=(9, 3))
+    ref = np.einsum("mce,mc->me", mach.jacobian(q, errs, names=names, exact=exact), w)
+    got = mach.jacobian_transpose(q, errs, w, names=names, exact=exact)
+    # the same products summed in another order: rounding of terms up to about |J||w|,
+    # with lever arms of 10³ mm, 10⁻¹³ of the largest entry
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-13 * np.abs(ref).max())
+    with pytest.raises(InputError, match="shape"):
+        mach.jacobian_transpose(q, errs, w[:3], names=names)
+
+
 def test_jacobian_chains_to_coefficients() -> None:
     # d p / d c_k of a Legendre series = J[:, :, EXX] * P_k(t)
     mach = library_machine("xfyz")

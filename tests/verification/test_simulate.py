@@ -206,3 +206,64 @@ def test_the_model_sent_to_a_worker_gives_the_same_bits(setup) -> None:  # type:
     here, there = vm(z), sent(z)
     for key in ("ve", "coef", "comp"):
         np.testing.assert_array_equal(here[key], there[key])
+
+
+class _PerTrialNoise:
+    """The noise of the readings recomputed from the true points for every block of trials."""
+
+    def __init__(self, noise, x) -> None:  # type: ignore[no-untyped-def]
+        self.noise, self.x = noise, x
+
+    def perturb(self, z):  # type: ignore[no-untyped-def]
+        return self.noise.perturb(np.broadcast_to(self.x, z.shape), z)
+
+
+def test_the_noise_computed_once_gives_the_bits_of_perturbing_every_trial(setup) -> None:  # type: ignore[no-untyped-def]
+    # the model keeps the spherical coordinates of the true readings and their standard
+    # deviations; recomputing them for every block (the reference) changes no bit
+    import dataclasses
+
+    ver = _ver(setup)
+    vm = VerificationModel.build(ver, reference_identification(ver))
+    every = dataclasses.replace(vm, noise_at=_PerTrialNoise(vm.noise, vm.x_true))
+    z = np.random.default_rng(np.random.SeedSequence(4)).normal(size=(50, 3 * ver.n_points))
+    once, again = vm(z), every(z)
+    assert sorted(once) == sorted(again)
+    for key in once:
+        np.testing.assert_array_equal(once[key], again[key])
+
+
+def test_slices_of_trials_give_the_bits_of_one_pass(setup, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # the model evaluates a block in slices of trials to bound its working memory; every
+    # trial is computed on its own, so slices of 7 trials (the last one short) give the
+    # numbers of one pass over the 50 trials, with every optional input present
+    from mtmc.verification import simulate as sim
+
+    ver = _ver(setup, pose=False)
+    vm = VerificationModel.build(
+        ver, reference_identification(ver), repeatability=1e-3, pose_u=[1e-6] * 3 + [1e-3] * 3
+    )
+    rng = np.random.default_rng(np.random.SeedSequence(6))
+    n3 = 3 * ver.n_points
+    draws = {"noise": rng.normal(size=(50, n3)), "repeatability": rng.normal(size=(50, n3))}
+    draws["pose"] = rng.normal(size=(50, 6))
+    whole = vm(**draws)
+    monkeypatch.setattr(sim, "_SLICE", 7 * ver.n_points)
+    sliced = vm(**draws)
+    assert sorted(sliced) == sorted(whole)
+    for key in whole:
+        np.testing.assert_array_equal(sliced[key], whole[key])
+
+
+def test_a_verification_on_a_process_pool_gives_the_same_bits(setup, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # the model (its noise at the true readings included) is pickled to two worker
+    # processes, three blocks of trials among them; the result equals the one in-process
+    from mtmc.uncertainty import montecarlo
+
+    original = montecarlo.evaluation_block_size
+    monkeypatch.setattr(montecarlo, "evaluation_block_size", lambda d, s: min(40, original(d, s)))
+    ver = _ver(setup)
+    here = simulate(ver, 120, 13)
+    there = simulate(ver, 120, 13, workers=2, executor="process")
+    for name in ("ve_samples", "coef_samples", "comp_u", "compensated_point_mean"):
+        np.testing.assert_array_equal(getattr(there, name), getattr(here, name))

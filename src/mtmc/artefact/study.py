@@ -296,12 +296,12 @@ class _StudyModel:
             )
             centres = fit.geometry.centre.reshape(m, R, P, N, 3)  # type: ignore[union-attr]
         else:
-            # the fits' linear maps, one GEMM per (pose, ball) over all trials and
-            # repetitions: (m R, 3n) @ (3n, 3)
+            # the fits' linear maps, one thin product per (pose, ball) over all trials and
+            # repetitions: (m R, 3n) @ (3n, 3), in slices that BLAS runs on one thread
             zf = z.reshape(m * R, P * N, per)
             dc = np.empty((m * R, P * N, 3))
             for i in range(P * N):
-                np.matmul(zf[:, i], KpT[i], out=dc[:, i])
+                _thin_matmul(zf[:, i], KpT[i], dc[:, i])
             centres = c0[None, None] + dc.reshape(m, R, P, N, 3)
         if repeat is not None:
             centres = centres + np.einsum(
@@ -309,13 +309,49 @@ class _StudyModel:
             )
         if setup is not None and study.setup_u is not None:
             dE = setup * study.setup_u  # (m, 3 + 3N)
-            dm = -(dE @ pr.J.T).reshape(m, 1, P, N, 3)
+            dm = -_thin_matmul(dE, pr.J.T, np.empty((m, pr.J.shape[0]))).reshape(m, 1, P, N, 3)
             centres = centres + dm
         cal = pr.cal[None]
         if cmm is not None:
             cal = cal + cmm.reshape(m, N, 3) @ art.rotation.T
         a = analyse(centres, cal, pr.pinv, pr.Jp)
         return a.by_pose() if self.split else a.flat()
+
+
+#: The most multiply-adds ``m·k·n`` of a product that OpenBLAS (the BLAS of NumPy's and
+#: SciPy's wheels) runs on one thread; above it, on all its threads.
+_BLAS_ONE_THREAD = 4 * 65536
+
+
+def _thin_matmul(a: _F, b: _F, out: _F) -> _F:
+    """``a @ b`` into ``out`` for a tall ``a`` ``(r, k)`` and a thin ``b`` ``(k, n)``.
+
+    The rows go in slices of a multiple of 64 rows, each at most :data:`_BLAS_ONE_THREAD`
+    multiply-adds, so that BLAS runs every slice on one thread whatever its thread
+    setting: a block of trials is already the unit of parallelism, and on a loaded
+    machine BLAS threads that wait for each other made the artefact's 45 products per
+    block 20 times slower than one thread. A slice starts on a multiple of 64 rows, where
+    a product of all rows on one thread starts a micro-kernel too, so every row is summed
+    as in that product (the same bits with OpenBLAS; tested to rounding). A product of
+    all rows on several threads may cut them elsewhere and differ in the last bit.
+
+    Parameters
+    ----------
+    a : ndarray, shape (r, k)
+    b : ndarray, shape (k, n)
+    out : ndarray, shape (r, n)
+        Written and returned.
+
+    Returns
+    -------
+    ndarray, shape (r, n)
+        ``out``.
+    """
+    k, n = b.shape
+    step = max(64, _BLAS_ONE_THREAD // max(1, k * n) // 64 * 64)
+    for i in range(0, a.shape[0], step):
+        np.matmul(a[i : i + step], b, out=out[i : i + step])
+    return out
 
 
 def _centre_covariance(study: ArtefactStudy, pr: _Prepared) -> _F:
@@ -525,7 +561,7 @@ def _joined(res: Any, attr: str, n_poses: int) -> dict[str, _F]:
 
 def simulate_artefact(
     study: ArtefactStudy,
-    trials: int,
+    trials: int | None,
     seed: int | None = None,
     *,
     exact_fit: bool = False,
@@ -538,8 +574,8 @@ def simulate_artefact(
     Parameters
     ----------
     study : ArtefactStudy
-    trials : int
-        Monte Carlo trials.
+    trials : int or None
+        Monte Carlo trials (None with ``adaptive=True`` among ``engine``).
     seed : int, optional
         The seed (None: fresh entropy, recorded in the result).
     exact_fit : bool
@@ -550,7 +586,8 @@ def simulate_artefact(
         How the probing noise is drawn (see :func:`study_model`).
     **engine
         Passed to :func:`mtmc.uncertainty.monte_carlo` (``workers``, ``executor``,
-        ``scheduler``, ``progress``, ``block_size``).
+        ``scheduler``, ``progress``, ``block_size``, ``nan_policy``; ``adaptive``, ``ndig``,
+        ``p`` and ``kind`` for the adaptive procedure of JCGM 101 §7.9).
 
     Returns
     -------

@@ -54,6 +54,7 @@ from mtmc.geometry.transforms import (
 
 __all__ = [
     "LaserTracker",
+    "NoiseAt",
     "TrackerNoise",
     "TrackerLimits",
     "VisibilityFailure",
@@ -285,9 +286,31 @@ class TrackerNoise:
         -------
         ndarray, shape (broadcast, 3)
             ``cartesian(spherical(x) + u ⊙ z)``.
+
+        See Also
+        --------
+        at : the same for many draws of the noise of the same points.
+        """
+        return self.at(x).perturb(z)
+
+    def at(self, x: npt.ArrayLike) -> NoiseAt:
+        """The noise of the readings of fixed points, for many draws of it.
+
+        The spherical coordinates of the points and their standard deviations are
+        computed once; :meth:`NoiseAt.perturb` then gives the same numbers as
+        :meth:`perturb` of the same points, bit for bit.
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 3)
+            True tracker-frame points, mm.
+
+        Returns
+        -------
+        NoiseAt
         """
         s = spherical(x)
-        return cartesian(s + self.u_spherical(s[..., 0]) * np.asarray(z, dtype=np.float64))
+        return NoiseAt(s, self.u_spherical(s[..., 0]))
 
     def covariance(self, x: npt.ArrayLike) -> _F:
         """Linearised covariance of the Cartesian reading of each point.
@@ -307,6 +330,49 @@ class TrackerNoise:
         u = self.u_spherical(s[..., 0])
         Ju = J * u[..., None, :]
         return Ju @ np.swapaxes(Ju, -1, -2)
+
+
+@dataclass(frozen=True, eq=False)
+class NoiseAt:
+    """The tracker noise at fixed true readings (:meth:`TrackerNoise.at`).
+
+    Parameters
+    ----------
+    spherical : ndarray, shape (..., 3)
+        ``(L, α, β)`` of the true readings: range (mm), azimuth and elevation (rad).
+    u : ndarray, shape (..., 3)
+        Their standard deviations ``(u_L, u_α, u_β)`` (mm, rad, rad).
+    """
+
+    spherical: _F
+    u: _F
+
+    def __post_init__(self) -> None:
+        for n in ("spherical", "u"):
+            a = np.asarray(getattr(self, n), dtype=np.float64).view()  # read-only, no copy
+            a.setflags(write=False)
+            object.__setattr__(self, n, a)
+        if self.spherical.shape != self.u.shape or self.spherical.shape[-1:] != (3,):
+            raise InputError(
+                f"expected spherical coordinates and standard deviations of one shape "
+                f"(..., 3), got {self.spherical.shape} and {self.u.shape}",
+                field="u",
+            )
+
+    def perturb(self, z: npt.ArrayLike) -> _F:
+        """Noisy readings from standard normal numbers ``z`` (broadcast against the points).
+
+        Parameters
+        ----------
+        z : array_like, shape (..., 3)
+            Standard normal numbers for ``(L, α, β)``; a leading axis of trials broadcasts.
+
+        Returns
+        -------
+        ndarray, shape (broadcast, 3)
+            ``cartesian(spherical + u ⊙ z)``, mm, tracker frame.
+        """
+        return cartesian(self.spherical + self.u * np.asarray(z, dtype=np.float64))
 
 
 @dataclass(frozen=True)

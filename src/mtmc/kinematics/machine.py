@@ -100,6 +100,8 @@ class _Factor:
     """One elementary transform of the chain; applied to points and directions."""
 
     names: tuple[str, ...] = ()
+    #: Whether the factor turns directions (its linear part is not the identity).
+    turns: bool = True
 
     def active(self, vals: Values) -> bool:
         return True
@@ -133,6 +135,8 @@ def _rotation_ops(
 
 class _Translate(_Factor):
     """``y + sign * (const + (v_x, v_y, v_z))`` on points; v named errors."""
+
+    turns = False
 
     def __init__(self, const: _F | None, names: tuple[str | None, ...], sign: float) -> None:
         self.const = None if const is None or not np.any(const) else const
@@ -242,6 +246,8 @@ class _AxisRotation(_Factor):
 
 class _LinearMotion(_Factor):
     """Nominal translation ``q R(s) e`` of a linear axis, ``s`` its squareness angles."""
+
+    turns = False
 
     def __init__(self, direction: int, col: int, squareness: tuple[tuple[str, int], ...]) -> None:
         self.direction = direction
@@ -843,3 +849,79 @@ class Machine:
         for col, i in enumerate(owners):  # loop over parameters, not trials
             J[:, :, i] += V[:, col, :]
         return J
+
+    def jacobian_transpose(
+        self,
+        q: npt.ArrayLike | Mapping[str, npt.ArrayLike],
+        errors: Mapping[str, Any] | None,
+        w: npt.ArrayLike,
+        *,
+        names: tuple[str, ...] | list[str] | None = None,
+        exact: bool = False,
+    ) -> NDArray[np.float64]:
+        """``Jᵀ w`` at every pose: the Jacobian of :meth:`jacobian` times one vector each.
+
+        Parameters
+        ----------
+        q, errors, exact
+            As for :meth:`jacobian`.
+        w : array_like, shape (M, 3)
+            One vector per pose (mm, workpiece frame), e.g. the residual of a fit.
+        names : sequence of str, optional
+            The error names (default :attr:`error_names`).
+
+        Returns
+        -------
+        ndarray, shape (M, len(names))
+            ``Σ_c J[:, c, e] w[:, c]``: the gradient of ``w · p`` with respect to each error
+            value, equal to ``einsum("mce,mc->me", jacobian(...), w)`` to rounding.
+
+        Raises
+        ------
+        InputError
+            On an unknown name or bad input, or ``w`` of another shape.
+
+        Notes
+        -----
+        Reverse mode: the pass from the tool to the workpiece keeps, at each factor, the
+        partial derivatives of its parameters and its linear part (the images of the unit
+        vectors; none for a factor that only translates); a pass back carries ``w``
+        through the transposed linear parts and meets each partial derivative once. Its
+        cost is that of four vectors through the chain, where :meth:`jacobian` carries
+        one per error.
+        """
+        cols_names = (
+            self.error_names if names is None else tuple(self.error_term(n).name for n in names)
+        )
+        qa = self.positions(q)
+        vals = self._values(qa, errors)
+        m = self._batch(qa, vals)
+        if qa.shape[0] != m:
+            qa = np.broadcast_to(qa, (m, qa.shape[1]))
+        lam = np.asarray(w, dtype=np.float64)
+        if lam.shape != (m, 3):
+            raise InputError(f"expected w of shape ({m}, 3), got {lam.shape}", field="w")
+        index = {n: i for i, n in enumerate(cols_names)}
+        y = np.zeros((m, 1, 3))
+        one = np.ones(1)
+        unit = np.broadcast_to(np.eye(3), (m, 3, 3))
+        tape: list[tuple[list[tuple[int, _F]], _F | None]] = []
+        for f in reversed(self._factors):  # type: ignore[attr-defined]
+            new = [
+                (index[n], np.broadcast_to(v, (m, 1, 3))[:, 0, :])
+                for n, v in f.partials(y, vals, qa, exact)
+                if n in index
+            ]
+            images = None
+            if f.active(vals):
+                if f.turns:
+                    images = f.apply(unit, np.zeros(3), vals, qa, exact)  # row c: L e_c
+                y = f.apply(y, one, vals, qa, exact)
+            tape.append((new, images))
+        g = np.zeros((m, len(cols_names)))
+        for new, images in reversed(tape):  # from the workpiece back to the tool
+            for i, v in new:
+                g[:, i] += np.einsum("mc,mc->m", v, lam)
+            if images is not None:
+                lam = np.einsum("mci,mi->mc", images, lam)  # Lᵀ w
+        return g

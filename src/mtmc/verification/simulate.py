@@ -17,14 +17,21 @@ The noise-free verification is identified once, exactly (:func:`identify`): solu
 
 1. chord Gauss–Newton iterations ``δ = −A r(θ, R, t)``, the pose part exact
    (``x = Rᵀ(p − t)``, ``R ← R Exp(δω)``), the machine part linearised,
-   ``p = p̄ + J_p (θ − θ̄)``. Their fixed point solves ``J₀ᵀ r = 0``, not the trial's own
-   normal equations ``J(θ, R, t)ᵀ r = 0``: it lies about 10⁻⁴ u from the trial's optimum
-   (``u`` the coefficient's standard uncertainty), which is 10⁻² relative for a
-   coefficient near zero.
+   ``p = p̄ + J_p (θ − θ̄)``. The readings enter once per trial, ``b = A (ȳ − x)`` with
+   ``ȳ = R̄ᵀ(p̄ − t̄)`` the model's readings at the reference; with ``E = R̄ᵀR`` and
+   ``Δt = t − t̄`` an iteration is then
+   ``A r = b + Σ_ij (E − I)_ij G_ij − S (Rᵀ Δt) + Σ_ij R_ij K_ij (θ − θ̄)``, whose operators
+   ``G_ij = Σ_n A_n,j ȳ_n,i``, ``S_j = Σ_n A_n,j`` and ``K_ij = Σ_n A_n,j (J_p)_n,i`` are
+   computed once (``A_n,j`` the columns of ``A`` of reading ``j`` of point ``n``): a few
+   hundred operations a trial instead of ``6N p``. Their fixed point solves
+   ``J₀ᵀ r = 0``, not the trial's own normal equations ``J(θ, R, t)ᵀ r = 0``: it lies
+   about 10⁻⁴ u from the trial's optimum (``u`` the coefficient's standard uncertainty),
+   which is 10⁻² relative for a coefficient near zero.
 2. ``refine`` exact steps ``δ = −H₀⁻¹ J(θ, R, t)ᵀ r(θ, R, t)``: the residual from the
    machine model itself at each trial's parameters and the exact gradient (the machine's
-   analytic Jacobian per trial, contracted with the residual block by block, never
-   stored for all trials). Their fixed point is the trial's exact least-squares solution;
+   analytic Jacobian per trial times the residual, in reverse mode,
+   :meth:`~mtmc.kinematics.Machine.jacobian_transpose`, block by block; the Jacobian
+   itself is never formed). Their fixed point is the trial's exact least-squares solution;
    ``H₀`` only sets the rate, a factor of about 10⁻⁵ per step (the change of ``J``
    between trials and the curvature of the rotation), so two steps reach the rounding
    floor. The result equals the per-trial solution of :func:`identify` and of
@@ -84,7 +91,7 @@ from mtmc.geometry.transforms import (
     matrix_from_rotation_vector,
     rotation_vector_from_matrix,
 )
-from mtmc.instruments.laser_tracker import LaserTracker
+from mtmc.instruments.laser_tracker import LaserTracker, NoiseAt
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.uncertainty.distributions import IID, Normal
 from mtmc.uncertainty.gum import Validation, gum, validate
@@ -195,6 +202,36 @@ def _rows(a: Any, b: Any) -> Any:
     return np.einsum("mk,kn->mn", a, b)
 
 
+def _chord_operators(A: _F, p_fit: _F, Jp: _F, R_ref: _F, t_ref: _F) -> tuple[_F, _F, _F, _F]:
+    """The operators of the chord iterations (module notes), computed once per model.
+
+    Parameters
+    ----------
+    A : ndarray, shape (p, 3N)
+        ``J₀⁺``.
+    p_fit : ndarray, shape (N, 3)
+        Model positions at the reference solution, base frame, mm.
+    Jp : ndarray, shape (N, 3, k)
+        Their derivatives with respect to the free coefficients.
+    R_ref, t_ref : ndarray, shape (3, 3) and (3,)
+        The reference tracker pose.
+
+    Returns
+    -------
+    y_ref : ndarray, shape (N, 3)
+        The model readings ``R̄ᵀ(p̄ − t̄)``, mm.
+    G, S, K : ndarray, shape (p, 9), (p, 3) and (p, 9k)
+        C-ordered; the columns of ``G`` and the blocks of ``K`` in the C order of ``i, j``.
+    """
+    N = p_fit.shape[0]
+    A3 = A.reshape(-1, N, 3)
+    p = A3.shape[0]
+    y = (p_fit - t_ref) @ R_ref
+    G = np.ascontiguousarray(np.einsum("pnj,ni->pij", A3, y).reshape(p, 9))
+    K = np.ascontiguousarray(np.einsum("pnj,nil->pijl", A3, Jp).reshape(p, 9 * Jp.shape[2]))
+    return y, G, np.ascontiguousarray(A3.sum(axis=1)), K
+
+
 @dataclass(frozen=True)
 class VerificationModel:
     """The vectorised model of one verification per trial (see the module notes).
@@ -231,6 +268,11 @@ class VerificationModel:
     base: _F = field(repr=False)  # (P,) full parameter vector with the fixed values
     Hinv: _F = field(repr=False)  # (p, p) (J0^T J0)^-1
     basis: tuple[tuple[str, NDArray[np.int64], _F], ...] = field(repr=False)
+    noise_at: NoiseAt = field(repr=False)  # the noise at x_true, for every block
+    y_ref: _F = field(repr=False)  # (N, 3) model readings at the reference solution
+    chord_G: _F = field(repr=False)  # (p, 9) chord operators (module notes)
+    chord_S: _F = field(repr=False)  # (p, 3)
+    chord_K: _F = field(repr=False)  # (p, 9 n_theta)
     exact: bool = False
     iterations: int = 3
     refine: int = 2
@@ -263,15 +305,21 @@ class VerificationModel:
         refine : int, optional
             Exact steps after the chord iterations (module notes). By default
             :data:`REFINE` for at most :data:`REFINE_POINTS` points, none above: an exact
-            step costs about 8 µs per point and trial (the machine's Jacobian at every
-            trial), so the 5408-point mesh keeps the chord solution (within 2·10⁻⁴ u).
+            step costs about 1 µs of CPU per point and trial (the machine model and its
+            gradient at every trial), so the 5408-point mesh keeps the chord solution
+            (within 2·10⁻⁴ u).
 
         Returns
         -------
         VerificationModel
         """
         prob = _problem(ver.model, ver.q, ver.tracker, ver.pose, ver.fixed, ver.exact)
+        noise = ver.tracker.noise
+        if noise is None:  # pragma: no cover - Verification checks it
+            raise InputError("the tracker has no noise model", field="tracker.noise")
+        x_true = ver.readings()
         th = reference.theta[:1]
+        p_fit = ver.model.tool_position(ver.q, th[0], exact=ver.exact)
         n_th = prob.free.size
         J0 = reference.jacobian[0]
         Q, R = np.linalg.qr(J0)
@@ -293,6 +341,7 @@ class VerificationModel:
                 field="pose_u",
             )
         nominal = m.machine.tool_position(ver.q)
+        chord = _chord_operators(A, p_fit, Jp, reference.rotation[0], reference.position[0])
         J_tool = m.machine.jacobian(
             ver.q, ver.true_errors, names=("EXT", "EYT", "EZT"), exact=ver.exact
         )
@@ -300,9 +349,9 @@ class VerificationModel:
             names=reference.names,
             n_theta=n_th,
             pose=ver.pose,
-            x_true=ver.readings(),
+            x_true=x_true,
             p_true=ver.true_positions(),
-            p_fit=m.tool_position(ver.q, th[0], exact=ver.exact),
+            p_fit=p_fit,
             Jp=Jp,
             est0=np.array(reference.estimate[0]),
             R_ref=np.array(reference.rotation[0]),
@@ -318,7 +367,7 @@ class VerificationModel:
                 m.machine.tool_position(eq, ver.true_errors, exact=ver.exact)
             ),
             Jpe=Jpe,
-            noise=ver.tracker.noise,
+            noise=noise,
             repeatability=float(repeatability),
             pose_u=pu,
             reflector_u=float(reflector_u),
@@ -327,7 +376,12 @@ class VerificationModel:
             free=prob.free,
             base=prob.base,
             Hinv=Ri @ Ri.T,
+            y_ref=chord[0],
+            chord_G=chord[1],
+            chord_S=chord[2],
+            chord_K=chord[3],
             basis=_error_basis(m, ver.q),
+            noise_at=noise.at(x_true),
             exact=ver.exact,
             refine=(REFINE if ver.n_points <= REFINE_POINTS else 0) if refine is None else refine,
         )
@@ -384,11 +438,18 @@ class VerificationModel:
         est = np.broadcast_to(self.est0, (m, self.est0.size)).copy()
         R = np.broadcast_to(self.R_ref, (m, 3, 3)).copy()
         t = np.broadcast_to(self.t_ref, (m, 3)).copy()
-        Jt = self.Jp.reshape(3 * N, k).T  # (k, 3N): one matrix product per iteration
-        for _ in range(self.iterations):  # chord iterations, all trials at once
-            p = self.p_fit + _rows(est[:, :k] - self.est0[:k], Jt).reshape(m, N, 3)
-            r = (p - t[:, None, :]) @ R - x_meas
-            d = -_rows(r.reshape(m, 3 * N), self.A.T)
+        Jt = self.Jp.reshape(3 * N, k).T  # (k, 3N)
+        # chord iterations, all trials at once; the readings enter once, b = A (ȳ - x)
+        b = _rows((self.y_ref - x_meas).reshape(m, 3 * N), self.A.T)
+        eye = np.eye(3)
+        for _ in range(self.iterations):
+            dE = (np.swapaxes(self.R_ref, -1, -2) @ R - eye).reshape(m, 9)  # E - I
+            dtR = np.einsum("mi,mij->mj", t - self.t_ref, R)  # R^T (t - t_ref)
+            U = (R.reshape(m, 9, 1) * (est[:, None, :k] - self.est0[:k])).reshape(m, -1)
+            Ar = b + np.einsum("mq,pq->mp", dE, self.chord_G)
+            Ar -= np.einsum("mj,pj->mp", dtR, self.chord_S)
+            Ar += np.einsum("mq,pq->mp", U, self.chord_K)
+            d = -Ar
             est += d
             if self.pose:
                 R = R @ matrix_from_rotation_vector(d[:, k : k + 3])
@@ -411,7 +472,8 @@ class VerificationModel:
 
         ``r = Rᵀ(p(q; θ) − t) − x_meas`` with the machine model evaluated at each trial's
         parameters; ``∂r/∂θ = Rᵀ ∂p/∂θ`` from the machine's analytic Jacobian (per
-        trial, in blocks of about :data:`_ROWS` points), ``∂r/∂δω = [x]×``,
+        trial, in blocks of about :data:`_ROWS` points, ``(∂p/∂θ)ᵀ R r`` in reverse
+        mode), ``∂r/∂δω = [x]×``,
         ``∂r/∂δt = −Rᵀ`` (the parametrisation of :func:`identify`).
         """
         m, N = x_meas.shape[:2]
@@ -431,8 +493,8 @@ class VerificationModel:
             xr = (p - t[a:b, None, :]) @ R[a:b]  # model readings
             r = xr - x_meas[a:b]
             w = np.einsum("mij,mnj->mni", R[a:b], r).reshape(-1, 3)  # R r: base frame
-            Je = mach.jacobian(qq, errs, names=names, exact=self.exact)
-            s = np.einsum("rce,rc->re", Je, w).reshape(b - a, N, -1)
+            s = mach.jacobian_transpose(qq, errs, w, names=names, exact=self.exact)
+            s = s.reshape(b - a, N, -1)
             for ie, (_, idx, B) in enumerate(self.basis):
                 g_th[a:b, idx] = _rows(s[:, :, ie], B)
             if self.pose:
@@ -448,11 +510,44 @@ class VerificationModel:
         pose: Any = None,
         reflector: Any = None,
     ) -> dict[str, Any]:
-        """One verification per trial; see the module notes for inputs and outputs."""
+        """One verification per trial; see the module notes for inputs and outputs.
+
+        The trials go in slices of at most :data:`_SLICE` readings (trials × points), each
+        trial computed on its own: the same numbers as one pass over the block, with the
+        working arrays of a slice (a few MB) instead of those of the whole block (some
+        hundred MB for a block of 5408-point verifications).
+        """
+        m = noise.shape[0]
+        step = max(1, _SLICE // self.x_true.shape[0])
+        if m <= step:
+            return self._trials(noise, repeatability, pose, reflector)
+        out: dict[str, Any] = {}
+        inputs = (noise, repeatability, pose, reflector)
+        for a in range(0, m, step):
+            part = self._trials(*(None if v is None else v[a : a + step] for v in inputs))
+            if not out:
+                out = {k: np.empty((m, *v.shape[1:])) for k, v in part.items()}
+            for k, v in part.items():
+                out[k][a : a + step] = v
+        return out
+
+    def _trials(
+        self,
+        noise: Any,
+        repeatability: Any = None,
+        pose: Any = None,
+        reflector: Any = None,
+    ) -> dict[str, Any]:
+        """The outputs of one slice of trials (:meth:`__call__`)."""
         m = noise.shape[0]
         N = self.x_true.shape[0]
-        x = self.true_readings(m, repeatability, pose, reflector)
-        x_meas = self.noise.perturb(x, noise.reshape(m, N, 3))
+        z = noise.reshape(m, N, 3)
+        if repeatability is None and pose is None and reflector is None:
+            # the same true readings in every trial: their spherical coordinates and
+            # standard deviations were computed once (the same bits as perturb)
+            x_meas = self.noise_at.perturb(z)
+        else:
+            x_meas = self.noise.perturb(self.true_readings(m, repeatability, pose, reflector), z)
         est, r, R, t = self.solve(x_meas)
         init = np.sqrt(np.sum((x_meas - self.x_nom) ** 2, axis=-1))
         res = np.sqrt(np.sum(r * r, axis=-1))
@@ -478,6 +573,9 @@ REFINE_POINTS: int = 1000
 
 #: Points per block of the exact gradient (about 30 MB of machine Jacobian).
 _ROWS = 65536
+
+#: Readings (trials × points) per slice of :meth:`VerificationModel.__call__`.
+_SLICE = 131072
 
 
 @dataclass(frozen=True)
