@@ -95,7 +95,7 @@ def test_real_process_exit_codes(cmd):
             "500",
             "--seed",
             "1",
-            "-p",
+            "--place",
             "cx",
             "--json",
         ],
@@ -109,7 +109,7 @@ def test_real_process_exit_codes(cmd):
     assert json.loads(ok.stdout)["places"]["cx"]["type"] == "x"
 
     bad = subprocess.run(
-        [*cmd, "graph", "run", str(EXAMPLES / "ball_centre.toml"), "-p", "zz"],
+        [*cmd, "graph", "run", str(EXAMPLES / "ball_centre.toml"), "--place", "zz"],
         capture_output=True,
         text=True,
         env=_env(),

@@ -53,7 +53,7 @@ def test_run_table(capsys):
                 "1000",
                 "--seed",
                 "1",
-                "-p",
+                "--place",
                 "cx",
             ]
         )
@@ -85,7 +85,7 @@ def test_run_table_rounds_each_component_to_its_u(capsys, monkeypatch):
     # a plane fitted to three points: the point in mm at 4 decimals (u of some um), the
     # unit normal at many more (u of some urad on its x, y; far less on its z)
     g = EXAMPLES / "plane_3pt.toml"
-    assert main(["graph", "run", str(g), "-n", "2000", "--seed", "5", "-p", "plane"]) == 0
+    assert main(["graph", "run", str(g), "-n", "2000", "--seed", "5", "--place", "plane"]) == 0
     out = capsys.readouterr().out
     lib = run_graph(load_graph(g), 2000, seed=5, outputs=["plane"]).places["plane"]
     text = "".join(c for c in out if c not in "│ ")
@@ -98,7 +98,8 @@ def test_run_table_rounds_each_component_to_its_u(capsys, monkeypatch):
             _check_rounded(y_text, u_text, y, u)
         cells = "[" + ",".join(y for y, _ in pairs) + "]", "[" + ",".join(u for _, u in pairs) + "]"
         assert "".join(cells) in text
-    assert main(["graph", "run", str(g), "-n", "2000", "--seed", "5", "-p", "plane", "--json"]) == 0
+    argv = ["graph", "run", str(g), "-n", "2000", "--seed", "5", "--place", "plane", "--json"]
+    assert main(argv) == 0
     normal = json.loads(capsys.readouterr().out)["places"]["plane"]["normal"]
     np.testing.assert_array_equal(normal["estimate"], lib.part("normal").estimate_vector)
 
@@ -157,7 +158,7 @@ def test_sweep(tmp_path, capsys):
             "expected KEY=LOW:HIGH:N",
         ),
         (
-            ["graph", "run", str(EXAMPLES / "ball_centre.toml"), "-p", "zz"],
+            ["graph", "run", str(EXAMPLES / "ball_centre.toml"), "--place", "zz"],
             "the graph has no place zz",
         ),
         (

@@ -69,7 +69,7 @@ def test_json_equals_library_result(capsys):
 
 
 def test_json_without_gum_has_no_gum_keys_and_p_is_used(capsys):
-    code, out, _ = _run([*ARGS, "--json", "--p", "0.9"], capsys)
+    code, out, _ = _run([*ARGS, "--json", "-p", "0.9"], capsys)
     assert code == 0
     got = json.loads(out)
     assert "gum" not in got
@@ -157,7 +157,7 @@ def test_table_output(capsys):
         ),
         (["propagate", "a", "-i", "a"], ["expected NAME=DISTRIBUTION"]),
         (["propagate", "a", "-i", "a=normal(0,1)", "-i", "a=normal(0,1)"], ["more than once"]),
-        (["propagate", "a", "-i", "a=normal(0, 1)", "--p", "1.5"], ["0 < p < 1"]),
+        (["propagate", "a", "-i", "a=normal(0, 1)", "-p", "1.5"], ["0 < p < 1"]),
         (["propagate", "a", "-i", "a=normal(0, 1)", "--trials", "1"], ["trials"]),
     ],
 )

@@ -49,7 +49,8 @@ def test_every_study_has_its_result_folder_and_the_index_links_them(quick):
     # each headline states U with its unit and the coverage probability (JCGM 100 §7.2.4)
     assert lines[0].startswith("Mass calibration (JCGM 101 §9.3): dm = ")
     for line in lines[:-2]:
-        assert re.search(r" = -?[0-9.]+ (mm|mg), U = [0-9.]+ (mm|mg)", line), line
+        # (in the unit of the study: a verification or an artefact study in µm)
+        assert re.search(r" = -?[0-9.]+ (mm|mg|µm), U = [0-9.]+ (mm|mg|µm)", line), line
         assert "(U at p = 95 %; " in line, line
         assert "±" not in line
     assert re.search(r"dm = [0-9.]+ mg, U = [0-9.]+ mg", page)

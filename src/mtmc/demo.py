@@ -40,6 +40,9 @@ __all__ = ["STUDIES", "main", "run_demo", "study_path"]
 #: The shipped studies the demo runs, in order (files of ``mtmc/data/studies``).
 STUDIES: tuple[str, ...] = (
     "mass_calibration.toml",
+    "bore_type_a.toml",
+    "gauge_blocks_correlated.toml",
+    "polar_coordinates.toml",
     "ball_centre.toml",
     "axis_c.toml",
     "axis_a.toml",
@@ -55,6 +58,11 @@ def _unit(unit: str) -> str:
     return "" if unit in ("", "1") else f" {unit}"
 
 
+def _k(k: float | None) -> str:
+    """`` (k = 1.96)``: the coverage factor of an expanded uncertainty, k = U/u."""
+    return "" if k is None else f" (k = {k:.2f})"
+
+
 def study_path(name: str) -> Path:
     """The path of a shipped study file (``mtmc/data/studies/NAME``)."""
     return Path(str(resources.files("mtmc").joinpath("data", "studies", name)))
@@ -68,6 +76,7 @@ def run_demo(
     studies: Sequence[str] | None = None,
     progress: Callable[[str], Any] | None = None,
     echo: Callable[[str], Any] = print,
+    on_result: Callable[[Path, Any], Any] | None = None,
     **parallel: Any,
 ) -> Path:
     """Run the shipped studies into ``out`` and write ``out/index.html``.
@@ -86,7 +95,9 @@ def run_demo(
         ``progress(label)`` gives a context manager yielding a progress callback (the
         CLI's Rich bar); None: no bar.
     echo : callable
-        Where the one-line summaries go.
+        Where the one-line summaries go (each states the seed of its study).
+    on_result : callable, optional
+        ``on_result(folder, result)`` after each study's result folder is written.
     **parallel
         ``workers``, ``executor``, ``scheduler`` of every run (:meth:`Study.run`).
 
@@ -120,14 +131,17 @@ def run_demo(
             started=started,
             argv=["mtmc", "demo"],
         )
+        if on_result is not None:
+            on_result(folder / stem, result)
         entries.append((stem, stem))
         heads = "; ".join(
             f"{q.name} = {q.reported['estimate']}{_unit(q.unit)}, "
-            f"U = {q.reported['U']}{_unit(q.unit)}"
+            f"U = {q.reported['U']}{_unit(q.unit)}{_k(q.mc['k'])}"
             for q in result.quantities[:2]
         )
         p = f"{100 * result.p:g} %"
-        echo(f"{result.title}: {heads} (U at p = {p}; {time.perf_counter() - t0:.1f} s)")
+        took = f"{time.perf_counter() - t0:.1f} s"
+        echo(f"{result.title}: {heads} (U at p = {p}; seed {result.seed}; {took})")
     index = render_index(entries, folder / "index.html")
     echo(f"{len(entries)} studies in {time.perf_counter() - start:.1f} s.")
     echo(f"Report: {index}")

@@ -63,9 +63,11 @@ def test_verify_simulate_gives_the_numbers_of_mtmc_run(capsys: pytest.CaptureFix
     r = load_study(path).run(trials=30, seed=5)
     for which in ("initial", "residual", "compensated"):
         for stat in ("max", "mean", "min"):
-            mc = r.quantity(f"volumetric_error.{which}.{stat}").mc
-            assert j[f"{which}_ve_um"][stat]["estimate"] == 1e3 * mc["estimate"]
-            assert j[f"{which}_ve_um"][stat]["u"] == 1e3 * mc["u"]
+            q = r.quantity(f"volumetric_error.{which}.{stat}")
+            # one unit: the study's µm, in the command's JSON and in the run's quantities
+            assert q.unit == "µm"
+            assert j[f"{which}_ve_um"][stat]["estimate"] == q.mc["estimate"]
+            assert j[f"{which}_ve_um"][stat]["u"] == q.mc["u"]
 
 
 def test_verify_simulate_and_mtmc_run_draw_the_same_uncertainties(tmp_path: Path) -> None:
@@ -84,7 +86,7 @@ def test_verify_simulate_and_mtmc_run_draw_the_same_uncertainties(tmp_path: Path
     a = st.study.simulate(20, 8)
     b = st.run(trials=20, seed=8)
     mc = b.quantity("volumetric_error.compensated.mean").mc
-    assert mc["estimate"] == a.ve("compensated.mean")[0]
+    assert mc["estimate"] == 1e3 * a.ve("compensated.mean")[0]  # µm from mm
     plain = load_study(STUDIES / "aguado2017.toml").study.simulate(20, 8)
     assert a.ve("compensated.mean")[0] != plain.ve("compensated.mean")[0]
 
@@ -112,9 +114,10 @@ def test_artefact_simulate_gives_the_numbers_of_mtmc_run(
     r = load_study(path).run(trials=60, seed=5)
     for pose in j["poses"]:
         name = f"r_max.b{pose['b_deg']:g}_c{pose['c_deg']:g}"
-        mc = r.quantity(name).mc
-        assert pose["r_max_um"]["estimate"] == pytest.approx(1e3 * mc["estimate"], rel=1e-12)
-        assert pose["r_max_um"]["u"] == pytest.approx(1e3 * mc["u"], rel=1e-12)
+        q = r.quantity(name)
+        assert q.unit == "µm"  # the study's unit, as the command's
+        assert pose["r_max_um"]["estimate"] == pytest.approx(q.mc["estimate"], rel=1e-12)
+        assert pose["r_max_um"]["u"] == pytest.approx(q.mc["u"], rel=1e-12)
 
 
 def test_graph_run_gives_the_numbers_of_mtmc_run(capsys: pytest.CaptureFixture[str]) -> None:
@@ -145,3 +148,23 @@ def test_propagate_gives_the_numbers_of_mtmc_run(
     assert j["estimate"] == mc["estimate"]
     assert j["u"] == mc["u"]
     assert math.isfinite(j["u"])
+
+
+def test_graph_sweep_gives_the_numbers_of_the_sweep_study(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # the sweep of bcs_origin.toml ([sweep]: d_ac, 1000 trials a grid point, the two
+    # standard deviations on 0.001:0.005:5) asked of the command with the same grid
+    graph = STUDIES.parent / "graphs" / "bcs_origin.toml"
+    argv = ["graph", "sweep", str(graph), "--quantity", "d_ac", "--trials", "1000"]
+    vary = ["--vary", "probe.u_probe=0.001:0.005:5", "--vary", "probe.u_axis=0.001:0.005:5"]
+    j = _json([*argv, *vary, "--seed", "5", "--json"], capsys)
+    s = load_study(STUDIES / "bcs_origin.toml").run(trials=200, seed=5).extra["sweep"]
+    assert j["names"] == list(s["names"])
+    assert j["grid"] == [list(map(float, row)) for row in s["grid"]]
+    # the same runs at every grid point: the same bits
+    assert j["u"] == [float(u) for u in s["u"]]
+    assert j["surrogate"]["c0"] == s["surrogate"]["c0"]
+    assert [j["surrogate"]["coefficients"][n] for n in j["names"]] == [
+        float(c) for c in s["surrogate"]["coefficients"]
+    ]

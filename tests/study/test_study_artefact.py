@@ -43,7 +43,8 @@ def test_artefact_study_reports_what_simulate_computes():
     )
     field = r.fields[0]
     assert field.values.shape == field.points.shape
-    assert np.linalg.norm(field.values, axis=1).mean() * 1e3 == pytest.approx(
+    assert field.unit == "µm"  # the study's unit, as its tables
+    assert np.linalg.norm(field.values, axis=1).mean() == pytest.approx(
         j["volumetric_mean_um"], rel=1e-9
     )
 
@@ -69,11 +70,13 @@ def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them
     # pose (b, c) = (-5°, -5°) in mtmc's sign (the paper's b = 5°) is the sixth of the plan
     i = [tuple(p.values()) for p in ref.pose_labels()].index((-5.0, -5.0))
     rm = q["r_max.b-5_c-5"]
-    # the kept samples give the engine's moments again (to rounding) and the GUM its u
-    assert rm.mc["estimate"] == pytest.approx(ref.mc_mean["r_max_measured"][i], rel=1e-12)
-    assert rm.mc["u"] == pytest.approx(ref.mc_u["r_max_measured"][i], rel=1e-9)
-    assert rm.gum["u"] == pytest.approx(ref.gum_u["r_max_measured"][i], rel=1e-12)
-    assert rm.gum["estimate"] == pytest.approx(ref.nominal.r_max_measured[0, i], rel=1e-9)
+    # the kept samples give the engine's moments again (to rounding) and the GUM its u,
+    # in the study's µm: the engine's mm times 1000
+    assert {x.unit for x in r.quantities} == {"µm"}
+    assert rm.mc["estimate"] == pytest.approx(1e3 * ref.mc_mean["r_max_measured"][i], rel=1e-12)
+    assert rm.mc["u"] == pytest.approx(1e3 * ref.mc_u["r_max_measured"][i], rel=1e-9)
+    assert rm.gum["u"] == pytest.approx(1e3 * ref.gum_u["r_max_measured"][i], rel=1e-12)
+    assert rm.gum["estimate"] == pytest.approx(1e3 * ref.nominal.r_max_measured[0, i], rel=1e-9)
     # the budget line of a k-variate input gives its contribution sqrt(c V cᵀ), not the
     # first component's x, u and c; the contributions add up in quadrature to the GUM u
     cmm = next(b for b in rm.budget if b["name"] == "cmm")
@@ -84,10 +87,10 @@ def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them
     assert total == pytest.approx(rm.gum["u"], rel=1e-9)
     j = ref.study.names.index("dw3y")
     s = q["setup.dw3y"]
-    assert s.mc["u"] == pytest.approx(ref.mc_u["setup"][j], rel=1e-9)
+    assert s.mc["u"] == pytest.approx(1e3 * ref.mc_u["setup"][j], rel=1e-9)
     assert s.gum["k"] == pytest.approx(1.959964, rel=1e-6)  # normal: infinite dof
     lo, hi = s.mc["shortest"]
-    samples = ref.samples["setup"][:, j]
+    samples = 1e3 * ref.samples["setup"][:, j]
     assert np.mean((samples >= lo) & (samples <= hi)) == pytest.approx(0.95, abs=0.01)
     # the histogram is a density of the samples
     h = s.histogram

@@ -7,6 +7,7 @@ written atomically.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Any
@@ -22,10 +23,18 @@ from mtmc.cli.common import (
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
+    nan_policy,
     parallel_options,
     print_json,
     progress_bar,
+    seed_option,
     with_u,
+)
+from mtmc.cli.run_options import (
+    ADAPTIVE_OPTION,
+    RUN_NAN_POLICY_OPTION,
+    run_lines,
+    run_message,
 )
 from mtmc.errors import InputError, MtmcError
 
@@ -41,7 +50,7 @@ FIG_SUFFIXES = (".svg", ".png", ".pdf")
 def simulate_cmd(
     study: Path = typer.Argument(..., help="Artefact study file (.toml)."),
     trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
-    seed: int | None = typer.Option(None, "--seed", min=0, help="Seed (default: the study's)."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     figure: Path | None = typer.Option(
         None, "--figure", help="Write the error-vector plot (Fig. 7) here: .svg, .png, .pdf."
     ),
@@ -60,24 +69,37 @@ def simulate_cmd(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    adaptive: bool = ADAPTIVE_OPTION,
+    nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties."""
     from mtmc.artefact.study import simulate_artefact
+    from mtmc.uncertainty.montecarlo import adaptive_block_size
 
     if figure is not None and figure.suffix.lower() not in FIG_SUFFIXES:
         fail(f"{figure}: expected a file ending in {', '.join(FIG_SUFFIXES)}")
+    if adaptive and trials is not None:
+        fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
     try:
         kind = load_study_of_kind(study, "artefact")  # the study as ``mtmc run`` reads it
         st = kind.study
+        # [run] trials = "adaptive" unless --trials, and --adaptive, as mtmc run
+        settings = dataclasses.replace(
+            kind.settings,
+            adaptive=adaptive or (kind.settings.adaptive and trials is None),
+            nan_policy=kind.settings.nan_policy if nan is None else nan_policy(nan),
+            trials=kind.settings.trials if trials is None else trials,
+        )
+        engine = settings.engine | parallel_options(workers, executor, scheduler)
         with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
             res = simulate_artefact(
                 st,
-                kind.settings.trials if trials is None else trials,
+                engine.pop("trials"),
                 kind.settings.seed if seed is None else seed,
                 gum_too=not no_gum,
                 noise=noise,
                 progress=bar,
-                **parallel_options(workers, executor, scheduler),
+                **engine,
             )
         if figure is not None:
             from mtmc.artefact.plot import plot_error_vectors
@@ -87,10 +109,11 @@ def simulate_cmd(
             except OSError as exc:
                 fail(f"{figure}: cannot write: {exc}")
     except MtmcError as exc:
-        fail(exc)
+        fail(run_message(exc))
     out = res.to_json()
+    omitted = res.trials - len(res.samples["setup"])  # the engine keeps finite trials only
     if as_json:
-        print_json(out)
+        print_json(out | {"omitted": omitted, "adaptive": settings.adaptive})
         return
     con = Console()
     t = Table(
@@ -131,6 +154,10 @@ def simulate_cmd(
         f"mean volumetric error {out['volumetric_mean_um']:.2f} µm; "
         f"trials {out['trials']}  seed {out['seed']}"
     )
+    blocks = res.trials // adaptive_block_size(settings.p) if settings.adaptive else None
+    run = {"adaptive": settings.adaptive, "trials": res.trials, "omitted": omitted}
+    for line in run_lines(run | {"blocks": blocks, "ndig": settings.ndig}):
+        typer.echo(line)
 
 
 @app.command("fit")

@@ -17,12 +17,13 @@ from typing import TYPE_CHECKING, Any, Literal, NoReturn
 
 import typer
 
-from mtmc.errors import MtmcError
+from mtmc.errors import InputError, MtmcError
 from mtmc.io import to_jsonable, write_bytes_atomic, write_text_atomic
 
 if TYPE_CHECKING:  # the library and Rich's progress bar are imported where they are used
     from rich.console import Console
 
+    from mtmc.uncertainty.distributions import Distribution
     from mtmc.uncertainty.montecarlo import ProgressFn
 
 #: The ``--progress/--no-progress`` option of the long-running subcommands.
@@ -92,6 +93,40 @@ def load_study_of_kind(path: Path, kind: str) -> Any:
 def engine_message(exc: BaseException) -> str:
     """The text of an engine error, with its ``nan_policy`` advice in CLI terms."""
     return str(exc).replace("nan_policy='omit'", "--nan-policy omit")
+
+
+#: ``--json``: the results as one JSON object on stdout (see ``docs/cli.md``).
+JSON_OPTION: Any = typer.Option(
+    False, "--json", help="Print the results as one JSON object on stdout, and nothing else there."
+)
+
+
+def seed_option(default: str) -> Any:
+    """The ``-s/--seed`` option of a command that runs a Monte Carlo.
+
+    Parameters
+    ----------
+    default : str
+        What seeds the run when the option is not given, e.g. ``"the study's run.seed"``.
+
+    Returns
+    -------
+    typer.models.OptionInfo
+        A non-negative integer option; the command prints the seed it used (given, from
+        the study, or drawn from fresh entropy) so that the run can be repeated.
+    """
+    return typer.Option(
+        None,
+        "--seed",
+        "-s",
+        min=0,
+        help=f"Seed of the random numbers (default: {default}); the seed used is printed.",
+    )
+
+
+def print_trials_seed(trials: int, seed: int) -> None:
+    """Print ``trials M  seed S``: what repeats a Monte Carlo run (``-n M -s S``)."""
+    typer.echo(f"trials {trials}  seed {seed}")
 
 
 #: ``--workers N``: blocks of trials (or grid points) evaluated at once.
@@ -190,6 +225,35 @@ def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
+def input_specs(specs: list[str]) -> dict[str, Distribution]:
+    """The ``-i NAME=DISTRIBUTION`` options of ``mtmc propagate``, parsed, in their order.
+
+    Raises
+    ------
+    InputError, DistributionError
+        On a text without ``=`` or a name, a name given twice, or a distribution that
+        does not parse (named ``-i NAME``, with its column).
+    """
+    from mtmc.uncertainty.distributions import parse_distribution
+
+    dists: dict[str, Distribution] = {}
+    for spec in specs:
+        name, sep, text = spec.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise InputError(
+                f"expected NAME=DISTRIBUTION, e.g. x=normal(0, 1), got {spec!r}", field="-i"
+            )
+        if name in dists:
+            raise InputError(f"input {name} given more than once", field=name)
+        try:
+            dists[name] = parse_distribution(text.strip(), field=name)
+        except MtmcError as exc:  # "line 1" would point at no file: name the option instead
+            where = f" (column {exc.column})" if exc.column is not None else ""
+            raise type(exc)(exc.message + where, field=f"-i {name}") from None
+    return dists
+
+
 def check_trials(trials: int | None) -> None:
     """Refuse ``--trials`` above the most a study's ``[run] trials`` may ask (10⁹).
 
@@ -253,10 +317,60 @@ def progress_wanted(flag: bool | None) -> bool:
     return bool(isatty and isatty())
 
 
+#: A run whose remaining time is estimated above this (seconds) says so, once.
+LONG_RUN_S: float = 60.0
+
+
+def duration_text(seconds: float) -> str:
+    """``"45 s"``, ``"3 min 20 s"``, ``"2 h 05 min"``: a duration as a person reads it."""
+    s = round(seconds)
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s // 3600} h {s % 3600 // 60:02d} min"
+
+
+class _Estimate:
+    """Progress callback that says, once, how long a long run will take.
+
+    After one second of a run (from the first report of progress) the trials done give
+    the rate; where the trials left would take more than :data:`LONG_RUN_S` at that
+    rate, one line on stderr gives the trials per second and the estimated time, so a
+    run of 10⁹ trials can be stopped (Ctrl-C) before the wait, not after.
+    """
+
+    def __init__(self, description: str) -> None:
+        self.description = description
+        self.start: float | None = None
+        self.said = False
+
+    def __call__(self, done: int, total: int | None) -> None:
+        import time
+
+        now = time.perf_counter()
+        if self.start is None:
+            self.start = now
+            self.first = done
+            return
+        elapsed = now - self.start
+        if self.said or total is None or elapsed < 1.0 or done <= self.first:
+            return
+        self.said = True
+        rate = (done - self.first) / elapsed
+        left = (total - done) / rate
+        if left > LONG_RUN_S:
+            typer.echo(
+                f"mtmc: {self.description}: {total:,} trials at {rate:,.0f} trials/s: about "
+                f"{duration_text(left)} to go (Ctrl-C stops the run; nothing is written)",
+                err=True,
+            )
+
+
 @contextlib.contextmanager
 def progress_bar(
     description: str, enabled: bool | None = None, *, console: Console | None = None
-) -> Iterator[ProgressFn | None]:
+) -> Iterator[ProgressFn]:
     """A Rich progress bar on stderr, as a library progress callback.
 
     Parameters
@@ -272,13 +386,16 @@ def progress_bar(
 
     Yields
     ------
-    callable or None
+    callable
         ``update(done, total)`` to pass as ``progress=`` to :func:`mtmc.monte_carlo`,
-        :func:`mtmc.graph.run_graph` or :func:`mtmc.graph.sweep_graph`; ``None`` when the
-        bar is off. A ``total`` of None shows a bar of unknown length.
+        :func:`mtmc.graph.run_graph` or :func:`mtmc.graph.sweep_graph`. A ``total`` of
+        None shows a bar of unknown length. With the bar on or off, a run whose
+        remaining time is estimated above :data:`LONG_RUN_S` says so once on stderr,
+        with its trials per second (:class:`_Estimate`).
     """
+    estimate = _Estimate(description)
     if not progress_wanted(enabled):
-        yield None
+        yield estimate
         return
     from rich.console import Console
     from rich.progress import (
@@ -306,21 +423,27 @@ def progress_bar(
 
         def update(done: int, total: int | None) -> None:
             bar.update(task, completed=done, total=total)
+            estimate(done, total)
 
         yield update
 
 
 __all__ = [
+    "JSON_OPTION",
     "NAN_POLICY_OPTION",
     "PROGRESS_OPTION",
     "check_trials",
+    "input_specs",
+    "duration_text",
     "engine_message",
     "load_study_of_kind",
     "nan_policy",
     "quiet_numpy",
+    "seed_option",
     "MtmcError",
     "fail",
     "print_json",
+    "print_trials_seed",
     "progress_bar",
     "progress_wanted",
     "to_jsonable",

@@ -8,7 +8,7 @@ written atomically (:mod:`mtmc.io`); ``run`` and ``sweep`` show a progress bar o
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.console import Console
@@ -16,6 +16,7 @@ from rich.table import Table
 
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
+    JSON_OPTION,
     NAN_POLICY_OPTION,
     PROGRESS_OPTION,
     SCHEDULER_OPTION,
@@ -26,11 +27,14 @@ from mtmc.cli.common import (
     nan_policy,
     parallel_options,
     print_json,
+    print_trials_seed,
     progress_bar,
     quiet_numpy,
+    seed_option,
     warn,
     write_output,
 )
+from mtmc.cli.run_options import ADAPTIVE_OPTION, run_lines
 from mtmc.errors import MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
@@ -56,7 +60,7 @@ def _read(path: Path) -> Graph:
 
 
 @app.command("check")
-def check_cmd(file: Path = FILE) -> None:
+def check_cmd(file: Path = FILE, as_json: bool = JSON_OPTION) -> None:
     """Validate FILE and print its places, transitions and firing order."""
     from mtmc.graph.model import check_graph
 
@@ -66,6 +70,18 @@ def check_cmd(file: Path = FILE) -> None:
         fail(exc)
     warn(plan.warnings)
     g = plan.graph
+    if as_json:
+        print_json(
+            {
+                "file": str(file),
+                "places": dict(plan.types),
+                "marked": list(plan.marked),
+                "transitions": [t.name for t in g.transitions],
+                "generations": [list(names) for names in plan.generations],
+                "warnings": list(plan.warnings),
+            }
+        )
+        return
     typer.echo(
         f"{file.name}: ok: {len(plan.types)} places ({len(plan.marked)} marked), "
         f"{len(g.transitions)} transitions, {len(plan.generations)} generations"
@@ -132,26 +148,33 @@ def export_cmd(
 @app.command("run")
 def run_cmd(
     file: Path = FILE,
-    trials: int = typer.Option(100_000, "--trials", "-n", help="Number of Monte Carlo trials M."),
-    seed: int | None = typer.Option(None, "--seed", help="Seed (default: fresh, printed)."),
-    place: list[str] | None = typer.Option(None, "--place", "-p", help="Only these places."),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    trials: int | None = typer.Option(
+        None, "--trials", "-n", help="Number of Monte Carlo trials M (default 100000)."
+    ),
+    seed: int | None = seed_option("fresh entropy"),
+    place: list[str] | None = typer.Option(
+        None, "--place", help="Only this place (repeat the option for more)."
+    ),
+    as_json: bool = JSON_OPTION,
     nan: str = NAN_POLICY_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    adaptive: bool = ADAPTIVE_OPTION,
 ) -> None:
     """Run FILE by Monte Carlo and print each place's estimate and standard uncertainty.
 
     The table gives lengths in the graph's units (``units`` of the file), angles in rad;
-    ``--json`` gives the library's result as it is (mm, rad).
+    ``--json`` gives the library's result as it is, in mm and rad (its ``units``).
     """
     from mtmc.graph.model import check_graph
     from mtmc.graph.run import run_graph
     from mtmc.graph.units import file_unit
 
     check_trials(trials)
+    if adaptive and trials is not None:
+        fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
     try:
         plan = check_graph(_read(file))
         warn(plan.warnings)
@@ -163,12 +186,13 @@ def run_cmd(
                 outputs=place or None,
                 progress=bar,
                 nan_policy=nan_policy(nan),
+                adaptive=adaptive,
                 **parallel_options(workers, executor, scheduler),
             )
     except MtmcError as exc:
         fail(engine_message(exc))
     if as_json:
-        print_json(res.to_dict())
+        print_json({**res.to_dict(), "units": {"length": "mm", "angle": "rad"}})
         return
     table = Table(title=f"{file.name}: Monte Carlo over the graph (Stryczek)")
     for col in ("place", "type", "part"):
@@ -192,7 +216,12 @@ def run_cmd(
             )
             first = False
     Console().print(table)
-    typer.echo(f"trials {res.trials}  seed {res.seed}")
+    print_trials_seed(res.trials, res.seed)
+    run: dict[str, Any] = {"trials": res.trials, "omitted": res.omitted}
+    run |= {"adaptive": res.adaptive, "blocks": res.blocks, "tolerance": res.tolerance}
+    run["ndig"] = 2  # the engine's default, which the command does not change
+    for line in run_lines(run):
+        typer.echo(line)
 
 
 def _fmt(
@@ -229,13 +258,14 @@ def sweep_cmd(
         ..., "--vary", help="KEY=LOW:HIGH:N, e.g. probe.u_probe=0.001:0.005:5 (repeatable)."
     ),
     quantity: str = typer.Option(
-        ..., "--quantity", "-q", help="The scalar place whose standard uncertainty is swept."
+        ..., "--quantity", help="The scalar place whose standard uncertainty is swept."
     ),
     trials: int = typer.Option(1000, "--trials", "-n", help="Trials per grid point."),
-    seed: int | None = typer.Option(None, "--seed", help="Seed of every grid point."),
+    seed: int | None = seed_option("fresh entropy; one seed for every grid point"),
     csv: Path | None = typer.Option(None, "--csv", help="Write the grid as CSV here."),
     no_intercept: bool = typer.Option(False, "--no-intercept", help="Fit without c0."),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    as_json: bool = JSON_OPTION,
+    nan: str = NAN_POLICY_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
@@ -260,11 +290,12 @@ def sweep_cmd(
                 trials=trials,
                 seed=seed,
                 progress=bar,
+                nan_policy=nan_policy(nan),
                 **parallel_options(workers, executor, scheduler),
             )
         fit = res.fit(intercept=not no_intercept)
     except MtmcError as exc:
-        fail(exc)
+        fail(engine_message(exc))
     text = res.to_csv(fit)
     if csv is not None:
         write_output(csv, text)
@@ -273,6 +304,7 @@ def sweep_cmd(
             {
                 "trials": res.trials,
                 "seed": res.seed,
+                "omitted": res.omitted,
                 "output": quantity,
                 "names": list(res.names),
                 "grid": res.grid,
@@ -289,6 +321,10 @@ def sweep_cmd(
         typer.echo(text, nl=False)
     typer.echo(f"surrogate: {fit.formula()}")
     typer.echo(f"largest relative error on the grid: {100 * fit.max_rel_error:.2f} %")
+    print_trials_seed(res.trials, res.seed)
+    if res.omitted:
+        total = res.trials * len(res.u)
+        typer.echo(f"{res.omitted} of {total} trials left out: a model value was NaN or infinite")
 
 
 @app.command("edit")

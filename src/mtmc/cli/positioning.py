@@ -20,14 +20,23 @@ from rich.table import Table
 
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
+    JSON_OPTION,
     PROGRESS_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
+    nan_policy,
     parallel_options,
     print_json,
     progress_bar,
+    seed_option,
+)
+from mtmc.cli.run_options import (
+    ADAPTIVE_OPTION,
+    RUN_NAN_POLICY_OPTION,
+    run_lines,
+    run_message,
 )
 from mtmc.errors import InputError, MtmcError
 
@@ -100,20 +109,22 @@ def evaluate_cmd(
         None, "--type-a", help="means, means-and-s or none (default: means, or the study's)."
     ),
     trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
-    seed: int | None = typer.Option(None, "--seed", min=0, help="Seed (default: the study's)."),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
+    as_json: bool = JSON_OPTION,
     compensation: Path | None = typer.Option(
         None, "--compensation", help="Write the pitch-error compensation table here."
     ),
     fmt: str = typer.Option("isg", "--format", help="Its format: isg, etalon or csv."),
     sign: str = typer.Option("error", "--sign", help="Its values: error or correction."),
     outdir: Path | None = typer.Option(
-        None, "-o", "--outdir", help="Also write the result folder with its HTML report."
+        None, "-o", "--output", help="Also write the result folder with its HTML report."
     ),
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    adaptive: bool = ADAPTIVE_OPTION,
+    nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Evaluate DATA: the parameters of ISO 230-2, each with U by Monte Carlo and the GUM."""
     from mtmc.positioning import pitch_compensation
@@ -128,6 +139,8 @@ def evaluate_cmd(
                 trials=trials,
                 seed=seed,
                 progress=bar,
+                adaptive=True if adaptive else None,
+                nan_policy=None if nan is None else nan_policy(nan),
                 **parallel_options(workers, executor, scheduler),
             )
         if compensation is not None:
@@ -136,14 +149,19 @@ def evaluate_cmd(
             argv = (ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]])
             write_result(result, outdir, study_text=s.source.text, argv=argv)
     except (MtmcError, OSError) as exc:
-        fail(exc)
+        fail(run_message(exc))
     out = summary(result)
     if as_json:
         print_json(out)
         return
     unit = out["unit"]
-    table = Table(title=f"{result.title} ({result.trials} trials, seed {result.seed})")
-    for col in ("parameter", "estimate", "U (MC)", "MC interval", "U (GUM)", "GUM §8"):
+    table = Table(
+        title=f"{result.title} ({result.trials} trials, seed {result.seed})",
+        caption=f"U: expanded uncertainty in {unit} at the coverage probability p",
+    )
+    pct = f"p = {100 * result.p:g} %"
+    cols = ("parameter", "estimate", f"U (MC, {pct})", "MC interval", f"U (GUM, {pct})")
+    for col in (*cols, "GUM §8"):
         table.add_column(col, justify="left" if col == "parameter" else "right")
     for q in result.quantities:
         p = out["parameters"][q.name]
@@ -158,6 +176,8 @@ def evaluate_cmd(
         )
     console = Console()
     console.print(table)
+    for line in run_lines(result.extra.get("run")):
+        typer.echo(line)
     for note in out["notes"]:
         typer.echo(f"note: {note}")
     if compensation is not None:

@@ -18,17 +18,35 @@ from rich.table import Table
 
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
+    JSON_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     check_trials,
     fail,
+    nan_policy,
     parallel_options,
+    print_json,
+    print_trials_seed,
     progress_bar,
+    seed_option,
     warn,
+)
+from mtmc.cli.run_options import (
+    ADAPTIVE_OPTION,
+    RUN_NAN_POLICY_OPTION,
+    run_lines,
+    run_message,
 )
 from mtmc.errors import MtmcError
 
-__all__ = ["default_outdir", "report_cmd", "run_cmd", "run_study_file", "summary_table"]
+__all__ = [
+    "default_outdir",
+    "report_cmd",
+    "run_cmd",
+    "run_study_file",
+    "run_summary",
+    "summary_table",
+]
 
 
 def default_outdir(study: Path) -> Path:
@@ -37,21 +55,84 @@ def default_outdir(study: Path) -> Path:
 
 
 def summary_table(result: Any) -> Table:
-    """A Rich table of the quantities of a result: y and U as the GUM rounds them, k, §8."""
-    table = Table(title=f"{result.title} ({result.trials} trials, seed {result.seed})")
-    for col in ("quantity", "y", "U", "unit", "k", "GUM §8"):
+    """A Rich table of the quantities of a result: y and U as the GUM rounds them, k, §8.
+
+    The expanded uncertainty is labelled with what it is: ``U (k, p = 95 %)`` over the
+    column, and each cell gives ``U (k = …)``, with ``k = U/u`` of that quantity; y and U
+    are in the quantity's unit (JCGM 100 §7.2.4).
+    """
+    table = Table(
+        title=f"{result.title} ({result.trials} trials, seed {result.seed})",
+        caption="y: estimate; U: expanded uncertainty, k = U/u; p: coverage probability",
+    )
+    big_u = f"U (k, p = {100 * result.p:g} %)"
+    for col in ("quantity", "y", big_u, "unit", "GUM §8"):
         table.add_column(col, justify="left" if col in ("quantity", "unit") else "right")
     for q in result.quantities:
         v = q.validation
+        k = "" if q.mc["k"] is None else f" (k = {q.mc['k']:.3f})"
         table.add_row(
             q.name,
             q.reported["estimate"],
-            q.reported["U"],
+            q.reported["U"] + k,
             q.unit,
-            "" if q.mc["k"] is None else f"{q.mc['k']:.3f}",
             "" if v is None else v["verdict"],
         )
     return table
+
+
+def run_summary(result: Any, outdir: Path) -> dict[str, Any]:
+    """The summary that ``mtmc run --json`` prints: what the table says, as numbers.
+
+    Parameters
+    ----------
+    result : StudyResult
+        The run's result.
+    outdir : Path
+        Its result folder.
+
+    Returns
+    -------
+    dict
+        ``title``, ``kind``, ``study_file``, ``seed``, ``trials``, ``p``, ``output`` (the
+        result folder), ``report`` and ``quantities``: per quantity its ``name``, ``unit``
+        (of ``estimate``, ``u``, ``U`` and ``interval``), ``estimate``, ``u`` (standard
+        uncertainty), ``U`` (expanded uncertainty, half the ``interval_kind`` coverage
+        interval), ``k`` (``U/u``), ``p``, ``interval``, ``reported`` (y and U rounded as
+        JCGM 100 §7.2.6 says) and ``verdict`` (JCGM 101 §8, or None); ``warnings``, and
+        ``run`` (how the Monte Carlo went: adaptive, trials left out; or None).
+    """
+    quantities = []
+    for q in result.quantities:
+        mc = q.mc
+        quantities.append(
+            {
+                "name": q.name,
+                "unit": q.unit,
+                "estimate": mc["estimate"],
+                "u": mc["u"],
+                "U": mc["U"],
+                "k": mc["k"],
+                "p": mc["p"],
+                "interval_kind": mc["interval"],
+                "interval": mc[mc["interval"]],
+                "reported": dict(q.reported),
+                "verdict": None if q.validation is None else q.validation["verdict"],
+            }
+        )
+    return {
+        "title": result.title,
+        "kind": result.kind,
+        "study_file": result.study_file,
+        "seed": result.seed,
+        "trials": result.trials,
+        "p": result.p,
+        "output": str(outdir),
+        "report": str(outdir / "report.html"),
+        "quantities": quantities,
+        "warnings": list(result.extra.get("warnings", ())),
+        "run": result.extra.get("run"),
+    }
 
 
 def run_study_file(
@@ -64,11 +145,14 @@ def run_study_file(
     progress: bool | None = None,
     argv: list[str] | None = None,
     parallel: dict[str, Any] | None = None,
+    adaptive: bool | None = None,
+    nan_policy: str | None = None,
 ) -> Any:
     """Load, run and write one study (the library calls of ``mtmc run``); return the result.
 
     ``parallel`` holds the ``workers``, ``executor`` and ``scheduler`` of
-    :meth:`mtmc.study.Study.run`.
+    :meth:`mtmc.study.Study.run`; ``adaptive`` and ``nan_policy`` override ``[run]``
+    (None: as the file says).
     """
     from mtmc.study import load_study, write_result
     from mtmc.study.write import now
@@ -76,7 +160,15 @@ def run_study_file(
     s = load_study(study)
     started = now()
     with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
-        result = s.run(trials=trials, seed=seed, samples=samples, progress=bar, **(parallel or {}))
+        result = s.run(
+            trials=trials,
+            seed=seed,
+            samples=samples,
+            progress=bar,
+            adaptive=adaptive,
+            nan_policy=nan_policy,
+            **(parallel or {}),
+        )
     write_result(result, outdir, study_text=s.source.text, started=started, argv=argv)
     return result
 
@@ -85,22 +177,29 @@ def run_cmd(
     ctx: typer.Context,
     study: Path = typer.Argument(..., help="The study file (TOML)."),
     outdir: Path | None = typer.Option(
-        None, "-o", "--outdir", help="Result folder (default: mtmc-results/STUDY-NAME)."
+        None, "-o", "--output", help="Result folder (default: mtmc-results/STUDY-NAME)."
     ),
     trials: int | None = typer.Option(
         None, "--trials", "-n", help="Trials (default: the study's run.trials)."
     ),
-    seed: int | None = typer.Option(None, "--seed", help="Seed (default: the study's run.seed)."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     samples: bool = typer.Option(False, "--samples", help="Also write the samples as .npy."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar, no table."),
+    quiet: bool = typer.Option(
+        False, "--quiet", "-q", help="No progress bar, no table (the seed is still printed)."
+    ),
+    as_json: bool = JSON_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
+    adaptive: bool = ADAPTIVE_OPTION,
+    nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Run STUDY and write its result folder and HTML report."""
     if trials is not None and trials < 2:
         fail(f"--trials: expected an integer >= 2, got {trials}")
     check_trials(trials)
+    if adaptive and trials is not None:
+        fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
     out = outdir if outdir is not None else default_outdir(study)
     try:
         result = run_study_file(
@@ -112,12 +211,24 @@ def run_cmd(
             progress=False if quiet else None,
             argv=(ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]]),
             parallel=parallel_options(workers, executor, scheduler),
+            adaptive=True if adaptive else None,
+            nan_policy=None if nan is None else nan_policy(nan),
         )
     except (MtmcError, OSError) as exc:
-        fail(exc)
+        fail(run_message(exc))
     warn(result.extra.get("warnings", ()))
-    if not quiet:
+    if as_json:
+        print_json(run_summary(result, out))
+        return
+    if quiet:
+        print_trials_seed(result.trials, result.seed)
+    else:
         Console().print(summary_table(result))
+    for line in run_lines(result.extra.get("run")):
+        typer.echo(line)
+    for q in result.quantities:  # the JCGM 106 decision of an output with [conformity]
+        if q.conformity is not None:
+            typer.echo(f"{q.name}: {q.conformity['text']}")
     typer.echo(f"report: {out / 'report.html'}")
 
 
@@ -135,15 +246,20 @@ def report_cmd(
 
 
 def demo_cmd(
-    out: Path = typer.Option(Path("mtmc-demo"), "-o", "--outdir", help="Output folder."),
+    out: Path = typer.Option(Path("mtmc-demo"), "-o", "--output", help="Output folder."),
     trials: int | None = typer.Option(None, "--trials", "-n", help="Trials of every study."),
-    seed: int | None = typer.Option(None, "--seed", help="Seed of every study."),
+    seed: int | None = seed_option("each study's run.seed"),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    as_json: bool = JSON_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
 ) -> None:
-    """Run the shipped studies into OUTDIR and write OUTDIR/index.html linking their reports."""
+    """Run the shipped studies into OUTPUT and write OUTPUT/index.html linking their reports.
+
+    Each study's line states its seed. With --json: one object of the output folder, the
+    index page and the studies, each as mtmc run --json summarises it.
+    """
     from mtmc.demo import run_demo
 
     if trials is not None and trials < 2:
@@ -153,14 +269,18 @@ def demo_cmd(
     def bar(label: str) -> Any:
         return progress_bar(f"{label}: Monte Carlo", False if quiet else None)
 
+    summaries: list[dict[str, Any]] = []
     try:
-        run_demo(
+        index = run_demo(
             out,
             trials=trials,
             seed=seed,
             progress=bar,
-            echo=typer.echo,
+            echo=(lambda _line: None) if as_json else typer.echo,
+            on_result=lambda folder, result: summaries.append(run_summary(result, folder)),
             **parallel_options(workers, executor, scheduler),
         )
     except (MtmcError, OSError) as exc:
         fail(exc)
+    if as_json:
+        print_json({"output": str(out), "index": str(index), "studies": summaries})

@@ -13,6 +13,7 @@ import typer
 
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
+    JSON_OPTION,
     PROGRESS_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
@@ -20,7 +21,9 @@ from mtmc.cli.common import (
     load_study_of_kind,
     parallel_options,
     print_json,
+    print_trials_seed,
     progress_bar,
+    seed_option,
     warn,
     with_u,
 )
@@ -39,14 +42,11 @@ def _load(path: Path) -> Any:
     return load_study_of_kind(path, "verification")
 
 
-JSON_OPTION = typer.Option(False, "--json", help="Print one JSON object.")
-
-
 @app.command("plan")
 def plan_cmd(
     study: Path = STUDY,
     out: Path = typer.Option(
-        Path("."), "-o", "--outdir", help="Folder for the NC programs and the points table."
+        Path("."), "-o", "--output", help="Folder for the NC programs and the points table."
     ),
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -142,7 +142,7 @@ def _coef_unit(model: Any, name: str) -> tuple[str, float]:
 def simulate_cmd(
     study: Path = STUDY,
     trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Trials (tests)."),
-    seed: int | None = typer.Option(None, "--seed", "-s", min=0, help="Random seed."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     points: str | None = typer.Option(None, "--points", help="A point set of the study."),
     tracker: str | None = typer.Option(None, "--tracker", help="A tracker position of the study."),
     as_json: bool = JSON_OPTION,
@@ -358,7 +358,7 @@ def place_cmd(
     study: Path = STUDY,
     points: str | None = typer.Option(None, "--points", help="A point set of the study."),
     trials: int = typer.Option(200, "--trials", "-n", min=0, help="MC trials confirming the best."),
-    seed: int | None = typer.Option(None, "--seed", "-s", min=0, help="Random seed."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     grid: int = typer.Option(11, "--grid", min=2, help="Candidates per horizontal axis."),
     refine: int = typer.Option(300, "--refine", min=0, help="Evaluations of the refinement."),
     as_json: bool = JSON_OPTION,
@@ -369,6 +369,7 @@ def place_cmd(
     """Search the tracker position with the smallest mean calibration uncertainty."""
     import math
 
+    from mtmc.uncertainty.sampling import resolve_seed
     from mtmc.verification.placement import place
     from mtmc.verification.visibility import study_visibility, visibility_warnings
 
@@ -380,6 +381,7 @@ def place_cmd(
         ver = st.verification(points, None)
         warnings = visibility_warnings(study_visibility(st, points), st.machine.axes)
         warn(warnings)
+        used_seed = resolve_seed(kind.settings.seed if seed is None else seed)
         r = place(
             ver,
             st.limits,
@@ -387,7 +389,7 @@ def place_cmd(
             n_xy=grid,
             refine=refine,
             trials=trials,
-            seed=kind.settings.seed if seed is None else seed,
+            seed=used_seed,
             **parallel_options(workers, executor, scheduler),
         )
     except MtmcError as exc:
@@ -395,6 +397,7 @@ def place_cmd(
     p = r.best.position
     out: dict[str, Any] = {
         "best": {
+            "unit": "mm",
             "x": float(p[0]),
             "y": float(p[1]),
             "z": float(p[2]),
@@ -406,6 +409,8 @@ def place_cmd(
         "reference": {n: {"u_um": u * 1e3} for n, u in r.reference.items()},
         "candidates": r.candidates,
         "rejected": r.rejected,
+        "trials": trials,
+        "seed": used_seed,
         "warnings": warnings,
     }
     if as_json:
@@ -421,3 +426,4 @@ def place_cmd(
     )
     for n, v in out["reference"].items():
         typer.echo(f"  {n}: {v['u_um']:.2f} um")
+    print_trials_seed(trials, used_seed)

@@ -18,7 +18,7 @@ from mtmc.graph.model import Graph, Plan, check_graph
 __all__ = ["layout", "graph_to_dot", "draw_graph"]
 
 #: Size of the place and transition labels, pt: read at the drawing's own size (the
-#: report shows it unscaled, in a box that scrolls).
+#: report draws it to the width of the page, and unscaled in a box that scrolls on request).
 LABEL_PT = 7.0
 
 

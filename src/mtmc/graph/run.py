@@ -21,7 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable, Container, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -275,6 +275,14 @@ class GraphResult:
         All M samples of each kept place (``(M,)``, ``(M, 3)``, a primitive or ``(M, 4, 4)``).
     types : mapping of str to str
         The type of every place of the graph.
+    omitted : int
+        Trials left out because a place was NaN or infinite (``nan_policy="omit"``).
+    adaptive : bool
+        Whether the number of trials was chosen by the adaptive procedure (JCGM 101 §7.9).
+    blocks : int
+        Blocks of the adaptive procedure (1 for a fixed run).
+    tolerance : float or None
+        The numerical tolerance δ the adaptive procedure met (None for a fixed run).
 
     The mappings are read-only, and so are the arrays of the samples (copied when given
     writable).
@@ -285,6 +293,10 @@ class GraphResult:
     places: Mapping[str, PlaceSummary]
     samples: Mapping[str, Any] = field(default_factory=dict)
     types: Mapping[str, str] = field(default_factory=dict)
+    omitted: int = 0
+    adaptive: bool = False
+    blocks: int = 1
+    tolerance: float | None = None
 
     def __post_init__(self) -> None:
         samples = {
@@ -324,10 +336,18 @@ class GraphResult:
         )
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"trials", "seed", "places": {name: summary}}``, JSON-ready apart from arrays."""
+        """``{"trials", "seed", "omitted", "adaptive", "places": {name: summary}}``.
+
+        JSON-ready apart from arrays; an adaptive run adds ``blocks`` and ``tolerance``
+        (JCGM 101 §7.9.4).
+        """
+        run: dict[str, Any] = {"omitted": self.omitted, "adaptive": self.adaptive}
+        if self.adaptive:
+            run.update(blocks=self.blocks, tolerance=self.tolerance)
         return {
             "trials": self.trials,
             "seed": self.seed,
+            **run,
             "places": {n: s.to_dict() for n, s in self.places.items()},
         }
 
@@ -522,7 +542,7 @@ class GraphModel:
 
 def run_graph(
     graph: Graph | Plan,
-    trials: int = 100_000,
+    trials: int | None = None,
     seed: int | np.random.SeedSequence | None = None,
     *,
     outputs: Iterable[str] | None = None,
@@ -535,6 +555,11 @@ def run_graph(
     scheduler: Any = None,
     nan_policy: NanPolicy = "raise",
     sampling: Sampling = "random",
+    adaptive: bool = False,
+    ndig: int = 2,
+    p: float = 0.95,
+    kind: Literal["symmetric", "shortest"] = "symmetric",
+    max_trials: int = 10**8,
 ) -> GraphResult:
     """Monte Carlo over a measurement graph (JCGM 101 with Stryczek's graph as the model).
 
@@ -547,8 +572,8 @@ def run_graph(
     ----------
     graph : Graph or Plan
         The graph (checked here if a Graph).
-    trials : int
-        Number of trials M (at least 2).
+    trials : int, optional
+        Number of trials M (at least 2; default 100 000). Not with ``adaptive``.
     seed : int, SeedSequence or None
         The seed; None draws fresh entropy, recorded in the result.
     outputs : iterable of str, optional
@@ -579,6 +604,16 @@ def run_graph(
         Pseudo-random draws or randomised quasi-Monte Carlo, as
         :func:`~mtmc.uncertainty.monte_carlo` (the Sobol dimensions go to the input
         places in sorted order of their names).
+    adaptive : bool, default False
+        Choose the number of trials by the adaptive procedure of JCGM 101 §7.9.4
+        (:func:`~mtmc.uncertainty.monte_carlo`): it stops when every component of every
+        summarised place (and of every kept one) has met the numerical tolerance of its
+        ``u`` to ``ndig`` significant digits. Every summarised place then keeps its
+        samples.
+    ndig, p, kind, max_trials
+        The adaptive procedure's significant digits of ``u``, coverage probability,
+        interval watched and largest number of trials, as
+        :func:`~mtmc.uncertainty.monte_carlo`.
 
     Returns
     -------
@@ -590,7 +625,8 @@ def run_graph(
     GraphError
         If the graph is not valid.
     InputError
-        Fewer than 2 trials, or an unknown place in ``outputs`` or ``keep``.
+        Fewer than 2 trials, ``trials`` with ``adaptive``, or an unknown place in
+        ``outputs`` or ``keep``.
     DegenerateGeometryError
         If a construction is degenerate in some trial.
 
@@ -615,8 +651,13 @@ def run_graph(
         res = monte_carlo(
             model,
             model.inputs,
-            trials,
+            trials if trials is not None or adaptive else 100_000,
             seed,
+            adaptive=adaptive,
+            ndig=ndig,
+            p=p,
+            kind=kind,
+            max_trials=max_trials,
             keep=keep_s,
             block_size=block_size,
             normal_method=normal_method,
@@ -643,7 +684,18 @@ def run_graph(
         places[n] = PlaceSummary(n, plan.types[n], r)
     samples_out = {n: read_only(unflatten(plan.types[n], res[n].values)) for n in keep_s}
     assert res.seed is not None  # monte_carlo records the seed it drew
-    return GraphResult(res.trials, res.seed, places, samples_out, dict(plan.types))
+    first = next(iter(res.values()), None)  # its adaptive blocks and δ are every output's
+    return GraphResult(
+        res.trials,
+        res.seed,
+        places,
+        samples_out,
+        dict(plan.types),
+        omitted=res.omitted,
+        adaptive=adaptive,
+        blocks=1 if first is None else first.blocks,
+        tolerance=None if first is None else first.tolerance,
+    )
 
 
 def _derived_parts(plan: Plan, summarised: Container[str]) -> dict[str, tuple[str, str]]:

@@ -42,6 +42,7 @@ from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import SCALAR_TYPES, ProbeDefaults
 from mtmc.graph.run import run_graph
 from mtmc.parallel import ExecutorKind, map_blocks
+from mtmc.uncertainty.montecarlo import NanPolicy
 from mtmc.uncertainty.sampling import resolve_seed
 
 __all__ = [
@@ -279,6 +280,9 @@ class SweepResult:
         Trials per grid point.
     seed : int
         The seed of every grid point.
+    omitted : int
+        Trials left out over all grid points because the output was NaN or infinite
+        (``nan_policy="omit"``).
     """
 
     names: tuple[str, ...]
@@ -288,6 +292,7 @@ class SweepResult:
     output: str
     trials: int
     seed: int
+    omitted: int = 0
 
     def fit(self, *, intercept: bool = True) -> Surrogate:
         """Fit the surrogate of :func:`fit_surrogate` to this sweep."""
@@ -331,13 +336,21 @@ class _SweepPoint:
     output: str
     trials: int
     seed: int
+    nan_policy: NanPolicy = "raise"
 
     def __call__(
         self, graph: Graph, progress: Callable[[int, int | None], None] | None = None
-    ) -> tuple[float, float]:
-        res = run_graph(graph, self.trials, self.seed, outputs=[self.output], progress=progress)
+    ) -> tuple[float, float, int]:
+        res = run_graph(
+            graph,
+            self.trials,
+            self.seed,
+            outputs=[self.output],
+            progress=progress,
+            nan_policy=self.nan_policy,
+        )
         summary = res.places[self.output]
-        return summary.u, summary.estimate
+        return summary.u, summary.estimate, res.omitted
 
 
 def sweep_graph(
@@ -351,6 +364,7 @@ def sweep_graph(
     workers: int = 1,
     executor: ExecutorKind | Any = "thread",
     scheduler: Any = None,
+    nan_policy: NanPolicy = "raise",
 ) -> SweepResult:
     """Run a graph on the grid of all combinations of the varied parameters.
 
@@ -379,6 +393,8 @@ def sweep_graph(
         Where the grid points run when ``workers > 1``.
     scheduler : str or distributed.Client, optional
         With ``executor="dask"``, a running Dask cluster to use.
+    nan_policy : {"raise", "omit"}
+        At each grid point, as :func:`~mtmc.uncertainty.monte_carlo`.
 
     Returns
     -------
@@ -414,8 +430,9 @@ def sweep_graph(
         graphs.append(g)
     trials = int(trials)
     total = grid.shape[0] * trials
-    point = _SweepPoint(output, trials, seed_i)
+    point = _SweepPoint(output, trials, seed_i, nan_policy)
     us, est = [], []
+    omitted = 0
     if workers == 1 and executor in ("thread", "process"):
         for i, g in enumerate(graphs):
             step = None
@@ -425,14 +442,18 @@ def sweep_graph(
                 def step(done: int, _total: int | None, _before: int = done_before) -> None:
                     progress(_before + done, total)
 
-            u, e = point(g, step)
+            u, e, left_out = point(g, step)
             us.append(u)
             est.append(e)
+            omitted += left_out
     else:
         results = map_blocks(point, graphs, workers=workers, executor=executor, scheduler=scheduler)
-        for i, (u, e) in enumerate(results):
+        for i, (u, e, left_out) in enumerate(results):
             us.append(u)
             est.append(e)
+            omitted += left_out
             if progress is not None:
                 progress((i + 1) * trials, total)
-    return SweepResult(names, grid, np.array(us), np.array(est), output, int(trials), seed_i)
+    return SweepResult(
+        names, grid, np.array(us), np.array(est), output, int(trials), seed_i, omitted
+    )

@@ -510,7 +510,7 @@ def _index(symbol: str) -> int:
 def evaluate_uncertainty(
     test: PositioningTest,
     model: UncertaintyModel,
-    trials: int = 200_000,
+    trials: int | None = 200_000,
     seed: int | None = None,
     *,
     p: float = 0.95,
@@ -524,8 +524,8 @@ def evaluate_uncertainty(
     ----------
     test : PositioningTest
     model : UncertaintyModel
-    trials : int, default 200 000
-        Monte Carlo trials ``M``.
+    trials : int or None, default 200 000
+        Monte Carlo trials ``M``; None with ``adaptive=True`` in ``parallel``.
     seed : int, optional
         The seed (None: fresh entropy, recorded in the result).
     p : float, default 0.95, keyword-only
@@ -536,7 +536,8 @@ def evaluate_uncertainty(
         Trials per evaluation (memory: about ``2 m n`` × 8 bytes × a few arrays per
         trial); it does not change a number.
     **parallel
-        ``workers``, ``executor``, ``scheduler`` of :func:`mtmc.uncertainty.monte_carlo`.
+        ``workers``, ``executor``, ``scheduler`` of :func:`mtmc.uncertainty.monte_carlo`,
+        and its ``nan_policy``, ``adaptive``, ``ndig`` and ``kind`` (JCGM 101 §7.9).
 
     Returns
     -------

@@ -12,12 +12,15 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Protocol, overload
+from typing import TYPE_CHECKING, Any, Protocol, TypeAlias, overload
 
 from mtmc.errors import InputError, MtmcError
 from mtmc.io import write_text_atomic
+
+if TYPE_CHECKING:
+    from mtmc.uncertainty.results import MonteCarloResult, MonteCarloResults
 
 __all__ = ["fmt", "html", "render", "render_index", "render_report"]
 
@@ -87,6 +90,7 @@ def _env() -> Any:
     from mtmc.report import plots  # NumPy, SciPy, Matplotlib: imported when a report is made
 
     env.globals["display_unit"] = plots.display_unit
+    env.globals["vector_magnification"] = plots.vector_magnification
     env.globals["repr"] = repr
     return env
 
@@ -134,10 +138,17 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
 
     figs: dict[str, str] = {}
     for q in result.get("quantities", []):
+        if not q["monte_carlo"]["u"]:  # u = 0 (or not finite): one value, nothing to draw
+            continue
         figs[f"histogram:{q['name']}"] = plots.histogram_svg(q)
         figs[f"convergence:{q['name']}"] = plots.convergence_svg(q)
     for r in result.get("regions", []):
         figs[f"region:{r['name']}"] = plots.region_svg(r)
+    joint = result.get("joint")
+    if joint and joint.get("region") and len(joint["outputs"]) == 2:
+        from mtmc.report.joint import joint_svg
+
+        figs["joint"] = joint_svg(joint)
     graph = result.get("graph")
     if graph:
         figs["graph"] = plots.graph_svg(graph["toml"], graph.get("file"))
@@ -203,28 +214,38 @@ class _HasToDict(Protocol):
     def to_dict(self) -> Mapping[str, Any]: ...
 
 
+#: Makes a result without ``to_dict()`` (that of :func:`mtmc.monte_carlo`) one with it.
+#: The package :mod:`mtmc` sets it to :func:`mtmc.study.load.study_result`: the study
+#: layer makes study results, and the report, below it, does not import it
+#: (docs/architecture.md).
+result_adapter: Callable[[Any], _HasToDict] | None = None
+
+#: What :func:`render_report` draws besides a result folder.
+_Source: TypeAlias = "Mapping[str, Any] | _HasToDict | MonteCarloResult | MonteCarloResults"
+
+
 @overload
 def render_report(source: str | Path, path: None = None) -> Path: ...
 
 
 @overload
-def render_report(source: Mapping[str, Any] | _HasToDict, path: None = None) -> str: ...
+def render_report(source: _Source, path: None = None) -> str: ...
 
 
 @overload
-def render_report(source: Mapping[str, Any] | _HasToDict, path: str | Path) -> Path: ...
+def render_report(source: _Source, path: str | Path) -> Path: ...
 
 
-def render_report(
-    source: str | Path | Mapping[str, Any] | _HasToDict, path: str | Path | None = None
-) -> Path | str:
+def render_report(source: str | Path | _Source, path: str | Path | None = None) -> Path | str:
     """Render a result: a result folder, or a result object (anything with ``to_dict()``).
 
     Parameters
     ----------
     source : path-like, mapping or result
         A result folder (its ``report.html`` is written), the content of a
-        ``result.json``, or a result whose ``to_dict()`` gives it.
+        ``result.json``, a result whose ``to_dict()`` gives it, or the result of
+        :func:`mtmc.monte_carlo` (made a study result of kind ``monte_carlo`` by
+        :func:`mtmc.study.load.study_result`).
     path : path-like, optional
         Where to write the page for a mapping or result (default: return the text).
 
@@ -235,7 +256,17 @@ def render_report(
     """
     if isinstance(source, str | Path):
         return render(source)
-    doc = source if isinstance(source, Mapping) else source.to_dict()
+    if isinstance(source, Mapping):
+        doc: Mapping[str, Any] = source
+    elif hasattr(source, "to_dict"):
+        doc = source.to_dict()
+    elif result_adapter is not None:
+        doc = result_adapter(source).to_dict()
+    else:
+        raise InputError(
+            f"expected a result folder, a result or its result.json, got {type(source).__name__}",
+            field="source",
+        )
     text = html(doc)
     if path is None:
         return text

@@ -2,8 +2,9 @@
 
 Each function takes the JSON-ready dictionaries of a result folder (a quantity, a region,
 a sweep) and returns one ``<svg>`` element as text (Matplotlib, no pyplot, fonts left to
-the browser). Lengths in mm are drawn in µm and angles in rad in µrad, as deviations from
-the estimate.
+the browser). Every value is drawn in the unit its entry states, the unit the study is
+written in and its tables show (``docs/results-format.md``, the unit rule); the
+distributions of a quantity as deviations from its estimate.
 """
 
 from __future__ import annotations
@@ -17,28 +18,43 @@ import numpy as np
 __all__ = [
     "convergence_svg",
     "display_unit",
+    "field_figure",
     "field_svg",
     "graph_svg",
     "histogram_svg",
     "machine_svg",
     "region_svg",
     "sweep_svg",
+    "vector_magnification",
 ]
 
 
 def display_unit(unit: str) -> tuple[float, str]:
-    """The factor and unit a value in ``unit`` is shown in: mm → µm, rad → µrad.
+    """The factor and unit a value in ``unit`` is shown in: the unit itself, factor 1.
+
+    A result holds its numbers in the unit of its study (``um`` written ``µm``), and its
+    plots show them in that unit, as its tables do: a plot and the table of one quantity
+    never differ in unit.
 
     Examples
     --------
-    >>> display_unit("mm"), display_unit("mg")
-    ((1000.0, 'µm'), (1.0, 'mg'))
+    >>> display_unit("mm"), display_unit("µm"), display_unit("um"), display_unit("rad")
+    ((1.0, 'mm'), (1.0, 'µm'), (1.0, 'µm'), (1.0, 'rad'))
     """
-    if unit == "mm":
-        return 1e3, "µm"
-    if unit == "rad":
-        return 1e6, "µrad"
-    return 1.0, unit
+    return 1.0, _SYMBOL.get(unit, unit)
+
+
+#: SI symbols of the units a study file may spell in ASCII.
+_SYMBOL = {"um": "µm", "urad": "µrad"}
+
+#: Units of length per mm: the error vectors of a field are drawn among its points, in mm.
+_PER_MM = {"mm": 1.0, "µm": 1e3, "um": 1e3, "nm": 1e6, "m": 1e-3}
+
+
+def _vectors_mm(f: dict[str, Any]) -> Any:
+    """The vectors of a field of error vectors, ``(n, 3)``, in the mm of its points."""
+    vec = np.asarray(f["values"], dtype=np.float64).reshape(-1, 3)
+    return vec / _PER_MM.get(str(f.get("unit", "mm")), 1.0)
 
 
 def _svg(fig: Any, salt: str) -> str:
@@ -192,22 +208,66 @@ def graph_svg(toml_text: str, name: str | None = None) -> str:
     return re.sub(r"<!--.*?-->", "", text[start:], flags=re.S).strip()
 
 
-def field_svg(f: dict[str, Any]) -> str:
-    """A map (a value per point, as colour) or error vectors (arrows), in xy, xz and 3D.
+def vector_magnification(f: dict[str, Any]) -> float:
+    """The factor the error vectors of a field are drawn magnified by, so that they fit.
 
-    Points in mm; values in mm are shown in µm. Vectors are drawn magnified by the
-    field's ``magnification`` (Wang, Cheung and Kong 2022, Fig. 7).
+    The field's own ``magnification`` when its longest vector then spans between 2 % and
+    30 % of the largest extent of the points; otherwise the 1-2-5 number that makes it
+    about 8 % of that extent (a vector as long as the workspace hides every other, one of
+    a thousandth of it is a dot). Vectors all zero, or points all at one place, keep it.
+
+    Examples
+    --------
+    >>> f = {"points": [[0, 0, 0], [400, 400, 0]], "values": [[0.004, 0, 0], [0, 0, 0.001]],
+    ...      "magnification": 1000.0}
+    >>> vector_magnification(f)
+    5000.0
+    >>> vector_magnification({**f, "magnification": 10000.0})
+    10000.0
+    """
+    pts = np.asarray(f["points"], dtype=np.float64).reshape(-1, 3)
+    vec = _vectors_mm(f)
+    longest = float(np.linalg.norm(vec, axis=1).max(initial=0.0))
+    span = float(np.ptp(pts, axis=0).max()) if pts.size else 0.0
+    given = float(f.get("magnification") or 1.0)
+    if not (longest > 0 and span > 0 and np.isfinite(longest) and np.isfinite(span)):
+        return given
+    if 0.02 <= given * longest / span <= 0.3:
+        return given
+    target = 0.08 * span / longest
+    decade = 10.0 ** np.floor(np.log10(target))
+    step = max(m for m in (1.0, 2.0, 5.0) if m * decade <= target)
+    return float(step * decade)
+
+
+def _limits(a: Any, b: Any, floor: float) -> tuple[float, float]:
+    """Limits holding every value of ``a`` and ``b``, widened by 6 %, at least ``floor`` wide."""
+    lo = float(min(np.min(a), np.min(b)))
+    hi = float(max(np.max(a), np.max(b)))
+    pad = max(0.06 * (hi - lo), 0.5 * max(floor - (hi - lo), 0.0))
+    return lo - pad, hi + pad
+
+
+def field_figure(f: dict[str, Any]) -> Any:
+    """The Matplotlib figure of :func:`field_svg`: views xy and xz, and 3D.
+
+    Vectors are drawn magnified by :func:`vector_magnification`, stated over each view,
+    and the limits of every view hold the points and the tips of their vectors.
     """
     pts = np.asarray(f["points"], dtype=np.float64).reshape(-1, 3)
     vals = np.asarray(f["values"], dtype=np.float64)
     scale, label = display_unit(f["unit"])
     names = f["axes"]
-    fig = _figure(10.5, 3.6, left=0.07, right=0.95, bottom=0.15, top=0.9, wspace=0.4)
+    fig = _figure(10.5, 3.6, left=0.07, right=0.95, bottom=0.15, top=0.88, wspace=0.4)
     a1 = fig.add_subplot(1, 3, 1)
     a2 = fig.add_subplot(1, 3, 2)
     a3: Any = fig.add_subplot(1, 3, 3, projection="3d")
+    span = float(np.ptp(pts, axis=0).max()) if pts.size else 0.0
+    floor = 0.1 * span if span > 0 else 1.0  # a flat axis (every z = 0) still gets a range
     if f["kind"] == "vectors":
-        v = vals.reshape(-1, 3) * f["magnification"]
+        mag = vector_magnification(f)
+        v = _vectors_mm(f) * mag
+        tips = pts + v
         for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
             ax.quiver(
                 pts[:, i],
@@ -221,8 +281,14 @@ def field_svg(f: dict[str, Any]) -> str:
                 width=0.004,
             )
             ax.plot(pts[:, i], pts[:, j], "k.", ms=3)
+            ax.set_xlim(*_limits(pts[:, i], tips[:, i], floor))
+            ax.set_ylim(*_limits(pts[:, j], tips[:, j], floor))
         a3.quiver(pts[:, 0], pts[:, 1], pts[:, 2], v[:, 0], v[:, 1], v[:, 2], color="C3")
-        fig.suptitle(f"arrows magnified {f['magnification']:g} times", fontsize=8)
+        a3.set_xlim(*_limits(pts[:, 0], tips[:, 0], floor))
+        a3.set_ylim(*_limits(pts[:, 1], tips[:, 1], floor))
+        a3.set_zlim(*_limits(pts[:, 2], tips[:, 2], floor))
+        for ax in (a1, a2, a3):
+            ax.set_title(f"vectors × {mag:g}", fontsize=8)
     else:
         c = vals.reshape(-1) * scale
         for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
@@ -234,11 +300,23 @@ def field_svg(f: dict[str, Any]) -> str:
     for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
         ax.set_xlabel(f"{names[i]} / mm")
         ax.set_ylabel(f"{names[j]} / mm")
-        ax.set_aspect("equal", adjustable="datalim")
+        if f["kind"] != "vectors":
+            ax.set_aspect("equal", adjustable="datalim")
     a3.set_xlabel(f"{names[0]} / mm", fontsize=7)
     a3.set_ylabel(f"{names[1]} / mm", fontsize=7)
     a3.set_zlabel(f"{names[2]} / mm", fontsize=7)
-    return _svg(fig, f"field:{f['name']}")
+    return fig
+
+
+def field_svg(f: dict[str, Any]) -> str:
+    """A map (a value per point, as colour) or error vectors (arrows), in xy, xz and 3D.
+
+    Points in mm; values in their own unit, as the field's table gives them. Vectors are
+    drawn in the points' mm, magnified by
+    :func:`vector_magnification` (Wang, Cheung and Kong 2022, Fig. 7), the factor stated
+    over each view, within the limits of every view.
+    """
+    return _svg(field_figure(f), f"field:{f['name']}")
 
 
 def machine_svg(name: str) -> str:
@@ -262,15 +340,16 @@ def sweep_svg(sw: dict[str, Any]) -> str:
     """The swept standard uncertainty over a two-parameter grid with the surrogate surface.
 
     Monte Carlo values as dots, the fitted surrogate ``u = √(c0 + Σ cᵢσᵢ²)`` as a
-    surface (Stryczek Fig. 14–15), both in µm over σ in µm; with one varied parameter,
-    a curve.
+    surface (Stryczek Fig. 14–15), in the sweep's ``unit`` over the varied parameters in
+    its ``grid_unit``, as its table gives them; with one varied parameter, a curve.
     """
-    grid = np.asarray(sw["grid"]) * 1e3
+    grid = np.asarray(sw["grid"])
+    g_unit = display_unit(str(sw.get("grid_unit", "mm")))[1]
     scale, label = display_unit(sw["unit"])
     u = np.asarray(sw["u"]) * scale
     names = sw["names"]
     surface = sw["surface"]  # the surrogate on a fine grid, as the study computed it
-    axes = [np.asarray(a) * 1e3 for a in surface["axes"]]
+    axes = [np.asarray(a) for a in surface["axes"]]
     u_fit = np.asarray(surface["u"]) * scale
 
     if grid.shape[1] == 2:
@@ -279,8 +358,8 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         aa, bb = np.meshgrid(axes[0], axes[1], indexing="ij")
         ax.plot_surface(aa, bb, u_fit, cmap="viridis", alpha=0.55, linewidth=0)
         ax.scatter(grid[:, 0], grid[:, 1], u, color="C3", s=12, label="Monte Carlo")
-        ax.set_xlabel(f"{names[0]} / µm", fontsize=8)
-        ax.set_ylabel(f"{names[1]} / µm", fontsize=8)
+        ax.set_xlabel(f"{names[0]} / {g_unit}", fontsize=8)
+        ax.set_ylabel(f"{names[1]} / {g_unit}", fontsize=8)
         ax.set_zlabel(f"u({sw['output']}) / {label}", fontsize=8)
         ax.legend(fontsize=7, loc="upper left")
     else:
@@ -289,7 +368,7 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         x = grid[:, 0]
         ax.plot(axes[0], u_fit, "k-", lw=1.0, label="surrogate")
         ax.plot(x, u, "C3o", ms=4, label="Monte Carlo")
-        ax.set_xlabel(f"{names[0]} / µm")
+        ax.set_xlabel(f"{names[0]} / {g_unit}")
         ax.set_ylabel(f"u({sw['output']}) / {label}")
         ax.legend(fontsize=7)
     return _svg(fig, "sweep")

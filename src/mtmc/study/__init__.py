@@ -16,6 +16,7 @@ from mtmc.study import positioning as _positioning  # noqa: F401  (registers pos
 from mtmc.study import propagate as _propagate  # noqa: F401  (registers propagate)
 from mtmc.study import verification as _verification  # noqa: F401  (registers verification)
 from mtmc.study.base import Quantity, Region, Study, StudyResult, Table
+from mtmc.study.load import load_result, study_result
 from mtmc.study.spec import (
     RunSettings,
     StudyKind,
@@ -35,9 +36,11 @@ __all__ = [
     "StudyResult",
     "Table",
     "load_study",
+    "load_result",
     "loads_study",
     "provenance",
     "register_kind",
     "study_kinds",
+    "study_result",
     "write_result",
 ]

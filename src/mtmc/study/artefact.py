@@ -18,13 +18,16 @@ import numpy as np
 
 from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Quantity, Study, StudyResult, Table, quantity
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.spec import RunSettings, register_kind
+from mtmc.uncertainty.montecarlo import adaptive_block_size
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = ["ArtefactKindStudy"]
 
-#: mm per µm: the artefact results are in µm.
-_UM = 1e-3
+#: µm per mm: the artefact study is written in µm and its results are given in µm, each
+#: value of the code's mm times this exact factor (docs/results-format.md, the unit rule).
+_UM = 1e3
 
 
 @dataclass(frozen=True)
@@ -38,6 +41,7 @@ class ArtefactKindStudy(Study):
     """
 
     kind = "artefact"
+    run_options = frozenset({ADAPTIVE, NAN_POLICY})
     study: Any
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
@@ -45,11 +49,7 @@ class ArtefactKindStudy(Study):
         from mtmc.artefact.study import simulate_artefact
 
         res = simulate_artefact(
-            self.study,
-            trials=settings.trials,
-            seed=settings.seed,
-            progress=progress,
-            **settings.parallel,
+            self.study, seed=settings.seed, progress=progress, **settings.engine
         )
         j = res.to_json()
         rows = []
@@ -109,20 +109,93 @@ class ArtefactKindStudy(Study):
             name="volumetric",
             title="Volumetric errors at the balls, pose by pose (Fig. 7)",
             points=pos.reshape(-1, 3),
-            values=np.asarray(vec, dtype=np.float64).reshape(-1, 3),
-            unit="mm",
+            values=_UM * np.asarray(vec, dtype=np.float64).reshape(-1, 3),
+            unit="µm",
             labels=labels,
             axes=tuple(self.study.setup.linear)[:3],
             magnification=10_000.0,
         )
         extra = {"artefact": {"volumetric_mean_um": j["volumetric_mean_um"], "units": "um"}}
+        # the engine keeps the finite trials only: the others were left out
+        omitted = res.trials - len(res.samples["setup"])
         return self._result(
             settings,
+            run=run_record(settings, res.trials, omitted, blocks=_blocks(res.trials, settings)),
             quantities=_quantities(res, settings),
             tables=tables,
             fields=(field,),
+            inputs=_inputs(self.study),
             extra=extra,
         )
+
+
+def _inputs(study: Any) -> tuple[dict[str, Any], ...]:
+    """The uncertain inputs the study file fixes, as ``inputs`` of ``result.json``, in µm.
+
+    The probing repeatability along each linear axis at every probed point; where the
+    study asks for them, the CMM covariance of the calibrated centres (Table 1: ``a`` and
+    the scale ``L/D``; ``u`` left out, it differs from one coordinate to the next, the
+    range is in the text), the machine's repeatability per probing and the setup errors
+    about their values.
+    """
+    setup = study.setup
+    art = setup.artefact
+    axes = tuple(setup.linear)[:3]
+    P, N, R = len(study.poses), int(art.n_balls), int(study.repetitions)
+    probed = R * P * N
+    points = probed * len(setup.offsets)
+    out: list[dict[str, Any]] = [
+        {
+            "name": f"probing repeatability, {a} (each of the {points} points)",
+            "distribution": f"normal(0, {_UM * s:g})",
+            "estimate": 0.0,
+            "u": _UM * float(s),
+            "unit": "µm",
+        }
+        for a, s in zip(axes, study.repeatability, strict=True)
+    ]
+    if study.cmm:
+        sd = _UM * np.sqrt(np.diag(art.centre_covariance()))
+        out.append(
+            {
+                "name": f"calibrated centres ({3 * N} coordinates)",
+                "distribution": f"normal(0, V_CMM), u(L) = √({art.cmm_a_um:g}² + "
+                f"(L/{art.cmm_divisor_mm:g})²) µm for a distance L in mm; u of a coordinate "
+                f"from {sd.min():.3g} to {sd.max():.3g} µm",
+                "estimate": 0.0,
+                "u": None,
+                "unit": "µm",
+            }
+        )
+    if study.machine_repeatability is not None:
+        out += [
+            {
+                "name": f"machine repeatability, {a} (each of the {probed} probings)",
+                "distribution": f"normal(0, {_UM * s:g})",
+                "estimate": 0.0,
+                "u": _UM * float(s),
+                "unit": "µm",
+            }
+            for a, s in zip(axes, study.machine_repeatability, strict=True)
+        ]
+    if study.setup_u is not None:
+        values = np.zeros(3 + 3 * N) if study.setup_errors is None else study.setup_errors
+        out += [
+            {
+                "name": f"setup error {name}",
+                "distribution": f"normal({_UM * v:g}, {_UM * study.setup_u:g})",
+                "estimate": _UM * float(v),
+                "u": _UM * float(study.setup_u),
+                "unit": "µm",
+            }
+            for name, v in zip(study.names, values, strict=True)
+        ]
+    return tuple(out)
+
+
+def _blocks(trials: int, settings: RunSettings) -> int | None:
+    """The blocks of an adaptive run of ``trials`` (JCGM 101 §7.9.4 a)), else None."""
+    return trials // adaptive_block_size(settings.p) if settings.adaptive else None
 
 
 def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
@@ -143,7 +216,7 @@ def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
     for name, key, i in items:
         mc = MonteCarloResult.from_samples(res.samples[key][:, i], seed=res.seed)
         g = res.gum[key].component(i) if key in res.gum else None
-        out.append(quantity(name, "mm", mc, g, settings))
+        out.append(quantity(name, "mm", mc, g, settings).in_unit("µm", _UM))
     return tuple(out)
 
 

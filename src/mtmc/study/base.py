@@ -28,7 +28,7 @@ from mtmc.frozen import frozen_floats
 from mtmc.io import to_jsonable
 from mtmc.study.spec import RunSettings
 from mtmc.uncertainty.gum import GumResult, endpoint_std_error, validate
-from mtmc.uncertainty.results import MonteCarloResult, convergence
+from mtmc.uncertainty.results import MonteCarloResult
 from mtmc.uncertainty.sampling import resolve_seed
 from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
 
@@ -53,6 +53,8 @@ HISTOGRAM_BINS = 60
 CONVERGENCE_POINTS = 60
 #: Trials drawn as dots in the plots of a coverage region.
 SCATTER_POINTS = 400
+#: The JCGM 101 §8 verdict of an output that both methods give as one value (u = 0).
+NOT_APPLICABLE = "not applicable"
 
 ProgressFn = Callable[[int, int | None], None]
 
@@ -117,14 +119,16 @@ class Quantity:
         ``d_low``, ``d_high``, ``delta``, ``passed``, ``kind``, ``ndig`` (JCGM 101 §8.2),
         ``endpoint_std_error`` (:func:`endpoint_std_error`) and ``verdict``: "validated",
         "not validated", or "not validated within Monte Carlo noise" (a ``d`` above δ by
-        less than three endpoint standard errors).
+        less than three endpoint standard errors); "not applicable" (and ``passed``
+        None) where both methods give ``u = 0``: a constant output, for which δ is 0.
     budget : tuple of dict
         Per input: ``name``, ``components`` (``k``), ``estimate``, ``u``,
         ``sensitivity`` (None for a ``k``-variate input, ``k > 1``), ``contribution``
         (``|c| u(x)``, for a ``k``-variate input ``sqrt(c V cᵀ)``), ``share`` (the shares
-        sum to 1 for uncorrelated inputs).
+        sum to 1 for uncorrelated inputs), ``dof`` (ν of ``u(x)``, JCGM 100 G.4.1;
+        ``inf`` where ``u(x)`` is exactly known).
     histogram : dict
-        ``edges`` and ``density`` of the Monte Carlo values.
+        ``edges`` and ``density`` of the Monte Carlo values (empty where ``u = 0``).
     convergence : dict
         ``m``, ``estimate``, ``u`` from the first ``m`` trials; ``last_half``: how far
         the estimate and ``u`` move (max - min) over ``m >= M/2``; ``delta``: the
@@ -133,6 +137,10 @@ class Quantity:
     reported : dict
         ``estimate`` and ``U`` as text, rounded as JCGM 100 §7.2.6 says (two significant
         digits on ``U``, the estimate to the same decimal place).
+    conformity : dict or None
+        Where the study gives tolerance limits: the JCGM 106 decision on the Monte Carlo
+        PDF (:meth:`mtmc.uncertainty.conformity.Conformity.to_dict`) with ``gum_p_c``,
+        the conformance probability of the GUM's PDF beside it.
     """
 
     name: str
@@ -144,6 +152,102 @@ class Quantity:
     histogram: dict[str, Any] = field(repr=False)
     convergence: dict[str, Any] = field(repr=False)
     reported: dict[str, str]
+    conformity: dict[str, Any] | None = None
+
+    def in_unit(self, unit: str, factor: float) -> Quantity:
+        """The same statement in another unit: every value of the quantity times ``factor``.
+
+        A study whose file is written in µm (an artefact or a verification study, whose
+        models compute in mm) gives its quantities in µm with ``in_unit("µm", 1e3)``
+        (``docs/results-format.md``, the unit rule). Estimates, ``u``, ``U``, the interval
+        ends, the GUM's values, the §8 differences ``d``, the budget's sensitivities and
+        contributions and the convergence curves are multiplied by ``factor``, the
+        histogram's density divided by it; ``k``, ``p``, ν, the shares and the verdict stay,
+        ``reported`` is rounded again (JCGM 100 §7.2.6) and the numerical tolerances δ are
+        those of the new ``u`` (JCGM 101 §7.9.2).
+
+        Parameters
+        ----------
+        unit : str
+            The new unit.
+        factor : float
+            Units of ``unit`` per unit of :attr:`unit` (1000 from mm to µm).
+
+        Returns
+        -------
+        Quantity
+
+        Raises
+        ------
+        ValueError
+            If ``factor`` is not a positive finite number, or the quantity has a
+            conformity decision (its limits are in the study's unit already).
+        """
+        if not (math.isfinite(factor) and factor > 0):
+            raise ValueError(f"a unit factor must be positive and finite, got {factor!r}")
+        if self.conformity is not None:
+            raise ValueError("a quantity with a conformity decision keeps its study's unit")
+
+        def times(x: Any) -> Any:
+            if x is None:
+                return None
+            if isinstance(x, list | tuple):
+                return [times(v) for v in x]
+            if isinstance(x, np.ndarray):
+                return x * factor
+            return float(x) * factor
+
+        mc = {**self.mc, **{k: times(self.mc[k]) for k in ("estimate", "u", "U")}}
+        mc.update({k: times(self.mc[k]) for k in ("shortest", "symmetric")})
+        gum = None
+        if self.gum is not None:
+            gum = {**self.gum, **{k: times(self.gum[k]) for k in ("estimate", "u", "U")}}
+            gum["interval"] = times(self.gum["interval"])
+        validation = None
+        if self.validation is not None:
+            v = self.validation
+            validation = {
+                **v,
+                "d_low": times(v["d_low"]),
+                "d_high": times(v["d_high"]),
+                "delta": times(v["delta"]),
+                "endpoint_std_error": times(v["endpoint_std_error"]),
+            }
+        budget = tuple(
+            {**b, "sensitivity": times(b["sensitivity"]), "contribution": times(b["contribution"])}
+            for b in self.budget
+        )
+        hist = self.histogram
+        histogram = {
+            "edges": np.asarray(hist["edges"], dtype=np.float64) * factor,
+            "density": np.asarray(hist["density"], dtype=np.float64) / factor,
+        }
+        conv = self.convergence
+        ndig = int(conv.get("ndig", 2))
+        u = float(mc["u"])
+        convergence = {
+            **conv,
+            "estimate": np.asarray(conv["estimate"], dtype=np.float64) * factor,
+            "u": np.asarray(conv["u"], dtype=np.float64) * factor,
+            "last_half": {k: times(v) for k, v in conv["last_half"].items()},
+            "delta": numerical_tolerance(u, ndig) if 0 < u < math.inf else None,
+        }
+        big_u = float(mc["U"])
+        if big_u > 0:
+            y_txt, u_txt = round_to_uncertainty(float(mc["estimate"]), big_u, ndig)
+        else:
+            y_txt, u_txt = f"{float(mc['estimate']):.6g}", "0"
+        return Quantity(
+            name=self.name,
+            unit=unit,
+            mc=mc,
+            gum=gum,
+            validation=validation,
+            budget=budget,
+            histogram=histogram,
+            convergence=convergence,
+            reported={"estimate": y_txt, "U": u_txt},
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (the entry of ``quantities`` in ``result.json``)."""
@@ -158,6 +262,7 @@ class Quantity:
                 "reported": self.reported,
                 "histogram": self.histogram,
                 "convergence": self.convergence,
+                **({} if self.conformity is None else {"conformity": self.conformity}),
             }
         )
 
@@ -203,6 +308,7 @@ def quantity(
         "shortest": [lo_s, hi_s],
         "symmetric": [lo_y, hi_y],
         "trials": mc.trials,
+        "omitted": mc.omitted,
     }
     gum_d = val_d = None
     budget: list[dict[str, Any]] = []
@@ -221,12 +327,15 @@ def quantity(
         }
         v = validate(gum_result, mc, p=p, ndig=settings.ndig, kind=settings.interval)  # type: ignore[arg-type]
         noise = endpoint_std_error(u, mc.m, p)
-        verdict = v.verdict(noise)
+        # both methods give one value and no interval: δ (JCGM 101 §7.9.2) is 0 and the
+        # JCGM 101 §8 comparison has nothing to compare
+        constant = not u > 0 and not gu > 0
+        verdict = NOT_APPLICABLE if constant else v.verdict(noise)
         val_d = {
             "d_low": v.d_low,
             "d_high": v.d_high,
             "delta": v.delta,
-            "passed": v.passed,
+            "passed": None if constant else v.passed,
             "kind": v.kind,
             "ndig": v.ndig,
             "endpoint_std_error": noise,
@@ -245,10 +354,11 @@ def quantity(
                     "sensitivity": float(e.sensitivity[0, 0]) if k == 1 else None,
                     "contribution": float(e.contribution[0]),
                     "share": float(e.share[0]),
+                    "dof": float(e.dof),  # ν of u(x), JCGM 100 G.4.1; null in JSON for ∞
                 }
             )
-    hist = mc.histogram(bins=HISTOGRAM_BINS)
-    m, est, us = convergence(np.asarray(mc.samples), CONVERGENCE_POINTS)
+    hist = mc.histogram(bins=HISTOGRAM_BINS) if u > 0 else None  # no histogram of one value
+    m, est, us = mc.convergence(CONVERGENCE_POINTS)
     late = m >= m[-1] / 2  # the curves over the last half of the trials
     if big_u > 0:
         y_txt, u_txt = round_to_uncertainty(mc.estimate, big_u, settings.ndig)
@@ -261,7 +371,9 @@ def quantity(
         gum=gum_d,
         validation=val_d,
         budget=tuple(budget),
-        histogram={"edges": hist.edges, "density": hist.density},
+        histogram={"edges": [], "density": []}
+        if hist is None
+        else {"edges": hist.edges, "density": hist.density},
         convergence={
             "m": m,
             "estimate": est,
@@ -376,7 +488,7 @@ class PointField:
     values : ndarray, shape (n,) or (n, 3)
         What, in ``unit``.
     unit : str
-        Unit of the values (``mm``: shown in µm).
+        Unit of the values, the study's (``mm``, ``µm``), in which the report shows them.
     labels : tuple of str
         A group label per point (e.g. the pose), or empty.
     axes : tuple of str
@@ -546,6 +658,7 @@ class StudyResult:
                 b["sensitivity"],
                 b["contribution"],
                 b["share"],
+                b.get("dof"),
             )
             for q in self.quantities
             for b in q.budget
@@ -563,6 +676,7 @@ class StudyResult:
                     "sensitivity",
                     "contribution",
                     "share",
+                    "dof",
                 ),
                 tuple(budget_rows),
             ).to_csv()
@@ -586,6 +700,11 @@ class Study:
     """
 
     kind: ClassVar[str] = ""
+    #: The options of :mod:`mtmc.study.options` the kind offers (``"adaptive"``,
+    #: ``"nan_policy"``); a study asking for another is refused, naming the key.
+    run_options: ClassVar[frozenset[str]] = frozenset()
+    #: Why the kind has no adaptive run, where it has none (said when one is asked for).
+    no_adaptive: ClassVar[str] = ""
     title: str
     source: Source
     settings: RunSettings
@@ -600,13 +719,16 @@ class Study:
         workers: int = 1,
         executor: str = "thread",
         scheduler: Any = None,
+        adaptive: bool | None = None,
+        nan_policy: str | None = None,
     ) -> StudyResult:
         """Run the study.
 
         Parameters
         ----------
         trials : int, optional
-            Overrides ``[run] trials``.
+            Overrides ``[run] trials`` (and an adaptive run of the file: the run then has
+            this fixed number of trials).
         seed : int, optional
             Overrides ``[run] seed``; with neither, fresh entropy is drawn and recorded.
         samples : bool, optional
@@ -618,12 +740,35 @@ class Study:
             ``workers`` threads, processes or Dask workers, or the Dask cluster of
             ``scheduler`` (an address or a ``distributed.Client``). The numbers do not
             depend on them.
+        adaptive : bool, optional
+            Overrides ``[run] trials = "adaptive"``: choose the number of trials by the
+            adaptive procedure of JCGM 101 §7.9 (not with ``trials``).
+        nan_policy : {"raise", "omit"}, optional
+            Overrides ``[run] nan_policy``: stop at a trial whose model value is NaN or
+            infinite, or leave such trials out (counted in the result's ``run``).
 
         Returns
         -------
         StudyResult
+
+        Raises
+        ------
+        InputError
+            Fewer than 2 trials; ``adaptive`` with ``trials``; an option the kind does
+            not offer (:func:`mtmc.study.options.unsupported_option`), naming it.
         """
+        from mtmc.errors import InputError
+        from mtmc.study.options import unsupported_option
+
         s = self.settings
+        if adaptive and trials is not None:
+            raise InputError(
+                f"trials = {trials} was given with adaptive, which chooses the number of "
+                "trials itself (JCGM 101 §7.9); give one of them",
+                field="adaptive",
+            )
+        if nan_policy is not None and nan_policy not in ("raise", "omit"):
+            raise InputError(f"expected 'raise' or 'omit', got {nan_policy!r}", field="nan_policy")
         t = s.trials if trials is None else int(trials)
         if t < 2:
             from mtmc.errors import InputError
@@ -640,22 +785,35 @@ class Study:
             workers=workers,
             executor=executor,
             scheduler=scheduler,
+            adaptive=(s.adaptive and trials is None) if adaptive is None else bool(adaptive),
+            nan_policy=s.nan_policy
+            if nan_policy is None
+            else ("omit" if nan_policy == "omit" else "raise"),
         )
+        refused = unsupported_option(self, settings)
+        if refused is not None:
+            key, message = refused
+            raise InputError(message, field="adaptive" if key == "trials" else key)
         return self.execute(settings, progress)
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Run with resolved settings (the seed an int); each kind implements it."""
         raise NotImplementedError
 
-    def _result(self, settings: RunSettings, **kw: Any) -> StudyResult:
+    def _result(
+        self, settings: RunSettings, *, run: Mapping[str, Any] | None = None, **kw: Any
+    ) -> StudyResult:
+        """The result; ``run`` (:func:`mtmc.study.options.run_record`) gives its trials."""
         assert settings.seed is not None
+        if run is not None:
+            kw["extra"] = {**kw.get("extra", {}), "run": dict(run)}
         return StudyResult(
             kind=self.kind,
             title=self.title,
             study_file=self.source.file,
             study_sha256=self.source.sha256,
             seed=settings.seed,
-            trials=settings.trials,
+            trials=settings.trials if run is None else int(run["trials"]),
             p=settings.p,
             **kw,
         )

@@ -15,7 +15,7 @@ without the constant ``c0``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
 
@@ -30,7 +30,7 @@ from mtmc.graph.model import Graph, Plan, check_graph
 from mtmc.graph.places import SCALAR_TYPES
 from mtmc.graph.run import graph_model, random_inputs, run_graph
 from mtmc.graph.sweep import Surrogate, apply_setting, sweep_graph
-from mtmc.graph.units import place_dimension, unit_of
+from mtmc.graph.units import file_unit, place_dimension, unit_of
 from mtmc.graph.values import PARTS
 from mtmc.study.base import (
     ProgressFn,
@@ -42,6 +42,7 @@ from mtmc.study.base import (
     quantity,
     region,
 )
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.results import MonteCarloResult
@@ -85,6 +86,17 @@ def component_names(place: str, type_: str) -> list[tuple[str, str]]:
 
 def _unit(plan: Plan, place: str, part: str) -> str:
     return unit_of(place_dimension(plan, place, part))
+
+
+def _shown(plan: Plan, place: str, part: str) -> tuple[float, str]:
+    """The factor from the library's mm to the graph file's unit, and that unit (µm as µm).
+
+    A study gives its numbers in the unit its graph is written in (``units = "um"``: µm,
+    each value in mm times 1000), as ``mtmc graph run`` prints them
+    (``docs/results-format.md``, the unit rule).
+    """
+    scale, unit = file_unit(plan, place, part)
+    return 1.0 / scale, unit.replace("um", "µm")
 
 
 @dataclass(frozen=True)
@@ -138,6 +150,7 @@ class GraphStudy(Study):
     """
 
     kind = "graph"
+    run_options = frozenset({ADAPTIVE, NAN_POLICY})
     graph: Graph
     graph_text: str
     outputs: tuple[str, ...]
@@ -152,18 +165,19 @@ class GraphStudy(Study):
         n_grid = 0
         if self.sweep is not None:
             n_grid = int(np.prod([len(v) for v in self.sweep.vary.values()]))
-        total = settings.trials + n_grid * (self.sweep.trials if self.sweep else 0)
+        grid_trials = n_grid * (self.sweep.trials if self.sweep else 0)
+        # an adaptive run does not know its number of trials until it stops
+        total = None if settings.adaptive else settings.trials + grid_trials
         # one Monte Carlo of the whole graph for every output (each trial fires every
         # transition once), then the GUM once per output, its vector result cut into the
         # components the report shows
         res = run_graph(
             plan,
-            settings.trials,
-            settings.seed,
+            seed=settings.seed,
             outputs=self.outputs,
             keep=self.outputs,
             progress=_offset(progress, 0, total),
-            **settings.parallel,
+            **settings.engine,
         )
         for out in self.outputs:
             mc = res.places[out].result
@@ -174,17 +188,19 @@ class GraphStudy(Study):
             g = gum(model, inputs, p=settings.p)
             for j, (name, part) in enumerate(component_names(out, plan.types[out])):
                 q_mc = MonteCarloResult(
-                    samples=vals[:, j], trials=res.trials, seed=res.seed, omitted=mc.omitted
+                    samples=vals[:, j], trials=res.trials, seed=res.seed, omitted=res.omitted
                 )
                 g_j = g.component(j) if g.dim else g
-                quantities.append(quantity(name, _unit(plan, out, part), q_mc, g_j, settings))
+                q = quantity(name, _unit(plan, out, part), q_mc, g_j, settings)
+                factor, unit = _shown(plan, out, part)
+                quantities.append(q if factor == 1.0 else q.in_unit(unit, factor))
             regions += self._regions(plan, out, vals, settings.p)
         extra: dict[str, Any] = {
             "graph": {"file": self.graph.file, "title": self.graph.title, "toml": self.graph_text}
         }
         tables: list[Table] = []
         if self.sweep is not None:
-            step = _offset(progress, settings.trials, total)
+            step = _offset(progress, res.trials, res.trials + grid_trials)
             sweep_d, table = self._sweep(settings, step)
             extra["sweep"] = sweep_d
             tables.append(table)
@@ -192,8 +208,12 @@ class GraphStudy(Study):
             {"name": n, "distribution": str(d), "estimate": float(d.mean), "u": float(d.std)}
             for n, d in random_inputs(plan).items()
         )
+        run = run_record(
+            settings, res.trials, res.omitted, blocks=res.blocks, tolerance=res.tolerance
+        )
         return self._result(
             settings,
+            run=run,
             quantities=tuple(quantities),
             regions=tuple(regions),
             tables=tuple(tables),
@@ -206,20 +226,22 @@ class GraphStudy(Study):
         type_ = plan.types[out]
         found: list[Region | None] = []
         if type_ in ("point", "vector"):
-            unit = _unit(plan, out, "value")
+            factor, unit = _shown(plan, out, "value")
             for a, b in ((0, 1), (0, 2), (1, 2)):
                 la, lb = "xyz"[a], "xyz"[b]
-                found.append(region(f"{out}: {la}, {lb}", (la, lb), unit, vals[:, [a, b]], p))
+                ab = factor * vals[:, [a, b]]
+                found.append(region(f"{out}: {la}, {lb}", (la, lb), unit, ab, p))
         elif type_ in ("line", "circle"):
             first, second = ("point", "direction") if type_ == "line" else ("centre", "normal")
             d_mean = vals[:, 3:6].mean(axis=0)
             basis = normal_plane_basis(d_mean)
-            loc = vals[:, 0:3] @ basis
+            factor, unit = _shown(plan, out, first)
+            loc = factor * (vals[:, 0:3] @ basis)
             found.append(
                 region(
                     f"{out}: {first} in the plane normal to the axis",
                     ("e1", "e2"),
-                    _unit(plan, out, first),
+                    unit,
                     loc,
                     p,
                 )
@@ -247,34 +269,40 @@ class GraphStudy(Study):
             trials=spec.trials,
             seed=settings.seed,
             progress=progress,
+            nan_policy=settings.nan_policy,
             **settings.parallel,
         )
         fit = sw.fit(intercept=spec.intercept)
         fit0 = sw.fit(intercept=False)
         pred = fit.predict(sw.grid)
         plan = check_graph(self.graph)
-        factor = self.graph.factor
+        # in the graph file's units (the unit rule): the grid as the file gives it, u from
+        # the library's mm times f (1 for a graph in mm, 1000 for one in um), the
+        # surrogate u² = c0 + Σ cᵢ σᵢ² (σ in the grid's unit) with c0 and cᵢ times f²
+        f, unit = _shown(plan, sw.output, "value")
+        grid_unit = "µm" if self.graph.units == "um" else "mm"
         d = {
             "output": sw.output,
-            "unit": _unit(plan, sw.output, "value"),
+            "unit": unit,
             "names": list(sw.names),
-            "grid_unit": "mm" if factor == 1.0 else "mm (converted from the graph's um)",
-            "grid": sw.grid * factor,
-            "u": sw.u,
-            "estimate": sw.estimate,
-            "u_surrogate": pred,
+            "grid_unit": grid_unit,
+            "grid": sw.grid,
+            "u": f * sw.u,
+            "estimate": f * sw.estimate,
+            "u_surrogate": f * pred,
             "trials": sw.trials,
+            "omitted": sw.omitted,
             "seed": sw.seed,
-            "surrogate": _surrogate_dict(fit),
-            "surrogate_no_intercept": _surrogate_dict(fit0),
-            "surface": _surface(fit, sw.grid, factor),
+            "surrogate": _surrogate_dict(_in_unit(fit, f)),
+            "surrogate_no_intercept": _surrogate_dict(_in_unit(fit0, f)),
+            "surface": _surface(fit, sw.grid, f),
         }
         rows = tuple(
             (
-                *(float(x) for x in sw.grid[i] * factor),
-                float(sw.estimate[i]),
-                float(sw.u[i]),
-                float(pred[i]),
+                *(float(x) for x in sw.grid[i]),
+                float(f * sw.estimate[i]),
+                float(f * sw.u[i]),
+                float(f * pred[i]),
                 float(fit.rel_errors[i]),
             )
             for i in range(len(sw.u))
@@ -283,7 +311,7 @@ class GraphStudy(Study):
             "sweep",
             f"u({sw.output}) on the grid, {sw.trials} trials per point, and the surrogate",
             (
-                *(f"{n} / mm" for n in sw.names),
+                *(f"{n} / {grid_unit}" for n in sw.names),
                 *(f"{c} / {d['unit']}" for c in ("estimate", "u", "u_surrogate")),
                 "rel_error",
             ),
@@ -292,12 +320,20 @@ class GraphStudy(Study):
         return d, table
 
 
-def _surface(fit: Surrogate, grid: NDArray[np.float64], factor: float) -> dict[str, Any]:
+def _in_unit(fit: Surrogate, f: float) -> Surrogate:
+    """The surrogate of ``f`` times ``u``: ``c0`` and the ``cᵢ`` times ``f²`` (f = 1: itself)."""
+    if f == 1.0:
+        return fit
+    return replace(fit, c0=fit.c0 * f**2, coefficients=fit.coefficients * f**2)
+
+
+def _surface(fit: Surrogate, grid: NDArray[np.float64], f: float) -> dict[str, Any]:
     """The surrogate on a fine grid over the swept box, for the report to draw.
 
     Two varied parameters: ``axes``, two arrays of 30 values, and ``u``, 30 × 30; otherwise
     a curve along the first parameter (the others at the first grid point): ``axes``, one
-    array of 200 values, and ``u`` (200,). Parameters in mm, like ``grid``.
+    array of 200 values, and ``u`` (200,). Parameters in the unit of ``grid``, ``u`` times
+    ``f`` (the factor from mm to the unit of the sweep's ``u``).
     """
     if grid.shape[1] == 2:
         axes = [np.linspace(grid[:, i].min(), grid[:, i].max(), 30) for i in range(2)]
@@ -308,7 +344,7 @@ def _surface(fit: Surrogate, grid: NDArray[np.float64], factor: float) -> dict[s
         full = np.repeat(grid[:1], 200, axis=0)
         full[:, 0] = axes[0]
         u = fit.predict(full)
-    return {"axes": [a * factor for a in axes], "u": u}
+    return {"axes": axes, "u": f * u}
 
 
 @dataclass(frozen=True)
@@ -316,14 +352,19 @@ class SweepStudy(GraphStudy):
     """A sweep of a graph without a full Monte Carlo run of its places (kind ``sweep``)."""
 
     kind = "sweep"
+    run_options = frozenset({NAN_POLICY})
+    no_adaptive = (
+        "its uncertainties are compared over a grid of settings, each run with the same "
+        "number of trials ([sweep] trials)"
+    )
 
 
-def _offset(progress: ProgressFn | None, before: int, total: int) -> ProgressFn | None:
+def _offset(progress: ProgressFn | None, before: int, total: int | None) -> ProgressFn | None:
     if progress is None:
         return None
 
-    def step(done: int, _total: int | None) -> None:
-        progress(before + done, total)
+    def step(done: int, own: int | None) -> None:
+        progress(before + done, own if total is None else total)
 
     return step
 

@@ -24,6 +24,7 @@ from mtmc.kinematics.library import library_machine, library_names
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import is_rotary
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.propagate import read_inputs
 from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.distributions import Distribution
@@ -110,6 +111,7 @@ class KinematicsStudy(Study):
     """
 
     kind = "kinematics"
+    run_options = frozenset({ADAPTIVE, NAN_POLICY})
     machine: Machine
     machine_name: str
     poses: NDArray[np.float64]
@@ -121,12 +123,7 @@ class KinematicsStudy(Study):
         """Monte Carlo and GUM of the tool positions (module docstring)."""
         model = tool_positions_model(self.machine, self.poses)
         mc = monte_carlo(
-            model,
-            self.errors,
-            trials=settings.trials,
-            seed=settings.seed,
-            progress=progress,
-            **settings.parallel,
+            model, self.errors, seed=settings.seed, progress=progress, **settings.engine
         )
         vals = np.asarray(mc.samples)
         quantities = []
@@ -134,7 +131,9 @@ class KinematicsStudy(Study):
             for j, c in enumerate("xyz"):
                 col = 3 * i + j
                 g = gum(_component(model, col), self.errors, p=settings.p)
-                q_mc = MonteCarloResult(samples=vals[:, col], trials=mc.trials, seed=mc.seed)
+                q_mc = MonteCarloResult(
+                    samples=vals[:, col], trials=mc.trials, seed=mc.seed, omitted=mc.omitted
+                )
                 quantities.append(quantity(f"pose{i + 1}.{c}", "mm", q_mc, g, settings))
         axes = self.machine.axes
         pose_rows = tuple((i + 1, *p) for i, p in enumerate(self.poses_given))
@@ -162,6 +161,9 @@ class KinematicsStudy(Study):
         extra = {"machine": {"name": self.machine_name, "topology": str(self.machine.topology)}}
         return self._result(
             settings,
+            run=run_record(
+                settings, mc.trials, mc.omitted, blocks=mc.blocks, tolerance=mc.tolerance
+            ),
             quantities=tuple(quantities),
             tables=(Table("poses", "Commanded poses", ("pose", *units), pose_rows),),
             fields=(field,),

@@ -26,6 +26,7 @@ import numpy as np
 from mtmc.document import Fields, Source
 from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.spec import RunSettings, register_kind
 
 __all__ = ["PositioningStudy", "positioning_study", "summary", "unit_label"]
@@ -75,6 +76,7 @@ class PositioningStudy(Study):
     """
 
     kind = "positioning"
+    run_options = frozenset({ADAPTIVE, NAN_POLICY})
     test: Any
     model: Any
     axis: str = "X"
@@ -97,14 +99,15 @@ class PositioningStudy(Study):
 
         test = self.test
         unit = unit_label(test.unit)
+        engine = settings.engine
         res = evaluate_uncertainty(
             test,
             self.model,
-            settings.trials,
+            engine.pop("trials"),
             settings.seed,
-            p=settings.p,
+            p=engine.pop("p"),
             progress=progress,
-            **settings.parallel,
+            **engine,
         )
         quantities: list[Quantity] = []
         samples: dict[str, Any] = {}
@@ -113,7 +116,10 @@ class PositioningStudy(Study):
             quantities.append(quantity(sym, unit, mc, res.gum_result(sym), settings))
             if settings.samples:
                 samples[sym] = mc.samples
-        validated = {q.name: bool((q.validation or {}).get("passed", True)) for q in quantities}
+        # a constant parameter (passed None, "not applicable") is no disagreement
+        validated = {
+            q.name: (q.validation or {}).get("passed", True) is not False for q in quantities
+        }
         notes = disagreement_notes(res, validated)
         readings = res.readings
         param_rows = tuple(
@@ -190,8 +196,16 @@ class PositioningStudy(Study):
                 "notes": notes,
             }
         }
+        mc_all = res.mc
         return self._result(
             settings,
+            run=run_record(
+                settings,
+                mc_all.trials,
+                mc_all.omitted,
+                blocks=mc_all.blocks,
+                tolerance=mc_all.tolerance,
+            ),
             quantities=tuple(quantities),
             tables=tuple(tables),
             inputs=tuple(inputs),

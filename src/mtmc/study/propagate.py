@@ -9,12 +9,19 @@ and :func:`mtmc.gum` (JCGM 100) of the same model, compared by :func:`mtmc.valid
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
 from mtmc.document import Fields
 from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import ProgressFn, Study, StudyResult, quantity
+from mtmc.study.conformity import ConformitySpec, assess, read_conformity
+from mtmc.study.correlation import CorrelationSpec, correlation_record, read_correlation
+from mtmc.study.observations import input_record, read_input_table
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.outputs import check_vector_use, load_outputs
+from mtmc.study.sensitivity import SensitivitySettings, read_sensitivity, sensitivity_record
 from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.distributions import Distribution, as_distribution, parse_distribution
 from mtmc.uncertainty.expression import Expression, check_variables, expression
@@ -25,7 +32,12 @@ __all__ = ["PropagateStudy", "read_inputs"]
 
 
 def read_inputs(table: Fields) -> dict[str, Distribution]:
-    """Read an ``[inputs]`` table: ``NAME = "normal(0, 1)"`` or ``NAME = number``.
+    """Read an ``[inputs]`` table: ``NAME = "normal(0, 1)"``, ``NAME = number`` or a table.
+
+    A table gives observations (``{data = [...]}``, ``{data = "FILE.csv", column = "x"}``,
+    with ``pooled_s`` and ``pooled_dof`` where pooled) or a distribution with degrees of
+    freedom (``{dist = "...", dof = 8}`` or ``u_rel_u``):
+    :func:`mtmc.study.observations.read_input_table`.
 
     Parameters
     ----------
@@ -61,6 +73,10 @@ def read_inputs(table: Fields) -> dict[str, Distribution]:
                     line=table.source.line(where),
                     field=".".join(map(str, where)),
                 ) from None
+        elif isinstance(value, dict):
+            sub = table.table(name)
+            assert sub is not None
+            out[name] = read_input_table(sub, name)
         else:
 
             def err(msg: str, _w: tuple[str | int, ...] = where) -> InputError:
@@ -86,39 +102,112 @@ class PropagateStudy(Study):
         Its unit (as text, for the report).
     inputs : dict of str to Distribution
         The input PDFs (JCGM 101 §6).
+    sensitivity : SensitivitySettings or None
+        The ``[sensitivity]`` table: a Monte Carlo budget and Sobol indices beside the
+        GUM's budget (JCGM 101 Annex B; ``docs/sensitivity.md``), or None.
+    conformity : ConformitySpec or None
+        The ``[conformity]`` table: tolerance limits and a decision rule (JCGM 106;
+        ``docs/conformity.md``), or None.
+    correlation : CorrelationSpec or None
+        The ``[correlation]`` table: correlated inputs, joined by a copula in the Monte
+        Carlo, ``r`` in the GUM (JCGM 100 eq. (13); ``docs/correlation.md``), or None.
     """
 
     kind = "propagate"
+    run_options = frozenset({ADAPTIVE, NAN_POLICY})
     model: Expression
     output: str
     unit: str
     inputs: dict[str, Distribution]
+    sensitivity: SensitivitySettings | None = None
+    conformity: ConformitySpec | None = None
+    correlation: CorrelationSpec | None = None
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Monte Carlo and GUM of the model (see the module docstring)."""
         mc = monte_carlo(
             self.model,
             self.inputs,
-            trials=settings.trials,
             seed=settings.seed,
             progress=progress,
-            **settings.parallel,
+            **settings.engine,
+            **({} if self.correlation is None else self.correlation.engine),
         )
-        g = gum(self.model, self.inputs, p=settings.p)
+        corr = None if self.correlation is None else self.correlation.correlation
+        g = gum(self.model, self.inputs, p=settings.p, correlation=corr)
         q = quantity(self.output, self.unit, mc, g, settings)
-        inputs = tuple(
-            {"name": n, "distribution": str(d), "estimate": float(d.mean), "u": float(d.std)}
-            for n, d in self.inputs.items()
-        )
+        if self.conformity is not None:  # the JCGM 106 decision on the Monte Carlo PDF
+            q = dataclasses.replace(q, conformity=assess(self.conformity, mc, g))
+        inputs = tuple(input_record(n, d) for n, d in self.inputs.items())
         extra: dict[str, Any] = {"model": self.model.text}
+        if self.correlation is not None:
+            assert settings.seed is not None
+            extra["correlation"] = correlation_record(
+                self.correlation, self.inputs, seed=settings.seed, trials=mc.trials, gum_result=g
+            )
+        warned = [x for x in inputs if x.get("type_a") and x["type_a"]["warning"]]
+        if warned:  # serially correlated observations (JCGM 100 §4.2.7), on the summary
+            extra["warnings"] = [f"input {x['name']}: {x['type_a']['warning']}" for x in warned]
+        if self.sensitivity is not None:
+            assert settings.seed is not None
+            extra["sensitivity"] = sensitivity_record(
+                self.model,
+                self.inputs,
+                self.sensitivity,
+                seed=settings.seed,
+                output=self.output,
+                unit=self.unit,
+                u_mc=q.mc["u"],
+                gum_result=g,
+                parallel=settings.parallel,
+            )
         samples = {self.output: mc.samples} if settings.samples else {}
-        return self._result(settings, quantities=(q,), inputs=inputs, extra=extra, samples=samples)
+        run = run_record(settings, mc.trials, mc.omitted, blocks=mc.blocks, tolerance=mc.tolerance)
+        return self._result(
+            settings, run=run, quantities=(q,), inputs=inputs, extra=extra, samples=samples
+        )
 
 
 @register_kind("propagate", "an expression of named inputs: Monte Carlo beside the GUM")
-def load_propagate(top: Fields) -> PropagateStudy:
-    """Validate a ``propagate`` study file (see ``docs/study-format.md``)."""
-    top.only(("kind", "title", "model", "output", "unit", "inputs", "run"))
+def load_propagate(top: Fields) -> Study:
+    """Validate a ``propagate`` study file (see ``docs/study-format.md``).
+
+    A file with an ``[outputs]`` table is a study of several outputs
+    (:func:`mtmc.study.outputs.load_outputs`).
+    """
+    top.only(
+        (
+            "kind",
+            "title",
+            "model",
+            "output",
+            "unit",
+            "inputs",
+            "run",
+            "sensitivity",
+            "outputs",
+            "conformity",
+            "correlation",
+        )
+    )
+    if top.has("outputs") and top.has("correlation"):
+        raise top.error(
+            "[correlation] applies to the one output of a study without [outputs]", "correlation"
+        )
+    if top.has("outputs") and top.has("conformity"):
+        raise top.error(
+            "[conformity] applies to the one output of a study without [outputs]", "conformity"
+        )
+    if top.has("sensitivity") and (top.has("outputs") or top.has("correlation")):
+        raise top.error(
+            "[sensitivity] applies to the one output of a study without [outputs], and its "
+            "one-at-a-time budget and Sobol indices assume independent inputs (no [correlation])",
+            "sensitivity",
+        )
+    if top.has("outputs"):
+        outputs_inputs = top.table("inputs")
+        assert outputs_inputs is not None
+        return load_outputs(top, outputs_inputs, read_inputs(outputs_inputs))
     text = top.text("model")
     try:
         model = expression(text)
@@ -136,6 +225,7 @@ def load_propagate(top: Fields) -> PropagateStudy:
                 "model",
             ) from None
         raise inputs_t.error(exc.message, str(exc.field)) from None
+    check_vector_use(model, inputs, lambda msg: top.error(msg, "model"))
     return PropagateStudy(
         title=top.text("title", "Propagation of distributions"),
         source=top.source,
@@ -144,4 +234,7 @@ def load_propagate(top: Fields) -> PropagateStudy:
         output=top.text("output", "y"),
         unit=top.text("unit", "1"),
         inputs={n: inputs[n] for n in model.names},
+        sensitivity=read_sensitivity(top),
+        conformity=read_conformity(top),
+        correlation=read_correlation(top, inputs),
     )

@@ -17,12 +17,18 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
 from mtmc.study.spec import RunSettings, register_kind
 
 __all__ = ["VerificationKindStudy"]
+
+#: µm per mm: the volumetric errors, computed in mm, are given in µm.
+_UM = 1e3
+#: The unit and factor of an error parameter given in the code's mm or rad.
+_ERROR_UNITS = {"mm": ("µm", 1e3), "rad": ("µrad", 1e6)}
 
 
 @dataclass(frozen=True)
@@ -36,6 +42,10 @@ class VerificationKindStudy(Study):
     """
 
     kind = "verification"
+    no_adaptive = (
+        "it simulates a fixed number of whole verifications, each an identification of the "
+        "machine's error coefficients"
+    )
     study: Any
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
@@ -50,6 +60,9 @@ class VerificationKindStudy(Study):
             study_visibility(s, None, [s.default_tracker]), s.machine.axes
         )
         mc = s.simulate(settings.trials, settings.seed, progress=progress, **settings.parallel)
+        # the file gives the machine's errors in µm and µrad (its travel in mm): the
+        # errors are shown in those units, each value of the code's mm or rad times the
+        # exact factor (docs/results-format.md, the unit rule)
         quantities = tuple(
             quantity(
                 f"volumetric_error.{name}",
@@ -57,21 +70,23 @@ class VerificationKindStudy(Study):
                 mc.ve_result(name),
                 None,
                 settings,
-            )
+            ).in_unit("µm", _UM)
             for name in VE_NAMES
         )
         ref = np.asarray(mc.reference.estimate, dtype=np.float64)[0]
-        coef_rows = tuple(
-            (
-                name,
-                parameter_unit(s.machine, name),
-                float(ref[i]) if i < ref.size else "",
-                float(mc.coef_estimate[i]),
-                float(mc.coef_u[i]),
-                float(mc.gum.u[i]),
+        coef_rows = []
+        for i, name in enumerate(mc.names):
+            unit, f = _ERROR_UNITS[parameter_unit(s.machine, name)]
+            coef_rows.append(
+                (
+                    name,
+                    unit,
+                    f * float(ref[i]) if i < ref.size else "",
+                    f * float(mc.coef_estimate[i]),
+                    f * float(mc.coef_u[i]),
+                    f * float(mc.gum.u[i]),
+                )
             )
-            for i, name in enumerate(mc.names)
-        )
         errors, stats = POINT_STATS
         point_um = {
             w: {k: {"estimate": 1e3 * e, "u": 1e3 * u} for k, (e, u) in mc.point_mean_ve(w).items()}
@@ -87,7 +102,7 @@ class VerificationKindStudy(Study):
                 "coefficients",
                 "Identified parameters: noise-free, Monte Carlo mean and u, GUM u",
                 ("parameter", "unit", "noise-free", "MC mean", "MC u", "GUM u"),
-                coef_rows,
+                tuple(coef_rows),
             ),
             Table(
                 "point_mean_volumetric_error",
@@ -105,15 +120,15 @@ class VerificationKindStudy(Study):
             title="Calibration uncertainty at each point, √(u²x + u²y + u²z): the standard "
             "deviation over the verifications of the error left after compensation",
             points=np.asarray(points, dtype=np.float64),
-            values=np.asarray(mc.point_u, dtype=np.float64),
-            unit="mm",
+            values=_UM * np.asarray(mc.point_u, dtype=np.float64),
+            unit="µm",
         )
         bias = PointField(
             name="compensation_bias",
             title="Mean error left after compensation at each point",
             points=np.asarray(points, dtype=np.float64),
-            values=np.asarray(mc.comp_bias, dtype=np.float64),
-            unit="mm",
+            values=_UM * np.asarray(mc.comp_bias, dtype=np.float64),
+            unit="µm",
             magnification=1000.0,
         )
         return self._result(
@@ -121,6 +136,7 @@ class VerificationKindStudy(Study):
             quantities=quantities,
             tables=tables,
             fields=(field, bias),
+            inputs=_inputs(s, ver.tracker, np.asarray(s.machine.tool_position(ver.q))),
             extra={
                 "verification": {
                     "note": s.note,
@@ -130,6 +146,63 @@ class VerificationKindStudy(Study):
                 "warnings": warnings,
             },
         )
+
+
+def _inputs(s: Any, tracker: Any, points: NDArray[np.float64]) -> tuple[dict[str, Any], ...]:
+    """The uncertain inputs the study file fixes, as ``inputs`` of ``result.json``.
+
+    The tracker's noise on each spherical coordinate of every reading (Aguado et al. 2016
+    eqs. 22-24: ``u_L = a + b·L``, ``u_α = c + e/L``, ``u_β = d + e/L``, ``u`` its mean
+    over the ranges ``L`` of the points), and where the study gives them the machine's
+    repeatability, the reflector offset and the tracker pose. Lengths in mm, angles in rad.
+    """
+    noise = s.noise
+    L = np.linalg.norm(points - np.asarray(tracker.position, dtype=np.float64), axis=1)
+    n = int(points.shape[0])
+    span = f"L from {L.min():.0f} to {L.max():.0f} mm"
+    e = f" + {noise.transverse_a:g}/L" if noise.transverse_a else ""
+    rows: list[tuple[str, str, float, str]] = [
+        (
+            "tracker range L",
+            f"normal(0, {noise.radial_a:g} + {noise.radial_b:g}·L), {span}",
+            float(np.mean(noise.u_range(L))),
+            "mm",
+        ),
+        (
+            "tracker azimuth α",
+            f"normal(0, {noise.azimuth:g}{e})",
+            noise.azimuth + noise.transverse_a * float(np.mean(1.0 / L)),
+            "rad",
+        ),
+        (
+            "tracker elevation β",
+            f"normal(0, {noise.elevation:g}{e})",
+            noise.elevation + noise.transverse_a * float(np.mean(1.0 / L)),
+            "rad",
+        ),
+    ]
+    if s.repeatability > 0:
+        rows.append(
+            ("machine repeatability", f"normal(0, {s.repeatability:g})", s.repeatability, "mm")
+        )
+    if s.reflector_u > 0:
+        rows.append(("reflector offset", f"normal(0, {s.reflector_u:g})", s.reflector_u, "mm"))
+    if not s.pose:
+        for name, u, unit in zip(
+            ("rx", "ry", "rz", "tx", "ty", "tz"), s.pose_u, ("rad",) * 3 + ("mm",) * 3, strict=True
+        ):
+            if u > 0:
+                rows.append((f"tracker pose {name}", f"normal(0, {u:g})", float(u), unit))
+    return tuple(
+        {
+            "name": name + (f" (each of the {n} readings)" if i < 3 else ""),
+            "distribution": text,
+            "estimate": 0.0,
+            "u": float(u),
+            "unit": unit,
+        }
+        for i, (name, text, u, unit) in enumerate(rows)
+    )
 
 
 @register_kind("verification", "a laser-tracker volumetric verification (Aguado et al.)")

@@ -33,6 +33,7 @@ import numpy as np
 from mtmc.errors import InputError
 from mtmc.io import _umask, deferred_interrupt, naming_os_errors
 from mtmc.study.base import StudyResult
+from mtmc.uncertainty.results import MonteCarloResult, MonteCarloResults
 
 __all__ = ["LIBRARIES", "now", "provenance", "write_result"]
 
@@ -72,7 +73,10 @@ def provenance(
     return {
         "mtmc_version": __version__,
         "seed": result.seed,
-        "seed_entropy": str(np.random.SeedSequence(result.seed).entropy),
+        # a result without a seed (values from elsewhere) has no entropy to record
+        "seed_entropy": (
+            None if result.seed is None else str(np.random.SeedSequence(result.seed).entropy)
+        ),
         "trials": result.trials,
         "study_file": result.study_file,
         "study_sha256": result.study_sha256,
@@ -165,7 +169,7 @@ def _write(tmp: Path, dest: Path, name: str, text: str) -> None:
 
 
 def write_result(
-    result: StudyResult,
+    result: StudyResult | MonteCarloResult | MonteCarloResults,
     outdir: str | os.PathLike[str],
     *,
     study_text: str | None = None,
@@ -177,8 +181,10 @@ def write_result(
 
     Parameters
     ----------
-    result : StudyResult
-        The result.
+    result : StudyResult, MonteCarloResult or MonteCarloResults
+        The result; a plain Monte Carlo result is first made a study result of kind
+        ``monte_carlo`` (:func:`mtmc.study.load.study_result`; its samples are not
+        written, as a study's by default).
     outdir : path-like
         The folder to create. An existing folder is replaced only if it is a result
         folder (it holds ``result.json``) or empty.
@@ -201,6 +207,10 @@ def write_result(
     InputError
         If ``outdir`` exists and is a file or a folder that is not a result folder.
     """
+    if not isinstance(result, StudyResult):
+        from mtmc.study.load import study_result
+
+        result = study_result(result)
     dest = Path(outdir)
     if dest.is_symlink():  # a link is followed, for a folder as for a file
         dest = Path(os.path.realpath(dest))
