@@ -355,3 +355,19 @@ def test_inputs_the_first_order_budget_cannot_see_are_shown_and_named(tmp_path):
     note = re.sub("<[^>]+>", "", html[html.index('class="unseen"') :].split("</p>")[0])
     assert note.startswith('class="unseen">rho_a, rho_w, rho_r: uncertain')
     assert "0.076 mg by Monte Carlo against 0.054 mg by the GUM" in note
+
+
+def test_inputs_are_shown_as_the_study_wrote_them(tmp_path):
+    from mtmc.study import write_result
+    from mtmc.study.spec import loads_study
+
+    text = (
+        'kind = "propagate"\nmodel = "l + dl"\nunit = "mm"\n'
+        '[inputs]\nl = "normal(50.000623, 0.000025)"\ndl = "uniform(-0.0001, 0.0001)"\n'
+    )
+    r = loads_study(text, file="s.toml").run(trials=2000, seed=1)
+    write_result(r, tmp_path / "out")
+    html = (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
+    assert ">50.000623</td>" in html  # not 50.0006
+    assert ">2.5e-05</td>" in html
+    assert ">5.7735e-05</td>" in html  # 0.0001/√3: a derived value, 6 digits

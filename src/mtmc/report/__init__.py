@@ -22,7 +22,28 @@ from mtmc.io import write_text_atomic
 if TYPE_CHECKING:
     from mtmc.uncertainty.results import MonteCarloResult, MonteCarloResults
 
-__all__ = ["fmt", "html", "render", "render_index", "render_report"]
+__all__ = ["as_given", "fmt", "html", "render", "render_index", "render_report"]
+
+
+def as_given(x: Any) -> str:
+    """An input's value as the study wrote it: every digit of a short decimal.
+
+    A float whose shortest round-trip text has at most 12 significant digits (what a
+    person types: ``50.000623``) is shown whole; a longer one (a value derived from the
+    file, ``0.05773502691896257`` = 0.1/√3) as :func:`fmt` shows it.
+
+    Examples
+    --------
+    >>> as_given(50.000623), as_given(0.1 / 3**0.5), as_given(2.0), as_given(1e-7)
+    ('50.000623', '0.057735', '2', '1e-07')
+    """
+    if not isinstance(x, float) or isinstance(x, bool) or not math.isfinite(x):
+        return fmt(x)
+    text = repr(x)
+    mantissa = text.split("e")[0].replace("-", "").replace(".", "").strip("0")
+    if len(mantissa) > 12:
+        return fmt(x)
+    return f"{x:.12g}"
 
 
 def fmt(x: Any, digits: int = 6) -> str:
@@ -85,6 +106,7 @@ def _env() -> Any:
         lstrip_blocks=True,
     )
     env.filters["fmt"] = fmt
+    env.filters["as_given"] = as_given
     env.filters["at_place"] = at_place
     env.filters["pct"] = lambda x: "—" if x is None else f"{100 * x:.1f} %"
     from mtmc.report import plots  # NumPy, SciPy, Matplotlib: imported when a report is made
