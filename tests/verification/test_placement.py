@@ -69,3 +69,13 @@ def test_place_cli_confirms_by_monte_carlo_on_two_workers(capsys) -> None:  # ty
     two = json.loads(capsys.readouterr().out)
     assert one == two
     assert one["best"]["u_mc_um"] > 0
+
+
+def test_place_cli_text_says_u_in_micrometres(capsys) -> None:  # type: ignore[no-untyped-def]
+    # the text names its unit as verify simulate does: µm, not "um"
+    args = ["verify", "place", str(STUDY), "--trials", "0", "--grid", "2", "--refine", "0"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "µm (GUM)" in out
+    assert " um" not in out
+    assert out.count(" µm\n") == 4  # the four reference positions

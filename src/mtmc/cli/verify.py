@@ -421,9 +421,9 @@ def place_cmd(
         f"best of {r.candidates} candidates ({r.rejected} out of the limits): "
         f"({b['x']:.0f}, {b['y']:.0f}, {b['z']:.0f}) mm, Euler {b['euler']} "
         f"({', '.join(f'{a:.1f}' for a in b['euler_deg'])}) deg: mean point u "
-        f"{b['u_um']:.2f} um (GUM)"
-        + ("" if b["u_mc_um"] is None else f", {b['u_mc_um']:.2f} um (MC)")
+        f"{b['u_um']:.2f} µm (GUM)"
+        + ("" if b["u_mc_um"] is None else f", {b['u_mc_um']:.2f} µm (MC)")
     )
     for n, v in out["reference"].items():
-        typer.echo(f"  {n}: {v['u_um']:.2f} um")
+        typer.echo(f"  {n}: {v['u_um']:.2f} µm")
     print_trials_seed(trials, used_seed)
