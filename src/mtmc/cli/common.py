@@ -254,6 +254,37 @@ def input_specs(specs: list[str]) -> dict[str, Distribution]:
     return dists
 
 
+def gum_lines(g: Any, mc: Any, p: float) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The ``gum`` and ``validation`` entries of a command's JSON for one scalar output.
+
+    ``g`` is the GUM result, ``mc`` the Monte Carlo result of the same output; the
+    comparison is :func:`mtmc.validate` (JCGM 101 §8). Where both give ``u = 0`` (one
+    value) δ is 0 and the comparison is not applicable: ``passed`` is None.
+    """
+    from mtmc.uncertainty.gum import validate
+
+    v = validate(g, mc, p=p)
+    return (
+        {
+            "estimate": g.estimate,
+            "u": g.u,
+            "k": g.coverage_factor(),
+            "interval": list(g.coverage_interval()),
+        },
+        {
+            "d_low": v.d_low,
+            "d_high": v.d_high,
+            "delta": v.delta,
+            "passed": None if not (mc.u > 0 or g.u > 0) else v.passed,
+        },
+    )
+
+
+def validated_text(passed: bool | None) -> str:
+    """The "GUM validated" cell of a command's table: yes, no or not applicable."""
+    return "not applicable" if passed is None else "yes" if passed else "no"
+
+
 def check_trials(trials: int | None) -> None:
     """Refuse ``--trials`` above the most a study's ``[run] trials`` may ask (10⁹).
 
@@ -433,6 +464,8 @@ __all__ = [
     "NAN_POLICY_OPTION",
     "PROGRESS_OPTION",
     "check_trials",
+    "gum_lines",
+    "validated_text",
     "input_specs",
     "duration_text",
     "engine_message",

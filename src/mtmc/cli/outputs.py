@@ -17,12 +17,14 @@ from rich.table import Table
 from mtmc.cli.common import (
     engine_message,
     fail,
+    gum_lines,
     input_specs,
     nan_policy,
     parallel_options,
     print_json,
     progress_bar,
     quiet_numpy,
+    validated_text,
 )
 from mtmc.errors import InputError, MtmcError
 
@@ -123,7 +125,7 @@ def propagate_outputs(
 ) -> None:
     """Run and print several outputs of the same inputs (see the module docstring)."""
     from mtmc.study.outputs import JointModel, NamedOutputs, joint_summary
-    from mtmc.uncertainty.gum import gum, validate
+    from mtmc.uncertainty.gum import gum
     from mtmc.uncertainty.montecarlo import monte_carlo
     from mtmc.uncertainty.results import MonteCarloResults
 
@@ -159,20 +161,7 @@ def propagate_outputs(
                 "symmetric": list(r.coverage_interval(p, kind="symmetric")),
             }
             if with_gum:
-                gi = g.component(i)
-                v = validate(gi, r, p=p)
-                row["gum"] = {
-                    "estimate": gi.estimate,
-                    "u": gi.u,
-                    "k": gi.coverage_factor(),
-                    "interval": list(gi.coverage_interval()),
-                }
-                row["validation"] = {
-                    "d_low": v.d_low,
-                    "d_high": v.d_high,
-                    "delta": v.delta,
-                    "passed": v.passed,
-                }
+                row["gum"], row["validation"] = gum_lines(g.component(i), r, p)
             out["outputs"][o.name] = row
         joint = joint_summary(outputs, mc, g, p)
         joint.pop("units")
@@ -200,7 +189,7 @@ def _print(out: dict[str, Any], p: float, with_gum: bool) -> None:
         cells = [name, _fmt(r["estimate"]), _fmt(r["u"])]
         cells.append(f"[{_fmt(r['symmetric'][0])}, {_fmt(r['symmetric'][1])}]")
         if with_gum:
-            cells += [_fmt(r["gum"]["u"]), "yes" if r["validation"]["passed"] else "no"]
+            cells += [_fmt(r["gum"]["u"]), validated_text(r["validation"]["passed"])]
         table.add_row(*cells)
     console.print(table)
     for name, r in out["outputs"].items():

@@ -23,6 +23,7 @@ from mtmc.cli.common import (
     check_trials,
     engine_message,
     fail,
+    gum_lines,
     input_specs,
     nan_policy,
     parallel_options,
@@ -30,6 +31,7 @@ from mtmc.cli.common import (
     progress_bar,
     quiet_numpy,
     seed_option,
+    validated_text,
 )
 from mtmc.errors import InputError, MtmcError
 
@@ -239,7 +241,7 @@ def propagate(
     """Propagate input distributions through EXPR by Monte Carlo (JCGM 101)."""
     from mtmc.cli.outputs import is_several, propagate_outputs
     from mtmc.uncertainty.expression import expression
-    from mtmc.uncertainty.gum import gum, validate
+    from mtmc.uncertainty.gum import gum
     from mtmc.uncertainty.montecarlo import monte_carlo
 
     check_trials(trials)
@@ -310,20 +312,7 @@ def propagate(
         if with_gum:
             with quiet_numpy():
                 g = gum(model, dists, p=p, correlation=corr or None)
-            v = validate(g, mc, p=p)
-            out["gum"] = {
-                "estimate": g.estimate,
-                "u": g.u,
-                "k": g.coverage_factor(),
-                "interval": list(g.coverage_interval()),
-            }
-            out["validation"] = {
-                "d_low": v.d_low,
-                "d_high": v.d_high,
-                "delta": v.delta,
-                # one value by both methods (u = 0): δ is 0, JCGM 101 §8 not applicable
-                "passed": None if not (mc.u > 0 or g.u > 0) else v.passed,
-            }
+            out["gum"], out["validation"] = gum_lines(g, mc, p)
         if sensitivity:
             out["sensitivity"] = _sensitivity(
                 model, dists, sensitivity_trials, mc.seed, mc.u, p, workers, executor, scheduler
@@ -366,9 +355,7 @@ def propagate(
         gt.add_row("d_high", _fmt(v_out["d_high"]))
         gt.add_row("numerical tolerance δ", _fmt(v_out["delta"]))
         passed = v_out["passed"]
-        gt.add_row(
-            "GUM validated", "not applicable" if passed is None else "yes" if passed else "no"
-        )
+        gt.add_row("GUM validated", validated_text(passed))
         console.print(gt)
     if sensitivity:
         _print_sensitivity(console, out["sensitivity"])
