@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.graph import PlaceSummary
-from mtmc.report import render_report
+from mtmc.study import render_report
 from mtmc.uncertainty import MonteCarloResult, MonteCarloResults, monte_carlo
 
 

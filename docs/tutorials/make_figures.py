@@ -185,10 +185,10 @@ def stryczek(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     }
     for c in "xyz":
         q = res.quantity(f"p.{c}")
-        u = float(q.mc["u"])
+        u = float(q.mc.u)
         values[f"fig1.u_{c}_um"] = mc(1e3 * u, 1e3 * u / math.sqrt(2.0), n1)
         values[f"fig1.u_{c}_closed_um"] = exact(1e3 * closed[c])
-        values[f"fig1.gum_u_{c}_um"] = exact(1e3 * float(q.gum["u"]))
+        values[f"fig1.gum_u_{c}_um"] = exact(1e3 * float(q.gum.u))
     values["fig1.u_w_um"] = exact(1e3 * u_w)
     values["fig1.u_1_um"] = exact(1e3 * probe.u_axis)
     data["fig1"] = [r.to_dict() for r in res.regions if r.name in ("p: x, y", "p: x, z")]
@@ -198,9 +198,9 @@ def stryczek(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     n14 = max(1000, int(study.settings.trials * scale))
     res = study.run(trials=n14, seed=study.settings.seed)
     d = res.quantity("d_ac")
-    values["d_ac.estimate_mm"] = mc(d.mc["estimate"], d.mc["u"], n14)
-    values["d_ac.u_um"] = mc(1e3 * d.mc["u"], 1e3 * d.mc["u"] / math.sqrt(2.0), n14)
-    values["d_ac.gum_u_um"] = exact(1e3 * d.gum["u"])
+    values["d_ac.estimate_mm"] = mc(d.mc.estimate, d.mc.u, n14)
+    values["d_ac.u_um"] = mc(1e3 * d.mc.u, 1e3 * d.mc.u / math.sqrt(2.0), n14)
+    values["d_ac.gum_u_um"] = exact(1e3 * d.gum.u)
     values["d_ac.sigma_p_um"] = exact(1e3 * study.graph.probe.u_probe)
     values["d_ac.sigma_m_um"] = exact(1e3 * study.graph.probe.u_axis)
     sw = res.extra["sweep"]

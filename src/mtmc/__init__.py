@@ -29,23 +29,9 @@ from mtmc.errors import *  # noqa: F403
 
 __version__ = "0.1.0"
 
-# Imported after the version, which the result folders record.
-from mtmc import report as _report
-from mtmc.report import render_report as render_report
-
-
-def _study_result(result: Any) -> Any:
-    """The result of :func:`monte_carlo` as a study result, for :func:`render_report`."""
-    from mtmc.study.load import study_result
-
-    return study_result(result)
-
-
-# the report draws study results; the study layer, above it, makes them of plain results
-_report.result_adapter = _study_result
-
 #: The names resolved on first access, and the subpackage each comes from.
 _NAMES: dict[str, str] = {
+    "render_report": "mtmc.study",
     "load_study": "mtmc.study",
     "loads_study": "mtmc.study",
     "write_result": "mtmc.study",
@@ -96,8 +82,8 @@ _NAMES: dict[str, str] = {
 __all__: list[str] = [
     "__version__",
     "errors",
-    "render_report",
     *errors.__all__,
+    "render_report",
     "load_study",
     "loads_study",
     "write_result",
@@ -168,6 +154,7 @@ if TYPE_CHECKING:
     from mtmc.kinematics.topology import parse_topology as parse_topology
     from mtmc.study.base import StudyResult as StudyResult
     from mtmc.study.load import load_result as load_result
+    from mtmc.study.render import render_report as render_report
     from mtmc.study.spec import load_study as load_study
     from mtmc.study.spec import loads_study as loads_study
     from mtmc.study.write import write_result as write_result

@@ -135,8 +135,8 @@ def run_demo(
             on_result(folder / stem, result)
         entries.append((stem, stem))
         heads = "; ".join(
-            f"{q.name} = {q.reported['estimate']}{_unit(q.unit)}, "
-            f"U = {q.reported['U']}{_unit(q.unit)}{_k(q.mc['k'])}"
+            f"{q.name} = {q.reported.estimate}{_unit(q.unit)}, "
+            f"U = {q.reported.U}{_unit(q.unit)}{_k(q.mc.k)}"
             for q in result.quantities[:2]
         )
         p = f"{100 * result.p:g} %"

@@ -1,7 +1,7 @@
 r"""Reading TOML files: one parse per file, one located document, one way to report errors.
 
 Every file mtmc reads as TOML (a study, a graph, an artefact) goes through here:
-:func:`read_text` reads it (UTF-8, or an error at the first bad byte), :func:`parse_toml`
+:func:`read_text` reads it (UTF-8, or an error at the first bad byte), :func:`loads_toml`
 parses it once into a :class:`Fields` over a :class:`Source` that knows the line of every key
 (:func:`key_lines`), and every error says the file, the line and the field and what was
 expected (:class:`~mtmc.errors.InputError`, :class:`~mtmc.errors.ParseError`). The layers
@@ -9,10 +9,10 @@ above take the validated values; none parses TOML or reports its errors another 
 
 Examples
 --------
->>> top = parse_toml('[run]\ntrials = 10', "s.toml")
+>>> top = loads_toml('[run]\ntrials = 10', "s.toml")
 >>> top.table("run").integer("trials"), top.source.line(("run", "trials"))
 (10, 2)
->>> parse_toml("a = 1.2.3", "s.toml")  # doctest: +ELLIPSIS
+>>> loads_toml("a = 1.2.3", "s.toml")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
 mtmc.errors.ParseError: s.toml:1:...: not valid TOML: ...
@@ -45,7 +45,7 @@ __all__ = [
     "check_number",
     "key_lines",
     "load_toml",
-    "parse_toml",
+    "loads_toml",
     "read_text",
 ]
 
@@ -456,7 +456,7 @@ def read_text(path: str | Path, what: str = "file") -> str:
 _MAX_FILE_BYTES = 256 << 20
 
 
-def parse_toml(text: str, file: str | None = "<toml>", folder: Path | None = None) -> Fields:
+def loads_toml(text: str, file: str | None = "<toml>", folder: Path | None = None) -> Fields:
     """Parse TOML text once: its top table, over a :class:`Source` with the line of every key.
 
     Parameters
@@ -524,9 +524,9 @@ def _too_deep(text: str, file: str | None) -> ParseError:
 
 
 def load_toml(path: str | Path, what: str = "file") -> Fields:
-    """Read and parse a TOML file (:func:`read_text`, then :func:`parse_toml`).
+    """Read and parse a TOML file (:func:`read_text`, then :func:`loads_toml`).
 
     Relative paths in the file are read from the file's folder.
     """
     p = Path(path)
-    return parse_toml(read_text(p, what), str(path), p.resolve().parent)
+    return loads_toml(read_text(p, what), str(path), p.resolve().parent)

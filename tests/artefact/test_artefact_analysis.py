@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mtmc.artefact.analysis import analyse, rigid_fit_residuals
-from mtmc.artefact.gravity import gravity_effect, read_gravity
+from mtmc.artefact.gravity import gravity_effect, load_gravity
 from mtmc.errors import InputError
 
 # Table 1 of the paper (tests/reference/wang2022/table1.csv): the calibrated ball centres, mm
@@ -123,11 +123,11 @@ def test_gravity_against_hand_computation(tmp_path: Path) -> None:
     assert g.mean_d[0] * 1e3 == pytest.approx(0.35, abs=1e-9)
     f = tmp_path / "g.csv"
     f.write_text("orientation,ball,x,y,z\n" + "\n".join(",".join(map(str, r)) for r in rows))
-    np.testing.assert_array_equal(read_gravity(f).delta, g.delta)
+    np.testing.assert_array_equal(load_gravity(f).delta, g.delta)
     bad = tmp_path / "bad.csv"
     bad.write_text("orientation,ball,x,y,z\nH,1,0,0,0\nX,1,0,0,0\n")
     with pytest.raises(InputError) as e:
-        read_gravity(bad)
+        load_gravity(bad)
     assert e.value.line == 3
     with pytest.raises(InputError):
         gravity_effect([("H", "1", 0, 0, 0), ("V", "2", 0, 0, 0)])

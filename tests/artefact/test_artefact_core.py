@@ -14,9 +14,9 @@ from mtmc.artefact import (
     distances,
     fit_points,
     fit_sensitivity,
+    load_points,
     loads_artefact,
     patch_points,
-    read_points,
     shipped_artefact,
 )
 from mtmc.errors import InputError
@@ -211,7 +211,7 @@ def test_linear_map_matches_the_converged_fit() -> None:
         assert np.abs(lin - full).max() < (1e-6 if not free else 1e-5)
 
 
-def test_read_points_csv_units_header_and_partial_cap(tmp_path: Path) -> None:
+def test_load_points_csv_units_header_and_partial_cap(tmp_path: Path) -> None:
     rng = np.random.default_rng(np.random.SeedSequence(11))
     # a real-scan-like partial cap: 5000 points within 25 degrees of the pole, in metres
     n = 5000
@@ -224,7 +224,7 @@ def test_read_points_csv_units_header_and_partial_cap(tmp_path: Path) -> None:
     f.write_text(
         "x,y,z\n" + "\n".join(f"{x / 1e3!r},{y / 1e3!r},{z / 1e3!r}" for x, y, z in pts.tolist())
     )
-    P = read_points(f, "m")
+    P = load_points(f, "m")
     np.testing.assert_allclose(P, pts, rtol=1e-15, atol=1e-12)
     fit = fit_points(P)
     assert abs(fit.radius - R) < 5e-4
@@ -233,12 +233,12 @@ def test_read_points_csv_units_header_and_partial_cap(tmp_path: Path) -> None:
     assert fit.n == n
     g = tmp_path / "plain.csv"
     g.write_text("\n".join(f"{x!r} {y!r} {z!r}" for x, y, z in (pts[:10] * 1e3).tolist()))
-    np.testing.assert_allclose(read_points(g, "um"), pts[:10], rtol=1e-12)
+    np.testing.assert_allclose(load_points(g, "um"), pts[:10], rtol=1e-12)
     bad = tmp_path / "bad.csv"
     bad.write_text("x,y,z\n1,2,3\n1,2\n")
     with pytest.raises(InputError) as e:
-        read_points(bad)
+        load_points(bad)
     assert e.value.line == 3
     assert e.value.file == str(bad)
     with pytest.raises(InputError):
-        read_points(g, "inch")
+        load_points(g, "inch")

@@ -384,7 +384,7 @@ def make_tree(root: Path) -> None:
 
     from mtmc.graph import assertions, load_graph
     from mtmc.study import load_study
-    from mtmc.verification.compensation import compensation_table, plain_csv_text
+    from mtmc.verification.compensation import compensation_table, dumps_plain_csv
 
     for sub in ("studies", "graphs", "artefacts"):
         shutil.copytree(EXAMPLES / sub, root / sub)
@@ -413,7 +413,7 @@ def make_tree(root: Path) -> None:
     shutil.copy(FORMATS / "etalon_exchange_example.txt", data / "etalon.txt")
     grid = {ax: np.linspace(0.0, 1000.0, 6) for ax in "XYZ"}
     table = compensation_table(st.truth, grid)
-    (data / "comp.csv").write_text(plain_csv_text(table))
+    (data / "comp.csv").write_text(dumps_plain_csv(table))
 
 
 # ---------------------------------------------------------------------------------------------

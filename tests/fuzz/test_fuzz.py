@@ -28,7 +28,7 @@ from mtmc_fuzz import (
 )
 
 from mtmc.cli.main import main
-from mtmc.document import MAX_DEPTH, parse_toml
+from mtmc.document import MAX_DEPTH, loads_toml
 from mtmc.errors import DegenerateGeometryError, InputError, ParseError
 from mtmc.instruments.multilateration import self_calibrate, trilaterate
 from mtmc.io import decode_utf8
@@ -102,11 +102,11 @@ def test_every_mutation_changes_a_file() -> None:
 )
 def test_deep_nesting_is_one_parse_error(text: str) -> None:
     with pytest.raises(ParseError, match=f"nested too deep; expected at most {MAX_DEPTH}"):
-        parse_toml(text, "s.toml")
+        loads_toml(text, "s.toml")
 
 
 def test_nesting_up_to_the_limit_is_read() -> None:
-    v = parse_toml("a = " + "[" * MAX_DEPTH + "]" * MAX_DEPTH, "s.toml").data["a"]
+    v = loads_toml("a = " + "[" * MAX_DEPTH + "]" * MAX_DEPTH, "s.toml").data["a"]
     for _ in range(MAX_DEPTH - 1):
         v = v[0]
     assert v == []
@@ -119,7 +119,7 @@ def test_bom_accepted_and_utf16_named() -> None:
 
 
 def test_repeated_and_too_many_names_are_refused() -> None:
-    top = parse_toml('o = ["a", "b", "a"]\nq = ["x", "y"]', "s.toml")
+    top = loads_toml('o = ["a", "b", "a"]\nq = ["x", "y"]', "s.toml")
     with pytest.raises(InputError, match=r"s.toml:1: field o: 'a' is listed twice"):
         top.texts("o")
     with pytest.raises(InputError, match="expected at most 1 entries, got 2"):
@@ -128,7 +128,7 @@ def test_repeated_and_too_many_names_are_refused() -> None:
 
 
 def test_integer_maximum() -> None:
-    top = parse_toml("[run]\ntrials = 10000000000000000000000000000000", "s.toml")
+    top = loads_toml("[run]\ntrials = 10000000000000000000000000000000", "s.toml")
     run = top.table("run")
     assert run is not None
     with pytest.raises(InputError, match=r"s.toml:2: field run.trials: expected an integer <="):

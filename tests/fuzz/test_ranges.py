@@ -14,7 +14,7 @@ import pytest
 from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD
 from mtmc.errors import InputError, MtmcError
 from mtmc.graph import toml_format
-from mtmc.positioning.data import parse_positioning_csv
+from mtmc.positioning.data import loads_positioning_csv
 from mtmc.study.spec import loads_study
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -138,27 +138,27 @@ def test_verification_numbers_beyond_a_machine(old: str, new: str, field: str) -
 def test_positioning_beyond_a_machine() -> None:
     head = "target,run,direction,deviation\n"
     with pytest.raises(InputError) as info:
-        parse_positioning_csv(head + "0,1,+,1e30\n", "p.csv")
+        loads_positioning_csv(head + "0,1,+,1e30\n", "p.csv")
     assert (info.value.line, info.value.field) == (2, "deviation")
     with pytest.raises(InputError) as info:
-        parse_positioning_csv(head + "2e6,1,+,0\n", "p.csv")
+        loads_positioning_csv(head + "2e6,1,+,0\n", "p.csv")
     assert (info.value.line, info.value.field) == (2, "target")
     with pytest.raises(InputError) as info:
-        parse_positioning_csv(head + "4000,1,+,0\n", "p.csv", units="deg,arcsec")
+        loads_positioning_csv(head + "4000,1,+,0\n", "p.csv", units="deg,arcsec")
     assert info.value.field == "target"
     rows = [f"{t},{r},{d},{x}" for t in (0, 9e5) for r in (1, 2) for d, x in (("+", 9e8), ("-", 4))]
-    ok = parse_positioning_csv(head + "\n".join(rows), "p.csv")
+    ok = loads_positioning_csv(head + "\n".join(rows), "p.csv")
     assert ok.deviations.tolist() == [[[9e8, 4.0]] * 2] * 2
 
 
 def test_gravity_coordinates_beyond_a_machine(tmp_path: Path) -> None:
-    from mtmc.artefact.gravity import read_gravity
+    from mtmc.artefact.gravity import load_gravity
 
     f = tmp_path / "g.csv"
     rows = "H,1,0,0,0\nH,2,100,0,0\nV,1,0,0,0\nV,2,100,0,0\nO,1,0,0,0\nO,2,100,1e308,0\n"
     f.write_text("orientation,ball,x,y,z\n" + rows)
     with pytest.raises(InputError) as info:
-        read_gravity(f)
+        load_gravity(f)
     assert (info.value.line, info.value.field) == (7, "y")
 
 

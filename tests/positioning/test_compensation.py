@@ -9,7 +9,7 @@ import pytest
 
 from mtmc.errors import InputError
 from mtmc.positioning import PositioningTest, apply_compensation, evaluate, pitch_compensation
-from mtmc.verification import FORMATS, load_compensation, write_compensation
+from mtmc.verification import FORMATS, dump_compensation, load_compensation
 
 P = np.array([0.0, 120.0, 260.0, 395.0, 500.0, 640.0])
 
@@ -25,7 +25,7 @@ def _synthetic() -> PositioningTest:
 @pytest.mark.parametrize("sign", ["error", "correction"])
 def test_round_trip_through_the_readers(tmp_path, fmt, sign):
     table = pitch_compensation(_synthetic(), "X", sign=sign)
-    path = write_compensation(table, tmp_path / f"pitch.{fmt}", fmt)
+    path = dump_compensation(table, tmp_path / f"pitch.{fmt}", fmt)
     back = load_compensation(path, fmt)
     assert back == table  # exact: the writers give shortest round-trip floats
     curve = back.curve("EXX")
@@ -36,7 +36,7 @@ def test_round_trip_through_the_readers(tmp_path, fmt, sign):
 
 def test_residual_is_the_bidirectional_scatter_alone(tmp_path):
     test = _synthetic()
-    path = write_compensation(pitch_compensation(test), tmp_path / "pitch.isg", "isg")
+    path = dump_compensation(pitch_compensation(test), tmp_path / "pitch.isg", "isg")
     residual = apply_compensation(test, load_compensation(path, "isg"))
     xbar = np.asarray(evaluate(test).mean)
     # each reading less the mean bidirectional deviation at its target (µm of size ~10:

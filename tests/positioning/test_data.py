@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mtmc.errors import InputError
-from mtmc.positioning import parse_positioning_csv, parse_units, read_positioning_csv, reading_times
+from mtmc.positioning import load_positioning_csv, loads_positioning_csv, parse_units, reading_times
 
 GOOD = """# a comment
 target,run,direction,deviation,temperature
@@ -22,7 +22,7 @@ target,run,direction,deviation,temperature
 
 
 def test_reads_the_layout_whatever_the_order():
-    t = parse_positioning_csv(GOOD, "g.csv")
+    t = loads_positioning_csv(GOOD, "g.csv")
     assert t.targets.tolist() == [0.0, 100.0]
     assert t.runs == (1, 2)
     assert (t.unit, t.target_unit, t.m, t.n, t.rotary) == ("um", "mm", 2, 2, False)
@@ -34,7 +34,7 @@ def test_column_mapping_semicolons_and_units():
     text = "Pos;Lauf;Richtung;Abw\n0;1;+;1\n5;1;+;2\n5;1;-;3\n0;1;-;4\n"
     text += "0;2;+;1\n5;2;+;2\n5;2;-;3\n0;2;-;4\n"
     cols = {"target": "pos", "run": "Lauf", "direction": "Richtung", "deviation": "Abw"}
-    t = parse_positioning_csv(text, columns=cols, units="deg,arcsec")
+    t = loads_positioning_csv(text, columns=cols, units="deg,arcsec")
     assert (t.target_unit, t.unit, t.rotary) == ("deg", "arcsec", True)
     assert t.deviations[:, 0, :].tolist() == [[1.0, 4.0], [2.0, 3.0]]
 
@@ -61,28 +61,28 @@ def test_units():
 )
 def test_errors_name_the_line_and_field(text, line, field, match):
     with pytest.raises(InputError, match=match) as exc:
-        parse_positioning_csv(text, "t.csv")
+        loads_positioning_csv(text, "t.csv")
     assert (exc.value.file, exc.value.line, exc.value.field) == ("t.csv", line, field)
 
 
 def test_missing_reading_and_empty_file():
     text = "\n".join(GOOD.splitlines()[:-1])
     with pytest.raises(InputError, match="no reading at target 0 mm, run 2, direction down"):
-        parse_positioning_csv(text, "t.csv")
+        loads_positioning_csv(text, "t.csv")
     with pytest.raises(InputError, match="has none"):
-        parse_positioning_csv("# only a comment\n", "t.csv")
+        loads_positioning_csv("# only a comment\n", "t.csv")
     with pytest.raises(InputError, match="no column 'run'"):
-        parse_positioning_csv("target\n1\n", "t.csv")
+        loads_positioning_csv("target\n1\n", "t.csv")
     with pytest.raises(InputError, match="unknown column 'position'"):
-        parse_positioning_csv(GOOD, columns={"position": "x"})
+        loads_positioning_csv(GOOD, columns={"position": "x"})
 
 
 def test_file_reading(tmp_path):
     p = tmp_path / "t.csv"
     p.write_text("\ufeff" + GOOD, encoding="utf-8")
-    assert read_positioning_csv(p).m == 2
+    assert load_positioning_csv(p).m == 2
     with pytest.raises(InputError, match="cannot read") as exc:
-        read_positioning_csv(tmp_path / "none.csv")
+        load_positioning_csv(tmp_path / "none.csv")
     assert exc.value.file.endswith("none.csv")
 
 

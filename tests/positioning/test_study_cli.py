@@ -10,7 +10,7 @@ import pytest
 
 from mtmc.cli.main import main
 from mtmc.errors import InputError
-from mtmc.positioning import SYMBOLS, UncertaintyModel, evaluate_uncertainty, read_positioning_csv
+from mtmc.positioning import SYMBOLS, UncertaintyModel, evaluate_uncertainty, load_positioning_csv
 from mtmc.report import html
 from mtmc.study import load_study, loads_study, write_result
 from mtmc.study.positioning import PositioningStudy, summary
@@ -43,8 +43,8 @@ def test_api_study_and_cli_give_the_same_numbers(capsys):
     # the library called directly
     res = evaluate_uncertainty(s.test, s.model, M, seed=4)
     for i, q in enumerate(result.quantities):
-        assert q.mc["estimate"] == float(np.mean(res.mc.samples[:, i]))
-        assert q.gum["u"] == res.gum_result(q.name).u
+        assert q.mc.estimate == float(np.mean(res.mc.samples[:, i]))
+        assert q.gum.u == res.gum_result(q.name).u
     # the command line, with the study's model applied to the same file
     argv = ["positioning", "evaluate", str(DATA), "--study", str(STUDY), "-n", str(M)]
     assert main([*argv, "--seed", "4", "--json"]) == 0
@@ -88,7 +88,7 @@ def test_report_says_when_the_monte_carlo_of_A_differs(tmp_path):
     )
     result = s.run()
     a = result.quantity("A")
-    assert a.validation["verdict"] == "not validated"
+    assert a.validation.verdict == "not validated"
     page = html(result.to_dict())
     assert "A: the GUM is not validated by the Monte Carlo" in page
 
@@ -214,5 +214,5 @@ def test_the_study_result_folder_writes(tmp_path):
     res = s.run(trials=500, seed=1)
     out = write_result(res, tmp_path / "o", study_text=s.source.text)
     assert (out / "report.html").is_file()
-    assert read_positioning_csv(DATA).m == 11
+    assert load_positioning_csv(DATA).m == 11
     assert isinstance(s.model, UncertaintyModel)

@@ -262,7 +262,7 @@ def test_the_histogram_draws_the_pdf_the_gum_interval_is_of():
         '[inputs]\na = "t(4, loc=10, scale=0.1)"\nb = "normal(0, 0.05)"\n'
     )
     result = loads_study(text).run(trials=2000, seed=1)
-    dof = result.quantity("y").gum["dof"]
+    dof = result.quantity("y").gum.dof
     assert 6.0 < dof < 6.5  # Welch-Satterthwaite: 0.0125**2 / (0.01**2 / 4) = 6.25
     page = html(result.to_dict())
     assert f"GUM: t PDF, ν_eff = {dof:.3g}" in page

@@ -135,8 +135,8 @@ def test_named_and_vector_outputs_become_quantities_and_a_region():
     res = study_result(r, {"s": g}, unit="mm")
     assert [q.name for q in res.quantities] == ["s", "p[0]", "p[1]"]
     assert res.quantities[0].gum is not None  # the GUM beside the Monte Carlo
-    assert res.quantities[0].gum["u"] == pytest.approx(math.sqrt(5.0), rel=1e-12)
-    assert res.quantities[1].mc["u"] == r["p"].component(0).u  # the same reduction
+    assert res.quantities[0].gum.u == pytest.approx(math.sqrt(5.0), rel=1e-12)
+    assert res.quantities[1].mc.u == r["p"].component(0).u  # the same reduction
     assert [reg.name for reg in res.regions] == ["p"]
     with pytest.raises(InputError, match="names output 'q'"):
         study_result(r, {"q": g})

@@ -66,8 +66,8 @@ def test_verify_simulate_gives_the_numbers_of_mtmc_run(capsys: pytest.CaptureFix
             q = r.quantity(f"volumetric_error.{which}.{stat}")
             # one unit: the study's µm, in the command's JSON and in the run's quantities
             assert q.unit == "µm"
-            assert j[f"{which}_ve_um"][stat]["estimate"] == q.mc["estimate"]
-            assert j[f"{which}_ve_um"][stat]["u"] == q.mc["u"]
+            assert j[f"{which}_ve_um"][stat]["estimate"] == q.mc.estimate
+            assert j[f"{which}_ve_um"][stat]["u"] == q.mc.u
 
 
 def test_verify_simulate_and_mtmc_run_draw_the_same_uncertainties(tmp_path: Path) -> None:
@@ -86,7 +86,7 @@ def test_verify_simulate_and_mtmc_run_draw_the_same_uncertainties(tmp_path: Path
     a = st.study.simulate(20, 8)
     b = st.run(trials=20, seed=8)
     mc = b.quantity("volumetric_error.compensated.mean").mc
-    assert mc["estimate"] == 1e3 * a.ve("compensated.mean")[0]  # µm from mm
+    assert mc.estimate == 1e3 * a.ve("compensated.mean")[0]  # µm from mm
     plain = load_study(STUDIES / "aguado2017.toml").study.simulate(20, 8)
     assert a.ve("compensated.mean")[0] != plain.ve("compensated.mean")[0]
 
@@ -116,8 +116,8 @@ def test_artefact_simulate_gives_the_numbers_of_mtmc_run(
         name = f"r_max.b{pose['b_deg']:g}_c{pose['c_deg']:g}"
         q = r.quantity(name)
         assert q.unit == "µm"  # the study's unit, as the command's
-        assert pose["r_max_um"]["estimate"] == pytest.approx(q.mc["estimate"], rel=1e-12)
-        assert pose["r_max_um"]["u"] == pytest.approx(q.mc["u"], rel=1e-12)
+        assert pose["r_max_um"]["estimate"] == pytest.approx(q.mc.estimate, rel=1e-12)
+        assert pose["r_max_um"]["u"] == pytest.approx(q.mc.u, rel=1e-12)
 
 
 def test_graph_run_gives_the_numbers_of_mtmc_run(capsys: pytest.CaptureFixture[str]) -> None:
@@ -129,8 +129,8 @@ def test_graph_run_gives_the_numbers_of_mtmc_run(capsys: pytest.CaptureFixture[s
         # the same draws through the same graph; the command reports the place as a vector
         # (means over the trials of each column of an (M, 3) array), the study each
         # coordinate alone: the same sums in another order, so equal to a few ulps
-        assert j["places"]["p"]["estimate"][i] == pytest.approx(mc["estimate"], rel=1e-13)
-        assert j["places"]["p"]["u"][i] == pytest.approx(mc["u"], rel=1e-13)
+        assert j["places"]["p"]["estimate"][i] == pytest.approx(mc.estimate, rel=1e-13)
+        assert j["places"]["p"]["u"][i] == pytest.approx(mc.u, rel=1e-13)
 
 
 def test_propagate_gives_the_numbers_of_mtmc_run(
@@ -145,8 +145,8 @@ def test_propagate_gives_the_numbers_of_mtmc_run(
     argv = ["propagate", "X1 + X2", "-i", "X1=normal(0, 1)", "-i", "X2=normal(0.5, 0.5)"]
     j = _json([*argv, "--trials", "3000", "--seed", "5", "--json"], capsys)
     mc = load_study(path).run(trials=3000, seed=5).quantity("Y").mc
-    assert j["estimate"] == mc["estimate"]
-    assert j["u"] == mc["u"]
+    assert j["estimate"] == mc.estimate
+    assert j["u"] == mc.u
     assert math.isfinite(j["u"])
 
 

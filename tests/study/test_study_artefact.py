@@ -73,26 +73,26 @@ def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them
     # the kept samples give the engine's moments again (to rounding) and the GUM its u,
     # in the study's µm: the engine's mm times 1000
     assert {x.unit for x in r.quantities} == {"µm"}
-    assert rm.mc["estimate"] == pytest.approx(1e3 * ref.mc_mean["r_max_measured"][i], rel=1e-12)
-    assert rm.mc["u"] == pytest.approx(1e3 * ref.mc_u["r_max_measured"][i], rel=1e-9)
-    assert rm.gum["u"] == pytest.approx(1e3 * ref.gum_u["r_max_measured"][i], rel=1e-12)
-    assert rm.gum["estimate"] == pytest.approx(1e3 * ref.nominal.r_max_measured[0, i], rel=1e-9)
+    assert rm.mc.estimate == pytest.approx(1e3 * ref.mc_mean["r_max_measured"][i], rel=1e-12)
+    assert rm.mc.u == pytest.approx(1e3 * ref.mc_u["r_max_measured"][i], rel=1e-9)
+    assert rm.gum.u == pytest.approx(1e3 * ref.gum_u["r_max_measured"][i], rel=1e-12)
+    assert rm.gum.estimate == pytest.approx(1e3 * ref.nominal.r_max_measured[0, i], rel=1e-9)
     # the budget line of a k-variate input gives its contribution sqrt(c V cᵀ), not the
     # first component's x, u and c; the contributions add up in quadrature to the GUM u
-    cmm = next(b for b in rm.budget if b["name"] == "cmm")
-    assert cmm["components"] == 15
-    assert cmm["estimate"] is cmm["u"] is cmm["sensitivity"] is None
-    assert cmm["contribution"] > 0
-    total = np.sqrt(sum(b["contribution"] ** 2 for b in rm.budget))
-    assert total == pytest.approx(rm.gum["u"], rel=1e-9)
+    cmm = next(b for b in rm.budget if b.name == "cmm")
+    assert cmm.components == 15
+    assert cmm.estimate is cmm.u is cmm.sensitivity is None
+    assert cmm.contribution > 0
+    total = np.sqrt(sum(b.contribution**2 for b in rm.budget))
+    assert total == pytest.approx(rm.gum.u, rel=1e-9)
     j = ref.study.names.index("dw3y")
     s = q["setup.dw3y"]
-    assert s.mc["u"] == pytest.approx(1e3 * ref.mc_u["setup"][j], rel=1e-9)
-    assert s.gum["k"] == pytest.approx(1.959964, rel=1e-6)  # normal: infinite dof
-    lo, hi = s.mc["shortest"]
+    assert s.mc.u == pytest.approx(1e3 * ref.mc_u["setup"][j], rel=1e-9)
+    assert s.gum.k == pytest.approx(1.959964, rel=1e-6)  # normal: infinite dof
+    lo, hi = s.mc.shortest
     samples = 1e3 * ref.samples["setup"][:, j]
     assert np.mean((samples >= lo) & (samples <= hi)) == pytest.approx(0.95, abs=0.01)
     # the histogram is a density of the samples
     h = s.histogram
-    assert float(np.sum(np.diff(h["edges"]) * h["density"])) == pytest.approx(1.0, rel=1e-12)
+    assert float(np.sum(np.diff(h.edges) * h.density)) == pytest.approx(1.0, rel=1e-12)
     assert ref.samples["r_max_measured"].shape == (300, 9)

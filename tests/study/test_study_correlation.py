@@ -49,14 +49,14 @@ def test_study_runs_with_the_correlation_in_mc_gum_result_and_report(tmp_path):
     ua, ub, r = 0.002, 0.02 / math.sqrt(12), 0.7
     exact = math.sqrt(ua**2 + ub**2 - 2 * r * ua * ub)  # JCGM 100 eq. (13), c = (1, -1)
     q = result.quantities[0]
-    assert q.gum["u"] == pytest.approx(exact, rel=1e-12)  # linear: exact to rounding
+    assert q.gum.u == pytest.approx(exact, rel=1e-12)  # linear: exact to rounding
     # the Monte Carlo draws the inputs with the product-moment correlation that the
     # Gaussian copula gives a normal and a uniform marginal, r_pm = r corr(Z, Φ(Z)) =
     # r sqrt(3/π) (closed form); u within 4 standard errors of s, u/sqrt(2(M - 1)) for
     # a normal output and less for this one, flatter than a normal (kurtosis below 3)
     r_pm = r * math.sqrt(3 / math.pi)
     mc_exact = math.sqrt(ua**2 + ub**2 - 2 * r_pm * ua * ub)
-    assert q.mc["u"] == pytest.approx(mc_exact, rel=4 / math.sqrt(2 * 65536))
+    assert q.mc.u == pytest.approx(mc_exact, rel=4 / math.sqrt(2 * 65536))
     rec = result.to_dict()["correlation"]
     assert rec["copula"] == {"kind": "gaussian"}
     assert rec["pairs"][0]["r"] == 0.7
@@ -194,11 +194,11 @@ def test_the_gauge_block_example_has_the_numbers_of_docs_correlation():
     q = result.quantities[0]
     nm = 1e6  # mm to nm
     # our own seeded run, printed in the docs to these digits
-    assert f"{q.mc['u'] * nm:.2f}" == "25.11"
-    assert [f"{(x - 50) * nm:.1f}" for x in q.mc["symmetric"]] == ["-16.9", "76.9"]
+    assert f"{q.mc.u * nm:.2f}" == "25.11"
+    assert [f"{(x - 50) * nm:.1f}" for x in q.mc.symmetric] == ["-16.9", "76.9"]
     # JCGM 100 eq. (13) by hand: u² = 10² + 10² + 34.64² + 17.32² - 2·0.9·34.64·17.32 nm²
     u1, u2 = 60 / math.sqrt(3), 30 / math.sqrt(3)
-    assert q.gum["u"] * nm == pytest.approx(
+    assert q.gum.u * nm == pytest.approx(
         math.sqrt(100 + 100 + u1**2 + u2**2 - 2 * 0.9 * u1 * u2), rel=1e-12
     )  # a linear model: complex-step sensitivities exact, agreement to rounding
     realised = result.to_dict()["correlation"]["pairs"][0]["realised"]

@@ -78,7 +78,7 @@ def test_broken_propagate_file_names_file_line_and_field(old, new, line, field, 
 
 def test_the_good_file_loads_and_runs():
     r = loads_study(GOOD_PROPAGATE, file="good.toml").run()
-    assert r.quantity("y").mc["estimate"] == pytest.approx(3.0, abs=0.02)
+    assert r.quantity("y").mc.estimate == pytest.approx(3.0, abs=0.02)
 
 
 GOOD_GRAPH = """\

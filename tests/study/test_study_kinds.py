@@ -57,26 +57,26 @@ def test_mass_calibration_is_monte_carlo_and_gum_of_the_model(results):
         "rho_r": parse_distribution("uniform(7950, 8050)"),
     }
     mc = monte_carlo(model, inputs, trials=M, seed=SEED)
-    assert q.mc["estimate"] == mc.estimate
-    assert q.mc["u"] == mc.u
-    assert q.mc["shortest"] == list(mc.coverage_interval(0.95, "shortest"))
-    assert q.mc["symmetric"] == list(mc.coverage_interval(0.95, "symmetric"))
+    assert q.mc.estimate == mc.estimate
+    assert q.mc.u == mc.u
+    assert q.mc.shortest == mc.coverage_interval(0.95, "shortest")
+    assert q.mc.symmetric == mc.coverage_interval(0.95, "symmetric")
     # the study file asks for the shortest interval: U is its half-length
-    assert q.mc["interval"] == "shortest"
+    assert q.mc.interval == "shortest"
     lo, hi = mc.coverage_interval(0.95, "shortest")
-    assert q.mc["U"] == 0.5 * (hi - lo) != mc.expanded_uncertainty(0.95, "symmetric")
+    assert q.mc.U == 0.5 * (hi - lo) != mc.expanded_uncertainty(0.95, "symmetric")
     g = gum(model, inputs)
-    assert q.gum["u"] == g.u
-    assert q.gum["k"] == g.coverage_factor()
+    assert q.gum.u == g.u
+    assert q.gum.k == g.coverage_factor()
     v = validate(g, mc, p=0.95, kind="shortest")
-    assert q.validation["d_low"] == v.d_low
-    assert q.validation["kind"] == "shortest"
+    assert q.validation.d_low == v.d_low
+    assert q.validation.kind == "shortest"
     # JCGM 101 Table 7: u(δm) = 0.0754 mg by MC, 0.0539 mg by the GUM
-    assert q.mc["u"] == pytest.approx(0.0754, rel=_mc_tol(M))
-    assert q.gum["u"] == pytest.approx(0.0539, abs=5e-5)
-    shares = [b["share"] for b in q.budget]
+    assert q.mc.u == pytest.approx(0.0754, rel=_mc_tol(M))
+    assert q.gum.u == pytest.approx(0.0539, abs=5e-5)
+    shares = [b.share for b in q.budget]
     assert sum(shares) == pytest.approx(1.0, abs=1e-12)
-    assert [b["name"] for b in q.budget] == list(inputs)
+    assert [b.name for b in q.budget] == list(inputs)
 
 
 def test_graph_study_is_monte_carlo_of_graph_model_and_equals_run_graph(results):
@@ -85,24 +85,24 @@ def test_graph_study_is_monte_carlo_of_graph_model_and_equals_run_graph(results)
     model, inputs = graph_model(g, "d_ac")
     mc = monte_carlo(model, inputs, trials=M, seed=SEED)
     q = r.quantity("d_ac")
-    assert q.mc["u"] == mc.u
-    assert q.mc["estimate"] == mc.estimate
+    assert q.mc.u == mc.u
+    assert q.mc.estimate == mc.estimate
     # no [run] interval: U is half the probabilistically symmetric interval, as the API's
     lo, hi = mc.coverage_interval(0.95, "symmetric")
-    assert q.mc["interval"] == "symmetric"
-    assert q.mc["U"] == 0.5 * (hi - lo) == mc.expanded_uncertainty(0.95)
-    assert q.mc["k"] == q.mc["U"] / mc.u
+    assert q.mc.interval == "symmetric"
+    assert q.mc.U == 0.5 * (hi - lo) == mc.expanded_uncertainty(0.95)
+    assert q.mc.k == q.mc.U / mc.u
     # a second route: the graph's own batched run draws the same trials
     res = run_graph(g, M, SEED, outputs=["d_ac", "p_o"])
-    assert q.mc["u"] == pytest.approx(res.places["d_ac"].u, rel=1e-9)
+    assert q.mc.u == pytest.approx(res.places["d_ac"].u, rel=1e-9)
     np.testing.assert_allclose(
-        [r.quantity(f"p_o.{c}").mc["u"] for c in "xyz"], res.places["p_o"].u_vector, rtol=1e-9
+        [r.quantity(f"p_o.{c}").mc.u for c in "xyz"], res.places["p_o"].u_vector, rtol=1e-9
     )
     # the GUM of the component models beside Monte Carlo
-    assert q.gum["u"] == pytest.approx(gum(model, inputs).u, rel=1e-12)
-    assert q.mc["u"] == pytest.approx(q.gum["u"], rel=_mc_tol(M))
+    assert q.gum.u == pytest.approx(gum(model, inputs).u, rel=1e-12)
+    assert q.mc.u == pytest.approx(q.gum.u, rel=_mc_tol(M))
     for quant in r.quantities:
-        assert sum(b["share"] for b in quant.budget) == pytest.approx(1.0, abs=1e-9)
+        assert sum(b.share for b in quant.budget) == pytest.approx(1.0, abs=1e-9)
 
 
 def test_ball_centre_against_the_closed_form_of_the_probe_model(results):
@@ -113,8 +113,8 @@ def test_ball_centre_against_the_closed_form_of_the_probe_model(results):
     for c, u in zip("xyz", closed, strict=True):
         q = r.quantity(f"p.{c}")
         assert q.unit == "mm"
-        assert q.gum["u"] == pytest.approx(u, rel=1e-6)
-        assert q.mc["u"] == pytest.approx(u, rel=_mc_tol(M))
+        assert q.gum.u == pytest.approx(u, rel=1e-6)
+        assert q.mc.u == pytest.approx(u, rel=_mc_tol(M))
     assert {reg.name for reg in r.regions} == {"p: x, y", "p: x, z", "p: y, z"}
 
 
@@ -145,7 +145,7 @@ def test_axis_regions_against_the_gaussian_ellipse(results, name):
     # direction: the component along the axis moves to second order only
     comps = [r.quantity(f"{name}.direction.{c}") for c in "xyz"]
     along = int(np.argmax(np.abs(direction)))
-    assert comps[along].gum["u"] < 1e-3 * max(c.mc["u"] for c in comps)
+    assert comps[along].gum.u < 1e-3 * max(c.mc.u for c in comps)
 
 
 def test_sweep_is_the_library_sweep_with_its_surrogate(results):
@@ -184,14 +184,14 @@ def test_convergence_movement_over_the_last_half_against_direct_std(results):
         "rho_r": "uniform(7950, 8050)",
     }
     y = np.asarray(monte_carlo(model, inputs, trials=M, seed=SEED).samples)
-    ms = [m for m in cv["m"] if m >= M / 2]
+    ms = [m for m in cv.m if m >= M / 2]
     u = [y[:m].std(ddof=1) for m in ms]
     e = [y[:m].mean() for m in ms]
-    assert cv["last_half"]["u"] == pytest.approx(max(u) - min(u), rel=1e-6, abs=1e-12)
-    assert cv["last_half"]["estimate"] == pytest.approx(max(e) - min(e), rel=1e-6, abs=1e-12)
+    assert cv.last_half_u == pytest.approx(max(u) - min(u), rel=1e-6, abs=1e-12)
+    assert cv.last_half_estimate == pytest.approx(max(e) - min(e), rel=1e-6, abs=1e-12)
     # u = 0.075 mg: two significant digits give δ = 0.0005 mg (JCGM 101 §7.9.2)
-    assert cv["delta"] == 0.0005
-    assert cv["ndig"] == 2
+    assert cv.delta == 0.0005
+    assert cv.ndig == 2
 
 
 def test_convergence_against_direct_means():
@@ -265,11 +265,11 @@ def test_kinematics_study_against_finite_differences_and_own_sampling():
         for j, c in enumerate("xyz"):
             quant = r.quantity(f"pose{i + 1}.{c}")
             # the GUM by differentiation of the model against finite differences
-            assert quant.gum["u"] == pytest.approx(u_fd[j], rel=1e-5)
+            assert quant.gum.u == pytest.approx(u_fd[j], rel=1e-5)
             # Monte Carlo against draws made here with another generator
-            assert quant.mc["u"] == pytest.approx(u_own[j], rel=_mc_tol(M) + _mc_tol(m))
-            assert quant.gum["estimate"] == pytest.approx(machine.tool_position(q)[0, j])
+            assert quant.mc.u == pytest.approx(u_own[j], rel=_mc_tol(M) + _mc_tol(m))
+            assert quant.gum.estimate == pytest.approx(machine.tool_position(q)[0, j])
     # pose 1, x: rectangular tilts dominate, the MC interval is narrower than the GUM's
     q1x = r.quantity("pose1.x")
-    assert q1x.mc["k"] < 1.93 < q1x.gum["k"]
+    assert q1x.mc.k < 1.93 < q1x.gum.k
     assert r.tables[0].rows[0] == (1, 150.0, 0.0, -100.0, -30.0, 0.0)

@@ -66,8 +66,8 @@ def test_two_outputs_gum_is_c_ux_ct_and_mc_is_within_its_standard_error():
     se = np.sqrt((np.outer(np.diag(U_Y), np.diag(U_Y)) + U_Y**2) / (m - 1))
     assert np.all(np.abs(np.array(j["monte_carlo"]["cov"]) - U_Y) <= 5 * se)
     # each output is also a quantity, with the GUM of its own row of C
-    assert r.quantity("y1").gum["u"] == pytest.approx(math.sqrt(0.054), rel=1e-14)
-    assert r.quantity("y2").gum["u"] == pytest.approx(math.sqrt(0.1), rel=1e-14)
+    assert r.quantity("y1").gum.u == pytest.approx(math.sqrt(0.054), rel=1e-14)
+    assert r.quantity("y2").gum.u == pytest.approx(math.sqrt(0.1), rel=1e-14)
     assert r.quantity("y2").unit == "mm"
 
 
@@ -155,7 +155,7 @@ def test_a_single_model_of_components_of_a_vector_input():
     # closed form: u²(x0 + x1) = 0.054; the inputs entry lists the components
     text = ONE.replace('"x[0] * a"', '"x[0] + x[1]"').replace('a = "normal(3, 0.1)"\n', "")
     r = loads_study(text).run(trials=2000)
-    assert r.quantity("y2").gum["u"] ** 2 == pytest.approx(0.054, rel=1e-14)
+    assert r.quantity("y2").gum.u ** 2 == pytest.approx(0.054, rel=1e-14)
     x = r.to_dict()["inputs"][0]
     assert x["estimate"] == [1.0, 2.0]
     assert x["u"] == pytest.approx([0.1, 0.2], rel=1e-15)  # sqrt of the diagonal
@@ -304,7 +304,7 @@ def test_gum_of_the_study_is_the_library_gum():
     # a second route: the library's gum of the expression alone, bit for bit
     r = loads_study(ONE).run(trials=2000)
     g = gum(expression("x[0] * a"), {"x": MultivariateNormal([1, 2], U_X), "a": "normal(3, 0.1)"})
-    assert r.quantity("y2").gum["u"] == g.u
+    assert r.quantity("y2").gum.u == g.u
 
 
 def test_the_polar_coordinates_example_has_the_gum_of_docs_vector_inputs():

@@ -59,7 +59,7 @@ def test_the_record_is_the_engine_functions_bit_for_bit(mass):
     assert [x["u"] for x in rec["budget"]] == [e.u for e in b.entries]
     assert rec["sobol"]["first_sum"] == s.first_sum
     assert rec["u_gum"] == g.u
-    assert rec["u_mc"] == result.quantities[0].mc["u"]
+    assert rec["u_mc"] == result.quantities[0].mc.u
 
 
 def test_the_mass_calibration_shows_its_second_order_term(mass):

@@ -22,7 +22,7 @@ from mtmc.cli.main import main
 from mtmc.errors import MtmcError
 from mtmc.report import html
 from mtmc.study import load_study, loads_study, write_result
-from mtmc.study.observations import read_csv_column
+from mtmc.study.observations import load_csv_column
 from mtmc.uncertainty import AutocorrelationWarning
 
 CSV = """\
@@ -148,11 +148,11 @@ def test_cli_takes_type_a_and_dof_in_distribution_text(capsys):
     assert got["gum"]["k"] == pytest.approx(float(stats.t.ppf(0.975, math.floor(hand))), rel=1e-12)
 
 
-def test_read_csv_column_against_the_csv_module(tmp_path):
+def test_load_csv_column_against_the_csv_module(tmp_path):
     f = tmp_path / "r.csv"
     f.write_text("a,b\n1, 2\n3,\n,4.5\n", encoding="utf-8")
-    assert read_csv_column(f, "a").tolist() == [1.0, 3.0]
-    assert read_csv_column(f, "B").tolist() == [2.0, 4.5]  # case ignored where not exact
+    assert load_csv_column(f, "a").tolist() == [1.0, 3.0]
+    assert load_csv_column(f, "B").tolist() == [2.0, 4.5]  # case ignored where not exact
 
 
 # (replace this, with this, file (None: the study), line, field, words)

@@ -29,8 +29,8 @@ def test_verification_study_reports_what_simulate_computes():
     for i, name in enumerate(VE_NAMES):
         q = r.quantity(f"volumetric_error.{name}")
         assert q.unit == "µm"  # the study's unit; the simulation's mm times 1000
-        assert q.mc["estimate"] == pytest.approx(1e3 * mc.ve_estimate[i], rel=1e-12)
-        assert q.mc["u"] == pytest.approx(1e3 * mc.ve_u[i], rel=1e-12)
+        assert q.mc.estimate == pytest.approx(1e3 * mc.ve_estimate[i], rel=1e-12)
+        assert q.mc.u == pytest.approx(1e3 * mc.ve_u[i], rel=1e-12)
     rows = r.tables[0].rows
     assert [row[0] for row in rows] == list(mc.names)
     # each parameter with its unit (ISO 230-1), in the study file's units: displacements

@@ -46,7 +46,7 @@ def test_cli_run_writes_the_folder_the_library_computes(tmp_path, capsys):
     np.testing.assert_array_equal(np.load(out / "samples" / "dm.npy"), lib.samples["dm"])
     # the table printed is the library's rounding
     q = lib.quantity("dm")
-    assert any(q.reported["estimate"] in ln and q.reported["U"] in ln for ln in printed)
+    assert any(q.reported.estimate in ln and q.reported.U in ln for ln in printed)
     prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
     assert prov["mtmc_version"] == mtmc.__version__
     assert prov["seed"] == 11
@@ -58,7 +58,7 @@ def test_cli_run_writes_the_folder_the_library_computes(tmp_path, capsys):
     assert (out / "study.toml").read_text() == study.read_text()
     csv_lines = (out / "quantities.csv").read_text().splitlines()
     assert csv_lines[0].startswith("quantity,unit,estimate,u,U")
-    assert float(csv_lines[1].split(",")[3]) == q.mc["u"]
+    assert float(csv_lines[1].split(",")[3]) == q.mc.u
 
 
 def test_report_command_renders_again(tmp_path, capsys):

@@ -103,15 +103,15 @@ def test_a_study_too_large_to_keep_its_samples_has_its_report_summaries(monkeypa
     # the same study above the size kept for the report: the same summaries, streamed
     monkeypatch.setattr(mc_module, "KEEP_AUTO_BYTES", 0)
     q = study.run(trials=100_000, seed=1).quantities[0]
-    assert q.convergence["m"][-1] == 100_000
-    assert len(q.histogram["edges"]) == 61
+    assert q.convergence.m[-1] == 100_000
+    assert len(q.histogram.edges) == 61
     # the kept run's u is a two-pass sum over the samples, the streamed one merged block
     # moments: the same value to the rounding of M additions
-    assert q.mc["u"] == pytest.approx(kept.mc["u"], rel=1e-12)
-    assert q.mc["estimate"] == pytest.approx(kept.mc["estimate"], rel=1e-12)
+    assert q.mc.u == pytest.approx(kept.mc.u, rel=1e-12)
+    assert q.mc.estimate == pytest.approx(kept.mc.estimate, rel=1e-12)
     # the intervals: order statistics against the sketch's, to within its rank error
-    assert q.mc["symmetric"] == pytest.approx(kept.mc["symmetric"], abs=1e-2 * kept.mc["u"])
-    assert q.convergence["u"][-1] == pytest.approx(kept.convergence["u"][-1], rel=1e-12)
+    assert q.mc.symmetric == pytest.approx(kept.mc.symmetric, abs=1e-2 * kept.mc.u)
+    assert q.convergence.u[-1] == pytest.approx(kept.convergence.u[-1], rel=1e-12)
 
 
 def test_sketch_with_the_default_sort_is_the_stable_sort_bits(monkeypatch):

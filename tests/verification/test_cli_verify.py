@@ -11,7 +11,7 @@ import pytest
 from mtmc.cli.main import main
 from mtmc.errors import InputError
 from mtmc.study import load_study, loads_study
-from mtmc.verification.compensation import read_plain_csv
+from mtmc.verification.compensation import loads_plain_csv
 from mtmc.verification.identify import identify
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -119,7 +119,7 @@ def test_identify_from_csv_and_export(tmp_path: Path, capsys) -> None:  # type: 
     for i, n in enumerate(ref.names[:-6]):
         f = 1e6 if st.machine.error_term(n.split("[")[0]).angular else 1e3
         assert d["coefficients"][n]["estimate"] == pytest.approx(ref.estimate[0, i] * f, rel=1e-6)
-    table = read_plain_csv(out.read_text())
+    table = loads_plain_csv(out.read_text())
     xs = table.curve("EXX").positions
     truth = st.truth["EXX"](xs)
     fitted = table.curve("EXX").values

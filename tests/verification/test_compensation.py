@@ -14,14 +14,14 @@ from mtmc.kinematics.parameters import ErrorModel
 from mtmc.verification.compensation import (
     CompensationTable,
     compensation_table,
-    etalon_text,
-    isg_csv_text,
+    dump_compensation,
+    dumps_etalon,
+    dumps_isg_csv,
+    dumps_plain_csv,
     load_compensation,
-    plain_csv_text,
-    read_etalon,
-    read_isg_csv,
-    read_plain_csv,
-    write_compensation,
+    loads_etalon,
+    loads_isg_csv,
+    loads_plain_csv,
 )
 
 REF = Path(__file__).resolve().parents[1] / "reference" / "formats"
@@ -83,7 +83,11 @@ def test_table_from_an_error_model_is_the_functions_on_the_grid() -> None:
 
 @pytest.mark.parametrize(
     ("writer", "reader"),
-    [(isg_csv_text, read_isg_csv), (etalon_text, read_etalon), (plain_csv_text, read_plain_csv)],
+    [
+        (dumps_isg_csv, loads_isg_csv),
+        (dumps_etalon, loads_etalon),
+        (dumps_plain_csv, loads_plain_csv),
+    ],
 )
 @pytest.mark.parametrize("sign", ["error", "correction"])
 def test_round_trip(writer, reader, sign: str) -> None:  # type: ignore[no-untyped-def]
@@ -115,11 +119,11 @@ def test_write_and_load_files(tmp_path: Path) -> None:
     model, theta = _model()
     t = compensation_table(model, GRID, theta=theta)
     for fmt in ("isg", "etalon", "csv"):
-        p = write_compensation(t, tmp_path / f"comp.{fmt}", fmt)
+        p = dump_compensation(t, tmp_path / f"comp.{fmt}", fmt)
         back = load_compensation(p, fmt)
         np.testing.assert_array_equal(back.curve("ECZ").values, t.curve("ECZ").values)
     with pytest.raises(InputError, match="format"):
-        write_compensation(t, tmp_path / "x", "siemens")
+        dump_compensation(t, tmp_path / "x", "siemens")
     with pytest.raises(InputError, match="cannot read"):
         load_compensation(tmp_path / "missing.txt", "isg")
 
@@ -143,7 +147,7 @@ def _structure(text: str) -> list[list[object]]:
 
 def test_isg_reference_example() -> None:
     text = (REF / "isg_csv_example.txt").read_text()
-    t = read_isg_csv(text, "isg_csv_example.txt")
+    t = loads_isg_csv(text, "isg_csv_example.txt")
     # the values typed from the ISG documentation page
     assert t.sign == "error"
     assert t.constants == {"EY0A": 0.1, "EZ0A": 0.2, "EX0B": 0.11}
@@ -159,14 +163,14 @@ def test_isg_reference_example() -> None:
     for name, vals in expected.items():
         np.testing.assert_array_equal(t.curve(name).positions, [0.0, 10.0])
         np.testing.assert_array_equal(t.curve(name).values, vals)
-    written = isg_csv_text(t)
+    written = dumps_isg_csv(t)
     assert _structure(written) == _structure(text)
-    assert read_isg_csv(written) == t
+    assert loads_isg_csv(written) == t
 
 
 def test_etalon_reference_example() -> None:
     text = (REF / "etalon_exchange_example.txt").read_text()
-    t = read_etalon(text, "etalon_exchange_example.txt")
+    t = loads_etalon(text, "etalon_exchange_example.txt")
     assert t.constants == {"EC0B": 0.000022355737, "EA0B": 0.000047622950}
     c = t.curve("EXY")
     np.testing.assert_array_equal(c.positions, [-280.0, -270.0, -260.0, 260.0, 270.0])
@@ -174,18 +178,18 @@ def test_etalon_reference_example() -> None:
         c.values,
         [-0.001358635132, -0.000240680764, 0.000877273605, -0.001297146744, -0.000316265101],
     )
-    written = etalon_text(t)
+    written = dumps_etalon(t)
     assert _structure(written) == _structure(text)
-    assert read_etalon(written) == t
+    assert loads_etalon(written) == t
 
 
 def test_tool_errors_only_in_plain_csv() -> None:
     t = CompensationTable({"EXT": 0.01, "EC0Y": 1e-5})
     with pytest.raises(InputError, match="plain CSV"):
-        isg_csv_text(t)
+        dumps_isg_csv(t)
     with pytest.raises(InputError, match="plain CSV"):
-        etalon_text(t)
-    assert read_plain_csv(plain_csv_text(t)) == t
+        dumps_etalon(t)
+    assert loads_plain_csv(dumps_plain_csv(t)) == t
 
 
 def test_table_input_errors() -> None:
@@ -232,9 +236,9 @@ X      EXX    EYX
     ],
 )
 def test_isg_errors_name_line_and_field(text: str, line: int, field: str, message: str) -> None:
-    assert read_isg_csv(ISG).constants == {"EC0Y": 0.1, "EX0C": 0.2}
+    assert loads_isg_csv(ISG).constants == {"EC0Y": 0.1, "EX0C": 0.2}
     with pytest.raises(ParseError, match=message) as info:
-        read_isg_csv(text, "comp.csv")
+        loads_isg_csv(text, "comp.csv")
     assert (info.value.file, info.value.line, info.value.field) == ("comp.csv", line, field)
     assert str(info.value).startswith(f"comp.csv:{line}: field {field}:")
 
@@ -264,9 +268,9 @@ Gridpoints = {
     ],
 )
 def test_etalon_errors_name_line_and_field(text: str, line: int, field: str, message: str) -> None:
-    assert read_etalon(ETALON).curve("EXY").values.tolist() == [-0.0013, -0.0002]
+    assert loads_etalon(ETALON).curve("EXY").values.tolist() == [-0.0013, -0.0002]
     with pytest.raises(ParseError, match=message) as info:
-        read_etalon(text, "comp.txt")
+        loads_etalon(text, "comp.txt")
     assert (info.value.file, info.value.line, info.value.field) == ("comp.txt", line, field)
 
 
@@ -295,9 +299,9 @@ def test_plain_csv_errors(
     edit: tuple[str, str], line: int, field: str | None, message: str
 ) -> None:
     with pytest.raises(ParseError, match=message) as info:
-        read_plain_csv(CSV.replace(*edit), "comp.csv")
+        loads_plain_csv(CSV.replace(*edit), "comp.csv")
     assert (info.value.line, info.value.field) == (line, field)
-    t = read_plain_csv(CSV)
+    t = loads_plain_csv(CSV)
     assert t.sign == "correction"
     assert t.constants == {"EC0Y": 1e-05}
     assert math.isclose(t.curve("EXX").values[1], 0.002)
@@ -305,7 +309,11 @@ def test_plain_csv_errors(
 
 @pytest.mark.parametrize(
     ("writer", "reader"),
-    [(isg_csv_text, read_isg_csv), (etalon_text, read_etalon), (plain_csv_text, read_plain_csv)],
+    [
+        (dumps_isg_csv, loads_isg_csv),
+        (dumps_etalon, loads_etalon),
+        (dumps_plain_csv, loads_plain_csv),
+    ],
 )
 def test_every_truncation_is_refused_or_the_whole_table(writer, reader) -> None:  # type: ignore[no-untyped-def]
     model, theta = _model()
@@ -333,18 +341,18 @@ _CSV_HEAD = "error,axis,position,position_unit,value,value_unit\n"
 @pytest.mark.parametrize(
     ("reader", "text", "line", "message"),
     [
-        (read_isg_csv, "", 1, "no table"),
-        (read_isg_csv, "// only a comment\n\n", 1, "no table"),
-        (read_etalon, "// only a comment\n", 1, "no table"),
-        (read_plain_csv, "# only a comment\n", 1, "no header"),
-        (read_plain_csv, "# sign = error\n" + _CSV_HEAD, 2, "no table"),
-        (read_isg_csv, ISG.replace("sign = error", "sign = foo"), 1, "'sign = foo'"),
-        (read_isg_csv, ISG.replace("sign = error", "sign = corrections"), 1, "corrections"),
-        (read_etalon, "// sign = errors\n" + ETALON, 1, "'sign = errors'"),
-        (read_plain_csv, CSV.replace("sign = correction", "sign = foo"), 1, "'sign = foo'"),
-        (read_plain_csv, CSV + "# sign = error\n", 6, "second sign line"),
+        (loads_isg_csv, "", 1, "no table"),
+        (loads_isg_csv, "// only a comment\n\n", 1, "no table"),
+        (loads_etalon, "// only a comment\n", 1, "no table"),
+        (loads_plain_csv, "# only a comment\n", 1, "no header"),
+        (loads_plain_csv, "# sign = error\n" + _CSV_HEAD, 2, "no table"),
+        (loads_isg_csv, ISG.replace("sign = error", "sign = foo"), 1, "'sign = foo'"),
+        (loads_isg_csv, ISG.replace("sign = error", "sign = corrections"), 1, "corrections"),
+        (loads_etalon, "// sign = errors\n" + ETALON, 1, "'sign = errors'"),
+        (loads_plain_csv, CSV.replace("sign = correction", "sign = foo"), 1, "'sign = foo'"),
+        (loads_plain_csv, CSV + "# sign = error\n", 6, "second sign line"),
         (
-            read_plain_csv,
+            loads_plain_csv,
             CSV + "EYX,X,0.0,mm,0.1,mm\n",
             6,
             "EYX has 1 positions of axis X, EXX 2",
@@ -362,7 +370,7 @@ def test_tables_that_are_not_whole_are_refused(  # type: ignore[no-untyped-def]
 def test_a_value_cut_inside_its_exponent_is_refused(tmp_path: Path) -> None:
     t = CompensationTable({"EC0Y": 4.6017387716398277e-05})
     for fmt, cut in (("etalon", "e-05\n"), ("isg", "e-05\n"), ("csv", "e-05,rad\n")):
-        whole = write_compensation(t, tmp_path / f"comp.{fmt}", fmt).read_text()
+        whole = dump_compensation(t, tmp_path / f"comp.{fmt}", fmt).read_text()
         assert load_compensation(tmp_path / f"comp.{fmt}", fmt) == t
         short = tmp_path / f"short.{fmt}"
         short.write_text(whole[: whole.index(cut)])

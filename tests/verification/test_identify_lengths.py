@@ -11,7 +11,7 @@ import pytest
 from mtmc.cli.main import main
 from mtmc.errors import InputError
 from mtmc.study import load_study
-from mtmc.verification.datafile import measured_points, parse_identification_csv
+from mtmc.verification.datafile import loads_identification_csv, measured_points
 
 STUDY = Path(__file__).resolve().parents[2] / "examples" / "studies" / "aguado2016.toml"
 
@@ -34,7 +34,7 @@ def test_lengths_give_the_same_identification_as_coordinates(tmp_path: Path, cap
     _write(tmp_path / "lengths.csv", ["X", "Y", "Z", *(f"L_{n}" for n in names)], q, L)
     _write(tmp_path / "xyz.csv", ["X", "Y", "Z", "x_lt", "y_lt", "z_lt"], q, ver.readings())
     # multilateration recovers the points exactly (noise-free)
-    d = parse_identification_csv(
+    d = loads_identification_csv(
         (tmp_path / "lengths.csv").read_text(), ("X", "Y", "Z"), st.trackers
     )
     assert d.kind == "lengths"
@@ -66,15 +66,15 @@ def test_lengths_give_the_same_identification_as_coordinates(tmp_path: Path, cap
 def test_bad_length_columns_are_named() -> None:
     st = load_study(STUDY).study
     with pytest.raises(InputError, match="L_nowhere"):
-        parse_identification_csv(
+        loads_identification_csv(
             "X,Y,Z,L_pos1,L_nowhere,L_pos2\n0,0,0,1,1,1\n", ("X", "Y", "Z"), st.trackers, "d.csv"
         )
     with pytest.raises(InputError, match="three or more stations"):
-        parse_identification_csv(
+        loads_identification_csv(
             "X,Y,Z,L_pos1,L_pos2\n0,0,0,1,1\n", ("X", "Y", "Z"), st.trackers, "d.csv"
         )
     with pytest.raises(InputError, match=r"d.csv:2:3: field Z: expected a plain decimal number"):
-        parse_identification_csv(
+        loads_identification_csv(
             "X,Y,Z,x_lt,y_lt,z_lt\n0,0,zero,1,1,1\n", ("X", "Y", "Z"), {}, "d.csv"
         )
 
@@ -96,7 +96,7 @@ def test_self_calibrated_stations_give_the_coordinates_identification(
     L = np.linalg.norm(p[:, None, :] - moved[None], axis=-1)
     _write(tmp_path / "lengths.csv", ["X", "Y", "Z", *(f"L_{n}" for n in names)], q, L)
     _write(tmp_path / "xyz.csv", ["X", "Y", "Z", "x_lt", "y_lt", "z_lt"], q, ver.readings())
-    d = parse_identification_csv(
+    d = loads_identification_csv(
         (tmp_path / "lengths.csv").read_text(), ("X", "Y", "Z"), st.trackers
     )
     # self-calibrated: the points in the datum frame of the moved stations, exactly;
@@ -143,7 +143,7 @@ def test_self_calibrated_stations_give_the_coordinates_identification(
 def test_self_calibration_is_refused_for_coordinates_and_three_stations(tmp_path: Path) -> None:
     st = load_study(STUDY).study
     ver = st.verification("mesh96", "pos4")
-    xyz = parse_identification_csv(
+    xyz = loads_identification_csv(
         "X,Y,Z,x_lt,y_lt,z_lt\n0,0,0,1,1,1\n", ("X", "Y", "Z"), st.trackers, "d.csv"
     )
     with pytest.raises(InputError, match="lengths per station"):
@@ -153,6 +153,6 @@ def test_self_calibration_is_refused_for_coordinates_and_three_stations(tmp_path
     C = np.array([st.trackers[n].position for n in names])
     L = np.linalg.norm(p[:, None, :] - C[None], axis=-1)
     _write(tmp_path / "l3.csv", ["X", "Y", "Z", *(f"L_{n}" for n in names)], ver.q, L)
-    d = parse_identification_csv((tmp_path / "l3.csv").read_text(), ("X", "Y", "Z"), st.trackers)
+    d = loads_identification_csv((tmp_path / "l3.csv").read_text(), ("X", "Y", "Z"), st.trackers)
     with pytest.raises(InputError, match="at least four stations"):
         measured_points(d, st.machine, st.trackers, ver.tracker, self_calibrated=True)

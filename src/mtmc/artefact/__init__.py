@@ -29,9 +29,9 @@ from mtmc.artefact.probing import (
     SphereFit,
     fit_points,
     fit_sensitivity,
+    load_points,
     patch_offsets,
     patch_points,
-    read_points,
 )
 
 __all__ = [
@@ -46,12 +46,12 @@ __all__ = [
     "fit_sensitivity",
     "identify_setup",
     "load_artefact",
+    "load_points",
     "loads_artefact",
     "paper_jacobian",
     "pairs",
     "patch_offsets",
     "patch_points",
-    "read_points",
     "setup_error_names",
     "shipped_artefact",
 ]

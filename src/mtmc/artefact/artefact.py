@@ -249,9 +249,9 @@ def loads_artefact(text: str, file: str = "<artefact>") -> Artefact:
     InputError
         On a missing or malformed field, naming the file, line and field.
     """
-    from mtmc.document import MAX_MM, Fields, parse_toml
+    from mtmc.document import MAX_MM, Fields, loads_toml
 
-    top = parse_toml(text, file)
+    top = loads_toml(text, file)
     src, data = top.source, top.data
     top.only(("name", "description", "diameter", "cmm", "ball"))
     diameter = top.number("diameter", low=0.0, high=MAX_MM, open_low=True)

@@ -27,7 +27,7 @@ from mtmc.document import MAX_MM, read_text
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
 
-__all__ = ["GravityEffect", "gravity_effect", "read_gravity"]
+__all__ = ["GravityEffect", "gravity_effect", "load_gravity"]
 
 _F = NDArray[np.float64]
 ORIENTATIONS = ("H", "O", "V")
@@ -130,7 +130,7 @@ def gravity_effect(rows: list[tuple[str, str, float, float, float]]) -> GravityE
     )
 
 
-def read_gravity(path: str | Path) -> GravityEffect:
+def load_gravity(path: str | Path) -> GravityEffect:
     """Read CMM measurements from a CSV file and compute eqs. 1–2.
 
     Parameters

@@ -13,7 +13,7 @@ the noise-free solution): at these noise levels (0.4 µm on a 5 mm ball, 6 mm pa
 differs from the converged fit by 2·10⁻⁴ µm with the calibrated radius (2·10⁻³ µm with a
 free radius), about 0.1 % of the centre's standard uncertainty (shown by the tests).
 
-:func:`read_points` reads real probed points from a CSV file (``x,y,z`` per row, with or
+:func:`load_points` reads real probed points from a CSV file (``x,y,z`` per row, with or
 without a header; mm, m or µm) and :func:`fit_points` fits them.
 """
 
@@ -39,7 +39,7 @@ __all__ = [
     "fit_sensitivity",
     "patch_offsets",
     "patch_points",
-    "read_points",
+    "load_points",
 ]
 
 _F = NDArray[np.float64]
@@ -246,7 +246,7 @@ def fit_points(points: npt.ArrayLike, radius: float | None = None) -> SphereFit:
     )
 
 
-def read_points(path: str | Path, units: str = "mm") -> _F:
+def load_points(path: str | Path, units: str = "mm") -> _F:
     """Read probed points from a CSV file: ``x,y,z`` per row, in ``units``; to mm.
 
     A first row that is not three numbers is taken as a header (e.g. ``x,y,z``); empty

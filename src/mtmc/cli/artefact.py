@@ -170,14 +170,14 @@ def fit_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object (mm)."),
 ) -> None:
     """Fit a sphere to POINTS (orthogonal distances), with standard uncertainties."""
-    from mtmc.artefact.probing import UNITS, fit_points, read_points
+    from mtmc.artefact.probing import UNITS, fit_points, load_points
 
     if units not in UNITS:
         fail(f"--units: expected mm, m or um, got {units!r}")
     if radius is not None and not radius > 0:
         fail(f"--radius: expected a radius > 0, got {radius}")
     try:
-        P = read_points(points, units)
+        P = load_points(points, units)
         f = fit_points(P, None if radius is None else radius * UNITS[units])
     except MtmcError as exc:
         fail(exc)
@@ -222,10 +222,10 @@ def gravity_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object (µm)."),
 ) -> None:
     """The gravity effect between mountings (eqs. 1-2): O-H and V-H per ball and mean."""
-    from mtmc.artefact.gravity import read_gravity
+    from mtmc.artefact.gravity import load_gravity
 
     try:
-        g = read_gravity(measurements)
+        g = load_gravity(measurements)
     except MtmcError as exc:
         fail(exc)
     out: dict[str, dict[str, Any]] = {

@@ -72,14 +72,14 @@ def _study(
     axis: str | None,
     type_a: str | None,
 ) -> Any:
-    from mtmc.positioning import UncertaintyModel, read_positioning_csv
+    from mtmc.positioning import UncertaintyModel, load_positioning_csv
     from mtmc.study.positioning import positioning_study
 
     if study_file is None:
         model = {} if type_a is None else {"type_a": type_a}
         return positioning_study(data, units=units, columns=columns, axis=axis or "X", model=model)
     s = load_study_of_kind(study_file, "positioning")
-    test = read_positioning_csv(data, columns=columns, units=units)
+    test = load_positioning_csv(data, columns=columns, units=units)
     model = s.model if type_a is None else dataclasses.replace(s.model, type_a=type_a)
     if not isinstance(model, UncertaintyModel):  # pragma: no cover - the study's own type
         raise InputError("not an uncertainty model", field="model")
@@ -130,7 +130,7 @@ def evaluate_cmd(
     from mtmc.positioning import pitch_compensation
     from mtmc.study import write_result
     from mtmc.study.positioning import summary
-    from mtmc.verification.compensation import write_compensation
+    from mtmc.verification.compensation import dump_compensation
 
     try:
         s = _study(data, study_file, units, parse_columns(columns), axis, type_a)
@@ -144,7 +144,7 @@ def evaluate_cmd(
                 **parallel_options(workers, executor, scheduler),
             )
         if compensation is not None:
-            write_compensation(pitch_compensation(s.test, s.axis, sign=sign), compensation, fmt)
+            dump_compensation(pitch_compensation(s.test, s.axis, sign=sign), compensation, fmt)
         if outdir is not None:
             argv = (ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]])
             write_result(result, outdir, study_text=s.source.text, argv=argv)
@@ -169,10 +169,10 @@ def evaluate_cmd(
         table.add_row(
             q.name,
             f"{p['estimate']:.3f} {unit}",
-            q.reported["U"],
+            q.reported.U,
             f"[{lo:.3f}, {hi:.3f}]",
             "" if p["gum"]["U"] is None else f"{p['gum']['U']:.3g}",
-            (q.validation or {}).get("verdict", ""),
+            "" if q.validation is None else q.validation.verdict,
         )
     console = Console()
     console.print(table)

@@ -70,13 +70,13 @@ def summary_table(result: Any) -> Table:
         table.add_column(col, justify="left" if col in ("quantity", "unit") else "right")
     for q in result.quantities:
         v = q.validation
-        k = "" if q.mc["k"] is None else f" (k = {q.mc['k']:.3f})"
+        k = "" if q.mc.k is None else f" (k = {q.mc.k:.3f})"
         table.add_row(
             q.name,
-            q.reported["estimate"],
-            q.reported["U"] + k,
+            q.reported.estimate,
+            q.reported.U + k,
             q.unit,
-            "" if v is None else v["verdict"],
+            "" if v is None else v.verdict,
         )
     return table
 
@@ -109,15 +109,15 @@ def run_summary(result: Any, outdir: Path) -> dict[str, Any]:
             {
                 "name": q.name,
                 "unit": q.unit,
-                "estimate": mc["estimate"],
-                "u": mc["u"],
-                "U": mc["U"],
-                "k": mc["k"],
-                "p": mc["p"],
-                "interval_kind": mc["interval"],
-                "interval": mc[mc["interval"]],
-                "reported": dict(q.reported),
-                "verdict": None if q.validation is None else q.validation["verdict"],
+                "estimate": mc.estimate,
+                "u": mc.u,
+                "U": mc.U,
+                "k": mc.k,
+                "p": mc.p,
+                "interval_kind": mc.interval,
+                "interval": list(mc.coverage_interval),
+                "reported": q.reported.to_dict(),
+                "verdict": None if q.validation is None else q.validation.verdict,
             }
         )
     return {

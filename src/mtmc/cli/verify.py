@@ -288,8 +288,8 @@ def identify_cmd(
     """Identify the error functions (and the tracker pose) from measured data."""
     from mtmc.verification.compensation import (
         compensation_table,
+        dump_compensation,
         measured_grid,
-        write_compensation,
     )
 
     if (export is None) != (out is None):
@@ -299,10 +299,10 @@ def identify_cmd(
     try:
         st = _load(study).study
         ver = st.verification(None, tracker)
-        from mtmc.verification.datafile import measured_points, read_identification_csv
+        from mtmc.verification.datafile import load_identification_csv, measured_points
         from mtmc.verification.identify import identify
 
-        d = read_identification_csv(data, st.machine.axes, st.trackers)
+        d = load_identification_csv(data, st.machine.axes, st.trackers)
         q = d.q
         meas, lt = measured_points(
             d, st.machine, st.trackers, ver.tracker, self_calibrated=self_cal
@@ -311,7 +311,7 @@ def identify_cmd(
         _check_identified(r, data)
         if export is not None and out is not None:
             table = compensation_table(st.model, measured_grid(st.model, q), theta=r.theta[0])
-            write_compensation(table, out, export)
+            dump_compensation(table, out, export)
     except MtmcError as exc:
         fail(exc)
     except OSError as exc:

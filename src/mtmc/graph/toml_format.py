@@ -1,7 +1,7 @@
 """The TOML graph file: reading (with file and line in every error) and writing.
 
 The format is documented in ``docs/graph-format.md``. Reading is in two steps kept apart:
-:func:`mtmc.document.parse_toml` parses the text, then :func:`loads_graph` turns the tables into
+:func:`mtmc.document.loads_toml` parses the text, then :func:`loads_graph` turns the tables into
 :class:`Place`, :class:`Transition` and :class:`Graph` objects, checking every key; nothing
 is skipped silently. TOML does not report lines, so the text is scanned for the ``[[place]]`` /
 ``[[transition]]`` headers and ``key =`` lines, and each entry and field keeps its line for
@@ -18,7 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, KeyPath, parse_toml
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, KeyPath, loads_toml
 from mtmc.errors import GraphError, MtmcError
 from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import MAX_MAGNITUDE, Place, ProbeDefaults, Transition
@@ -98,7 +98,7 @@ def loads_graph(text: str, *, file: str | None = None, validate: bool = True) ->
     >>> g.transitions[0].inputs
     ('a', 'a')
     """
-    top = parse_toml(text, file)
+    top = loads_toml(text, file)
     data, lines = top.data, _Lines(top.source.lines)
 
     def err(msg: str, line: int | None, fld: str | None) -> GraphError:

@@ -16,7 +16,7 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any
 
-from mtmc.document import parse_toml
+from mtmc.document import loads_toml
 from mtmc.errors import InputError
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import is_rotary, parse_topology
@@ -99,7 +99,7 @@ def library_entries() -> tuple[LibraryEntry, ...]:
         If the data file has a malformed entry (naming the entry and key).
     """
     text = resources.files("mtmc.kinematics").joinpath(_FILE).read_text(encoding="utf-8")
-    data = parse_toml(text, _FILE).data
+    data = loads_toml(text, _FILE).data
     return tuple(_entry(k, v) for k, v in data.items())
 
 

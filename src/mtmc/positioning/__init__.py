@@ -1,6 +1,6 @@
 """Positioning tests of numerically controlled axes (ISO 230-2) with their uncertainty.
 
-A test (:class:`PositioningTest`, read from a CSV file by :func:`read_positioning_csv`)
+A test (:class:`PositioningTest`, read from a CSV file by :func:`load_positioning_csv`)
 gives the parameters of ISO 230-2 from their definitions (:func:`evaluate`: ``A``, ``E``,
 ``M``, ``R``, ``B`` and their unidirectional forms); an input model of the test
 (:class:`UncertaintyModel`: the laser's wavelength, the refractive index of air by an
@@ -16,9 +16,9 @@ from mtmc.positioning.data import (
     COLUMNS,
     DEVIATION_UNITS,
     PositioningTest,
-    parse_positioning_csv,
+    load_positioning_csv,
+    loads_positioning_csv,
     parse_units,
-    read_positioning_csv,
     reading_times,
 )
 from mtmc.positioning.edlen import (
@@ -61,11 +61,11 @@ __all__ = [
     "disagreement_notes",
     "evaluate",
     "evaluate_uncertainty",
-    "parse_positioning_csv",
+    "load_positioning_csv",
+    "loads_positioning_csv",
     "parse_units",
     "pitch_compensation",
     "positioning_model",
-    "read_positioning_csv",
     "reading_times",
     "refractive_index",
     "saturation_vapour_pressure",

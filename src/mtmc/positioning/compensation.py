@@ -6,7 +6,7 @@ positional deviation ``x̄_i = (x̄_i↑ + x̄_i↓) / 2``, the error a control 
 subtracting it (:mod:`mtmc.verification.compensation`'s sign convention; ``sign =
 "correction"`` writes its negative). It is a :class:`~mtmc.verification.CompensationTable`,
 so the writers of that module give it in the ISG CSV, Etalon exchange and plain CSV
-formats (:func:`~mtmc.verification.write_compensation`), in their units: mm or rad for the
+formats (:func:`~mtmc.verification.dump_compensation`), in their units: mm or rad for the
 values, mm or deg for the positions.
 
 Applied to the test (:func:`apply_compensation`), the table is read back as a control

@@ -10,7 +10,7 @@ Units: the deviations stay in the unit of the test (``unit``: µm by default, or
 linear axis; arcseconds or µrad for a rotary axis), since every parameter of ISO 230-2 is
 stated in it; targets are in mm (deg for a rotary axis).
 
-The CSV file (:func:`read_positioning_csv`) has one row per reading under the header
+The CSV file (:func:`load_positioning_csv`) has one row per reading under the header
 ``target,run,direction,deviation`` (``columns`` maps other names, a vendor's export);
 ``direction`` is ``+``/``up``/``↑`` or ``-``/``down``/``↓``; other columns are ignored;
 lines starting with ``#`` are comments; the separator is a comma, a semicolon or a tab.
@@ -35,13 +35,13 @@ __all__ = [
     "COLUMNS",
     "DEVIATION_UNITS",
     "PositioningTest",
-    "parse_positioning_csv",
+    "load_positioning_csv",
+    "loads_positioning_csv",
     "parse_units",
-    "read_positioning_csv",
     "reading_times",
 ]
 
-#: The columns of a positioning CSV file, as :func:`read_positioning_csv` names them.
+#: The columns of a positioning CSV file, as :func:`load_positioning_csv` names them.
 COLUMNS = ("target", "run", "direction", "deviation")
 #: Deviation units by the unit of the targets: mm (linear axis), deg (rotary axis).
 DEVIATION_UNITS: Mapping[str, tuple[str, ...]] = {
@@ -297,14 +297,14 @@ def _reading(
     return (target, run, _DIRECTIONS[d_text.lower()]), deviation
 
 
-def parse_positioning_csv(
+def loads_positioning_csv(
     text: str,
     file: str = "<csv>",
     *,
     columns: Mapping[str, str] | None = None,
     units: str | tuple[str, str] = ("mm", "um"),
 ) -> PositioningTest:
-    """Read a positioning test from CSV text (see :func:`read_positioning_csv`)."""
+    """Read a positioning test from CSV text (see :func:`load_positioning_csv`)."""
     t_unit, d_unit = parse_units(units if isinstance(units, str) else ",".join(units))
     lines = [(k, raw.strip()) for k, raw in enumerate(text.splitlines(), start=1)]
     lines = [(k, s) for k, s in lines if s and not s.startswith("#")]
@@ -347,7 +347,7 @@ def parse_positioning_csv(
     )
 
 
-def read_positioning_csv(
+def load_positioning_csv(
     path: str | Path,
     *,
     columns: Mapping[str, str] | None = None,
@@ -380,4 +380,4 @@ def read_positioning_csv(
         in both directions, an unreadable file.
     """
     text = read_text(path, "positioning file")
-    return parse_positioning_csv(text, str(path), columns=columns, units=units)
+    return loads_positioning_csv(text, str(path), columns=columns, units=units)

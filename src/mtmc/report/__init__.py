@@ -12,17 +12,14 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol, TypeAlias, overload
+from typing import Any
 
 from mtmc.errors import InputError, MtmcError
 from mtmc.io import write_text_atomic
 
-if TYPE_CHECKING:
-    from mtmc.uncertainty.results import MonteCarloResult, MonteCarloResults
-
-__all__ = ["as_given", "fmt", "html", "render", "render_index", "render_report"]
+__all__ = ["as_given", "fmt", "html", "render", "render_index"]
 
 
 def as_given(x: Any) -> str:
@@ -228,71 +225,6 @@ def render(folder: str | Path) -> Path:
             file=str(d / "result.json"),
         ) from None
     return write_text_atomic(d / "report.html", page)
-
-
-class _HasToDict(Protocol):
-    """A result that gives the content of its ``result.json``."""
-
-    def to_dict(self) -> Mapping[str, Any]: ...
-
-
-#: Makes a result without ``to_dict()`` (that of :func:`mtmc.monte_carlo`) one with it.
-#: The package :mod:`mtmc` sets it to :func:`mtmc.study.load.study_result`: the study
-#: layer makes study results, and the report, below it, does not import it
-#: (docs/architecture.md).
-result_adapter: Callable[[Any], _HasToDict] | None = None
-
-#: What :func:`render_report` draws besides a result folder.
-_Source: TypeAlias = "Mapping[str, Any] | _HasToDict | MonteCarloResult | MonteCarloResults"
-
-
-@overload
-def render_report(source: str | Path, path: None = None) -> Path: ...
-
-
-@overload
-def render_report(source: _Source, path: None = None) -> str: ...
-
-
-@overload
-def render_report(source: _Source, path: str | Path) -> Path: ...
-
-
-def render_report(source: str | Path | _Source, path: str | Path | None = None) -> Path | str:
-    """Render a result: a result folder, or a result object (anything with ``to_dict()``).
-
-    Parameters
-    ----------
-    source : path-like, mapping or result
-        A result folder (its ``report.html`` is written), the content of a
-        ``result.json``, a result whose ``to_dict()`` gives it, or the result of
-        :func:`mtmc.monte_carlo` (made a study result of kind ``monte_carlo`` by
-        :func:`mtmc.study.load.study_result`).
-    path : path-like, optional
-        Where to write the page for a mapping or result (default: return the text).
-
-    Returns
-    -------
-    pathlib.Path or str
-        The file written (for a folder, or with ``path``), else the HTML text.
-    """
-    if isinstance(source, str | Path):
-        return render(source)
-    if isinstance(source, Mapping):
-        doc: Mapping[str, Any] = source
-    elif hasattr(source, "to_dict"):
-        doc = source.to_dict()
-    elif result_adapter is not None:
-        doc = result_adapter(source).to_dict()
-    else:
-        raise InputError(
-            f"expected a result folder, a result or its result.json, got {type(source).__name__}",
-            field="source",
-        )
-    text = html(doc)
-    if path is None:
-        return text
-    return write_text_atomic(path, text)
 
 
 def render_index(

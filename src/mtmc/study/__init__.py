@@ -15,8 +15,22 @@ from mtmc.study import kinematics as _kinematics  # noqa: F401  (registers kinem
 from mtmc.study import positioning as _positioning  # noqa: F401  (registers positioning)
 from mtmc.study import propagate as _propagate  # noqa: F401  (registers propagate)
 from mtmc.study import verification as _verification  # noqa: F401  (registers verification)
-from mtmc.study.base import Quantity, Region, Study, StudyResult, Table
+from mtmc.study.base import (
+    BudgetLine,
+    Convergence,
+    GumSummary,
+    Histogram,
+    MonteCarloSummary,
+    Quantity,
+    Region,
+    Reported,
+    Study,
+    StudyResult,
+    Table,
+    ValidationSummary,
+)
 from mtmc.study.load import load_result, study_result
+from mtmc.study.render import render_report
 from mtmc.study.spec import (
     RunSettings,
     StudyKind,
@@ -28,18 +42,26 @@ from mtmc.study.spec import (
 from mtmc.study.write import provenance, write_result
 
 __all__ = [
+    "BudgetLine",
+    "Convergence",
+    "GumSummary",
+    "Histogram",
+    "MonteCarloSummary",
     "Quantity",
     "Region",
+    "Reported",
     "RunSettings",
     "Study",
     "StudyKind",
     "StudyResult",
     "Table",
+    "ValidationSummary",
     "load_study",
     "load_result",
     "loads_study",
     "provenance",
     "register_kind",
+    "render_report",
     "study_kinds",
     "study_result",
     "write_result",

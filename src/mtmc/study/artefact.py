@@ -221,7 +221,7 @@ def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
 
 
 @register_kind("artefact", "a fiducial artefact probed at rotary poses (Wang, Cheung and Kong)")
-def load_artefact_kind(top: Fields) -> ArtefactKindStudy:
+def read_artefact_kind(top: Fields) -> ArtefactKindStudy:
     """Validate an ``artefact`` study file (reader: :mod:`mtmc.artefact.study`)."""
     from mtmc.artefact.study import read_artefact_study
 

@@ -17,14 +17,14 @@ import csv
 import io
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.document import Source
-from mtmc.frozen import frozen_floats
+from mtmc.frozen import frozen_array, frozen_floats
 from mtmc.io import to_jsonable
 from mtmc.study.spec import RunSettings
 from mtmc.uncertainty.gum import GumResult, endpoint_std_error, validate
@@ -34,12 +34,19 @@ from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
 
 __all__ = [
     "RESULT_FORMAT",
+    "BudgetLine",
+    "Convergence",
+    "GumSummary",
+    "Histogram",
+    "MonteCarloSummary",
     "PointField",
     "Quantity",
     "Region",
+    "Reported",
     "Study",
     "StudyResult",
     "Table",
+    "ValidationSummary",
     "quantity",
     "region",
 ]
@@ -99,6 +106,343 @@ class Table:
         return buf.getvalue()
 
 
+def _scaled(x: float | None, factor: float) -> float | None:
+    return None if x is None else float(x) * factor
+
+
+def _dof_of(x: Any) -> float:
+    """A ``dof`` read from JSON: ``null`` is ``∞`` (an exactly known ``u``)."""
+    return math.inf if x is None else float(x)
+
+
+def _pair(x: Any) -> tuple[float, float]:
+    lo, hi = x
+    return (float(lo), float(hi))
+
+
+class _Written:
+    """A frozen summary written as a flat JSON object, one key per field, in field order.
+
+    Tuples are written as lists; :attr:`_read` names the fields read back through a
+    converter (a pair of interval ends, a ``dof`` written ``null`` for ``∞``).
+    """
+
+    _read: ClassVar[Mapping[str, Callable[[Any], Any]]] = {}
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (its entry in ``result.json``; an infinite ``dof`` is ``None``)."""
+        out = {}
+        for f in fields(self):  # type: ignore[arg-type]
+            v = getattr(self, f.name)
+            out[f.name] = list(v) if isinstance(v, tuple) else v
+        return _plain_dict(out)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Any:
+        """The value that :meth:`to_dict` wrote."""
+        return cls(
+            **{f.name: cls._read.get(f.name, _same)(d[f.name]) for f in fields(cls)}  # type: ignore[arg-type]
+        )
+
+
+def _same(x: Any) -> Any:
+    return x
+
+
+@dataclass(frozen=True)
+class MonteCarloSummary(_Written):
+    """The Monte Carlo result of one scalar output quantity (JCGM 101).
+
+    Attributes
+    ----------
+    estimate : float
+        The mean of the Monte Carlo values (JCGM 101 §7.6).
+    u : float
+        Their standard deviation, the standard uncertainty (JCGM 101 §7.6).
+    U : float
+        Half the length of the ``interval`` kind of coverage interval (the study's
+        ``[run] interval``).
+    k : float or None
+        ``U/u`` (None where ``u = 0``).
+    p : float
+        The coverage probability.
+    interval : str
+        The kind of coverage interval that gives ``U``: ``"symmetric"`` or ``"shortest"``.
+    shortest : tuple of float
+        The shortest coverage interval (JCGM 101 §7.7).
+    symmetric : tuple of float
+        The probabilistically symmetric coverage interval (JCGM 101 §7.7).
+    trials : int
+        The number of trials ``M``.
+    omitted : int
+        Trials left out (their value NaN or infinite).
+    """
+
+    _read: ClassVar[Mapping[str, Callable[[Any], Any]]] = {"shortest": _pair, "symmetric": _pair}
+
+    estimate: float
+    u: float
+    U: float
+    k: float | None
+    p: float
+    interval: str
+    shortest: tuple[float, float]
+    symmetric: tuple[float, float]
+    trials: int
+    omitted: int
+
+    @property
+    def coverage_interval(self) -> tuple[float, float]:
+        """The ends of the coverage interval of the :attr:`interval` kind, which gives ``U``."""
+        return self.shortest if self.interval == "shortest" else self.symmetric
+
+
+@dataclass(frozen=True)
+class GumSummary(_Written):
+    """The GUM result of one scalar output quantity (JCGM 100).
+
+    Attributes
+    ----------
+    estimate : float
+        The estimate ``y`` (JCGM 100 §4.1.4).
+    u : float
+        The combined standard uncertainty ``u_c(y)`` (JCGM 100 §5.1.2).
+    k : float
+        The coverage factor ``k_p`` (JCGM 100 G.3.2, G.4.1): the t quantile for ``dof``,
+        the normal one where ``dof`` is infinite.
+    U : float
+        The expanded uncertainty ``k u`` (JCGM 100 §6.2.1).
+    dof : float
+        The effective degrees of freedom by Welch–Satterthwaite (JCGM 100 eq. (G.2b);
+        ``inf`` where every input is exactly known).
+    interval : tuple of float
+        The coverage interval ``[y - U, y + U]``.
+    method : str
+        ``"complex-step"`` or ``"central-difference"``: how the sensitivities were
+        computed.
+    """
+
+    _read: ClassVar[Mapping[str, Callable[[Any], Any]]] = {"dof": _dof_of, "interval": _pair}
+
+    estimate: float
+    u: float
+    k: float
+    U: float
+    dof: float
+    interval: tuple[float, float]
+    method: str
+
+
+@dataclass(frozen=True)
+class ValidationSummary(_Written):
+    """The JCGM 101 §8 comparison of the GUM with the Monte Carlo for one quantity.
+
+    Attributes
+    ----------
+    d_low, d_high : float
+        The differences of the interval ends (JCGM 101 §8.2).
+    delta : float
+        The numerical tolerance δ of ``u`` to ``ndig`` significant digits (JCGM 101
+        §7.9.2).
+    passed : bool or None
+        Whether both ``d`` are within δ; None where both methods give ``u = 0``.
+    kind : str
+        The kind of Monte Carlo interval compared: ``"symmetric"`` or ``"shortest"``.
+    ndig : int
+        Significant digits of ``u``.
+    endpoint_std_error : float
+        The standard error of a Monte Carlo interval end
+        (:func:`~mtmc.uncertainty.gum.endpoint_std_error`).
+    verdict : str
+        "validated", "not validated", or "not validated within Monte Carlo noise" (a
+        ``d`` above δ by less than three endpoint standard errors); "not applicable"
+        where both methods give ``u = 0``: a constant output, for which δ is 0.
+    """
+
+    d_low: float
+    d_high: float
+    delta: float
+    passed: bool | None
+    kind: str
+    ndig: int
+    endpoint_std_error: float
+    verdict: str
+
+
+@dataclass(frozen=True)
+class BudgetLine(_Written):
+    """One input of the uncertainty budget of a quantity (JCGM 100 §5.1.3).
+
+    Attributes
+    ----------
+    name : str
+        The input.
+    components : int
+        Its number of components ``k``.
+    estimate : float or None
+        Its estimate ``x`` (None for a ``k``-variate input, ``k > 1``).
+    u : float or None
+        Its standard uncertainty ``u(x)`` (None for ``k > 1``).
+    sensitivity : float or None
+        The sensitivity coefficient ``c`` (None for ``k > 1``).
+    contribution : float
+        ``|c| u(x)``; for a ``k``-variate input ``sqrt(c V cᵀ)``.
+    share : float
+        Its share of ``u²(y)`` (the shares sum to 1 for uncorrelated inputs).
+    dof : float
+        ν of ``u(x)`` (JCGM 100 G.4.1; ``inf`` where ``u(x)`` is exactly known).
+    """
+
+    _read: ClassVar[Mapping[str, Callable[[Any], Any]]] = {"dof": _dof_of}
+
+    name: str
+    components: int
+    estimate: float | None
+    u: float | None
+    sensitivity: float | None
+    contribution: float
+    share: float
+    dof: float
+
+
+def _same_fields(a: Any, b: Any) -> bool:
+    """Whether two values of one dataclass with array fields have equal fields."""
+    for f in fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if not (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y):
+            return False
+    return True
+
+
+@dataclass(frozen=True, eq=False)
+class Histogram:
+    """The histogram of the Monte Carlo values of a quantity.
+
+    Attributes
+    ----------
+    edges : ndarray
+        The bin edges (read-only float64; empty where ``u = 0``).
+    density : ndarray
+        The probability density of each bin (read-only float64; empty where ``u = 0``).
+    """
+
+    edges: NDArray[np.float64]
+    density: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "edges", frozen_floats(self.edges))
+        object.__setattr__(self, "density", frozen_floats(self.density))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Histogram):
+            return NotImplemented
+        return _same_fields(self, other)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (``histogram`` of a quantity)."""
+        return _plain_dict({"edges": self.edges, "density": self.density})
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Histogram:
+        """The histogram that :meth:`to_dict` wrote."""
+        return cls(edges=d["edges"], density=d["density"])
+
+
+@dataclass(frozen=True, eq=False)
+class Convergence:
+    """How the estimate and ``u`` of a quantity settle as the trials grow (JCGM 101 §7.9).
+
+    Attributes
+    ----------
+    m : ndarray
+        Numbers of trials (read-only int64).
+    estimate, u : ndarray
+        The estimate and ``u`` from the first ``m`` trials (read-only float64).
+    last_half_estimate, last_half_u : float
+        How far the estimate and ``u`` move (max - min) over ``m >= M/2``.
+    delta : float or None
+        The numerical tolerance of ``u`` to ``ndig`` significant digits (JCGM 101
+        §7.9.2; None where ``u = 0``), the scale to read those moves against.
+    ndig : int
+        Significant digits of ``u``.
+    """
+
+    m: NDArray[np.int64]
+    estimate: NDArray[np.float64]
+    u: NDArray[np.float64]
+    last_half_estimate: float
+    last_half_u: float
+    delta: float | None
+    ndig: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "m", frozen_array(np.asarray(self.m, dtype=np.int64)))
+        object.__setattr__(self, "estimate", frozen_floats(self.estimate))
+        object.__setattr__(self, "u", frozen_floats(self.u))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Convergence):
+            return NotImplemented
+        return _same_fields(self, other)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (``convergence`` of a quantity)."""
+        return _plain_dict(
+            {
+                "m": self.m,
+                "estimate": self.estimate,
+                "u": self.u,
+                "last_half": {"estimate": self.last_half_estimate, "u": self.last_half_u},
+                "delta": self.delta,
+                "ndig": self.ndig,
+            }
+        )
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Convergence:
+        """The curves that :meth:`to_dict` wrote."""
+        return cls(
+            m=d["m"],
+            estimate=d["estimate"],
+            u=d["u"],
+            last_half_estimate=d["last_half"]["estimate"],
+            last_half_u=d["last_half"]["u"],
+            delta=d["delta"],
+            ndig=d["ndig"],
+        )
+
+
+@dataclass(frozen=True)
+class Reported:
+    """The estimate and ``U`` of a quantity as text, rounded as JCGM 100 §7.2.6 says.
+
+    Two significant digits on ``U``, the estimate to the same decimal place.
+
+    Attributes
+    ----------
+    estimate : str
+        The estimate ``y``.
+    U : str
+        The expanded uncertainty.
+    """
+
+    estimate: str
+    U: str
+
+    def to_dict(self) -> dict[str, str]:
+        """JSON-ready form (``reported`` of a quantity)."""
+        return {"estimate": self.estimate, "U": self.U}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Reported:
+        """The text that :meth:`to_dict` wrote."""
+        return cls(estimate=d["estimate"], U=d["U"])
+
+
 @dataclass(frozen=True)
 class Quantity:
     """The uncertainty statement of one scalar output quantity.
@@ -109,32 +453,22 @@ class Quantity:
         The output (``d_ac``, ``p.x``, ``axis_c.direction.y``).
     unit : str
         Its unit (``mm``, ``rad``, ``1``, or what a study file says).
-    mc : dict
-        ``estimate``, ``u``, ``U`` (half the length of the ``interval`` kind of coverage
-        interval, the study's ``[run] interval``), ``k = U/u``, ``p``, ``interval``,
-        ``shortest``, ``symmetric`` (JCGM 101 §7.6–7.7), ``trials``.
-    gum : dict or None
-        ``estimate``, ``u``, ``k``, ``U``, ``dof``, ``interval``, ``method`` (JCGM 100).
-    validation : dict or None
-        ``d_low``, ``d_high``, ``delta``, ``passed``, ``kind``, ``ndig`` (JCGM 101 §8.2),
-        ``endpoint_std_error`` (:func:`endpoint_std_error`) and ``verdict``: "validated",
-        "not validated", or "not validated within Monte Carlo noise" (a ``d`` above δ by
-        less than three endpoint standard errors); "not applicable" (and ``passed``
-        None) where both methods give ``u = 0``: a constant output, for which δ is 0.
-    budget : tuple of dict
-        Per input: ``name``, ``components`` (``k``), ``estimate``, ``u``,
-        ``sensitivity`` (None for a ``k``-variate input, ``k > 1``), ``contribution``
-        (``|c| u(x)``, for a ``k``-variate input ``sqrt(c V cᵀ)``), ``share`` (the shares
-        sum to 1 for uncorrelated inputs), ``dof`` (ν of ``u(x)``, JCGM 100 G.4.1;
-        ``inf`` where ``u(x)`` is exactly known).
-    histogram : dict
-        ``edges`` and ``density`` of the Monte Carlo values (empty where ``u = 0``).
-    convergence : dict
-        ``m``, ``estimate``, ``u`` from the first ``m`` trials; ``last_half``: how far
-        the estimate and ``u`` move (max - min) over ``m >= M/2``; ``delta``: the
-        numerical tolerance of ``u`` to ``ndig`` significant digits (JCGM 101 §7.9.2;
-        None where ``u = 0``), the scale to read those moves against.
-    reported : dict
+    mc : MonteCarloSummary
+        The Monte Carlo estimate, ``u``, ``U`` (half the length of the ``interval`` kind
+        of coverage interval, the study's ``[run] interval``), ``k = U/u``, ``p`` and
+        both coverage intervals (JCGM 101 §7.6–7.7).
+    gum : GumSummary or None
+        The GUM result of the same model (JCGM 100).
+    validation : ValidationSummary or None
+        The JCGM 101 §8 comparison of the two and its verdict.
+    budget : tuple of BudgetLine
+        Per input: its ``u(x)``, sensitivity, contribution and share of ``u²(y)``
+        (JCGM 100 §5.1.3).
+    histogram : Histogram
+        The histogram of the Monte Carlo values (empty where ``u = 0``).
+    convergence : Convergence
+        The estimate and ``u`` from the first ``m`` trials (JCGM 101 §7.9).
+    reported : Reported
         ``estimate`` and ``U`` as text, rounded as JCGM 100 §7.2.6 says (two significant
         digits on ``U``, the estimate to the same decimal place).
     conformity : dict or None
@@ -145,13 +479,13 @@ class Quantity:
 
     name: str
     unit: str
-    mc: dict[str, Any]
-    gum: dict[str, Any] | None
-    validation: dict[str, Any] | None
-    budget: tuple[dict[str, Any], ...]
-    histogram: dict[str, Any] = field(repr=False)
-    convergence: dict[str, Any] = field(repr=False)
-    reported: dict[str, str]
+    mc: MonteCarloSummary
+    gum: GumSummary | None
+    validation: ValidationSummary | None
+    budget: tuple[BudgetLine, ...]
+    histogram: Histogram = field(repr=False)
+    convergence: Convergence = field(repr=False)
+    reported: Reported
     conformity: dict[str, Any] | None = None
 
     def in_unit(self, unit: str, factor: float) -> Quantity:
@@ -188,55 +522,59 @@ class Quantity:
         if self.conformity is not None:
             raise ValueError("a quantity with a conformity decision keeps its study's unit")
 
-        def times(x: Any) -> Any:
-            if x is None:
-                return None
-            if isinstance(x, list | tuple):
-                return [times(v) for v in x]
-            if isinstance(x, np.ndarray):
-                return x * factor
-            return float(x) * factor
-
-        mc = {**self.mc, **{k: times(self.mc[k]) for k in ("estimate", "u", "U")}}
-        mc.update({k: times(self.mc[k]) for k in ("shortest", "symmetric")})
+        mc = replace(
+            self.mc,
+            estimate=self.mc.estimate * factor,
+            u=self.mc.u * factor,
+            U=self.mc.U * factor,
+            shortest=(self.mc.shortest[0] * factor, self.mc.shortest[1] * factor),
+            symmetric=(self.mc.symmetric[0] * factor, self.mc.symmetric[1] * factor),
+        )
         gum = None
         if self.gum is not None:
-            gum = {**self.gum, **{k: times(self.gum[k]) for k in ("estimate", "u", "U")}}
-            gum["interval"] = times(self.gum["interval"])
+            g = self.gum
+            gum = replace(
+                g,
+                estimate=g.estimate * factor,
+                u=g.u * factor,
+                U=g.U * factor,
+                interval=(g.interval[0] * factor, g.interval[1] * factor),
+            )
         validation = None
         if self.validation is not None:
             v = self.validation
-            validation = {
-                **v,
-                "d_low": times(v["d_low"]),
-                "d_high": times(v["d_high"]),
-                "delta": times(v["delta"]),
-                "endpoint_std_error": times(v["endpoint_std_error"]),
-            }
+            validation = replace(
+                v,
+                d_low=v.d_low * factor,
+                d_high=v.d_high * factor,
+                delta=v.delta * factor,
+                endpoint_std_error=v.endpoint_std_error * factor,
+            )
         budget = tuple(
-            {**b, "sensitivity": times(b["sensitivity"]), "contribution": times(b["contribution"])}
+            replace(
+                b,
+                sensitivity=_scaled(b.sensitivity, factor),
+                contribution=b.contribution * factor,
+            )
             for b in self.budget
         )
-        hist = self.histogram
-        histogram = {
-            "edges": np.asarray(hist["edges"], dtype=np.float64) * factor,
-            "density": np.asarray(hist["density"], dtype=np.float64) / factor,
-        }
+        histogram = Histogram(
+            edges=self.histogram.edges * factor, density=self.histogram.density / factor
+        )
         conv = self.convergence
-        ndig = int(conv.get("ndig", 2))
-        u = float(mc["u"])
-        convergence = {
-            **conv,
-            "estimate": np.asarray(conv["estimate"], dtype=np.float64) * factor,
-            "u": np.asarray(conv["u"], dtype=np.float64) * factor,
-            "last_half": {k: times(v) for k, v in conv["last_half"].items()},
-            "delta": numerical_tolerance(u, ndig) if 0 < u < math.inf else None,
-        }
-        big_u = float(mc["U"])
-        if big_u > 0:
-            y_txt, u_txt = round_to_uncertainty(float(mc["estimate"]), big_u, ndig)
+        u = mc.u
+        convergence = replace(
+            conv,
+            estimate=conv.estimate * factor,
+            u=conv.u * factor,
+            last_half_estimate=conv.last_half_estimate * factor,
+            last_half_u=conv.last_half_u * factor,
+            delta=numerical_tolerance(u, conv.ndig) if 0 < u < math.inf else None,
+        )
+        if mc.U > 0:
+            y_txt, u_txt = round_to_uncertainty(mc.estimate, mc.U, conv.ndig)
         else:
-            y_txt, u_txt = f"{float(mc['estimate']):.6g}", "0"
+            y_txt, u_txt = f"{mc.estimate:.6g}", "0"
         return Quantity(
             name=self.name,
             unit=unit,
@@ -246,7 +584,7 @@ class Quantity:
             budget=budget,
             histogram=histogram,
             convergence=convergence,
-            reported={"estimate": y_txt, "U": u_txt},
+            reported=Reported(estimate=y_txt, U=u_txt),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -255,13 +593,13 @@ class Quantity:
             {
                 "name": self.name,
                 "unit": self.unit,
-                "monte_carlo": self.mc,
-                "gum": self.gum,
-                "validation": self.validation,
-                "budget": list(self.budget),
-                "reported": self.reported,
-                "histogram": self.histogram,
-                "convergence": self.convergence,
+                "monte_carlo": self.mc.to_dict(),
+                "gum": None if self.gum is None else self.gum.to_dict(),
+                "validation": None if self.validation is None else self.validation.to_dict(),
+                "budget": [b.to_dict() for b in self.budget],
+                "reported": self.reported.to_dict(),
+                "histogram": self.histogram.to_dict(),
+                "convergence": self.convergence.to_dict(),
                 **({} if self.conformity is None else {"conformity": self.conformity}),
             }
         )
@@ -298,64 +636,65 @@ def quantity(
     u = mc.u
     kind = settings.interval
     big_u = 0.5 * (hi_s - lo_s) if kind == "shortest" else 0.5 * (hi_y - lo_y)
-    mc_d = {
-        "estimate": mc.estimate,
-        "u": u,
-        "U": big_u,
-        "k": big_u / u if u > 0 else None,
-        "p": p,
-        "interval": kind,
-        "shortest": [lo_s, hi_s],
-        "symmetric": [lo_y, hi_y],
-        "trials": mc.trials,
-        "omitted": mc.omitted,
-    }
-    gum_d = val_d = None
-    budget: list[dict[str, Any]] = []
+    mc_s = MonteCarloSummary(
+        estimate=float(mc.estimate),
+        u=float(u),
+        U=float(big_u),
+        k=float(big_u / u) if u > 0 else None,
+        p=float(p),
+        interval=kind,
+        shortest=(float(lo_s), float(hi_s)),
+        symmetric=(float(lo_y), float(hi_y)),
+        trials=int(mc.trials),
+        omitted=int(mc.omitted),
+    )
+    gum_s = None
+    val_s = None
+    budget: list[BudgetLine] = []
     if gum_result is not None:
         gk = gum_result.coverage_factor()
         gu = gum_result.u
         g_lo, g_hi = gum_result.coverage_interval()
-        gum_d = {
-            "estimate": gum_result.estimate,
-            "u": gu,
-            "k": gk,
-            "U": gk * gu,
-            "dof": gum_result.dof,
-            "interval": [g_lo, g_hi],
-            "method": gum_result.method,
-        }
+        gum_s = GumSummary(
+            estimate=float(gum_result.estimate),
+            u=float(gu),
+            k=float(gk),
+            U=float(gk * gu),
+            dof=float(gum_result.dof),
+            interval=(float(g_lo), float(g_hi)),
+            method=gum_result.method,
+        )
         v = validate(gum_result, mc, p=p, ndig=settings.ndig, kind=settings.interval)  # type: ignore[arg-type]
         noise = endpoint_std_error(u, mc.m, p)
         # both methods give one value and no interval: δ (JCGM 101 §7.9.2) is 0 and the
         # JCGM 101 §8 comparison has nothing to compare
         constant = not u > 0 and not gu > 0
         verdict = NOT_APPLICABLE if constant else v.verdict(noise)
-        val_d = {
-            "d_low": v.d_low,
-            "d_high": v.d_high,
-            "delta": v.delta,
-            "passed": None if constant else v.passed,
-            "kind": v.kind,
-            "ndig": v.ndig,
-            "endpoint_std_error": noise,
-            "verdict": verdict,
-        }
+        val_s = ValidationSummary(
+            d_low=float(v.d_low),
+            d_high=float(v.d_high),
+            delta=float(v.delta),
+            passed=None if constant else bool(v.passed),
+            kind=v.kind,
+            ndig=int(v.ndig),
+            endpoint_std_error=float(noise),
+            verdict=verdict,
+        )
         for e in gum_result.budget:
             # a k-variate input has k estimates, u and sensitivities: the line gives
             # its contribution sqrt(c V cᵀ) and share, not the first component's x, u, c
             k = int(e.u.size)
             budget.append(
-                {
-                    "name": e.name,
-                    "components": k,
-                    "estimate": float(e.estimate[0]) if k == 1 else None,
-                    "u": float(e.u[0]) if k == 1 else None,
-                    "sensitivity": float(e.sensitivity[0, 0]) if k == 1 else None,
-                    "contribution": float(e.contribution[0]),
-                    "share": float(e.share[0]),
-                    "dof": float(e.dof),  # ν of u(x), JCGM 100 G.4.1; null in JSON for ∞
-                }
+                BudgetLine(
+                    name=e.name,
+                    components=k,
+                    estimate=float(e.estimate[0]) if k == 1 else None,
+                    u=float(e.u[0]) if k == 1 else None,
+                    sensitivity=float(e.sensitivity[0, 0]) if k == 1 else None,
+                    contribution=float(e.contribution[0]),
+                    share=float(e.share[0]),
+                    dof=float(e.dof),  # ν of u(x), JCGM 100 G.4.1; null in JSON for ∞
+                )
             )
     hist = mc.histogram(bins=HISTOGRAM_BINS) if u > 0 else None  # no histogram of one value
     m, est, us = mc.convergence(CONVERGENCE_POINTS)
@@ -367,22 +706,23 @@ def quantity(
     return Quantity(
         name=name,
         unit=unit,
-        mc=mc_d,
-        gum=gum_d,
-        validation=val_d,
+        mc=mc_s,
+        gum=gum_s,
+        validation=val_s,
         budget=tuple(budget),
-        histogram={"edges": [], "density": []}
+        histogram=Histogram(edges=np.empty(0), density=np.empty(0))
         if hist is None
-        else {"edges": hist.edges, "density": hist.density},
-        convergence={
-            "m": m,
-            "estimate": est,
-            "u": us,
-            "last_half": {"estimate": float(np.ptp(est[late])), "u": float(np.ptp(us[late]))},
-            "delta": numerical_tolerance(u, settings.ndig) if 0 < u < math.inf else None,
-            "ndig": settings.ndig,
-        },
-        reported={"estimate": y_txt, "U": u_txt},
+        else Histogram(edges=hist.edges, density=hist.density),
+        convergence=Convergence(
+            m=m,
+            estimate=est,
+            u=us,
+            last_half_estimate=float(np.ptp(est[late])),
+            last_half_u=float(np.ptp(us[late])),
+            delta=numerical_tolerance(u, settings.ndig) if 0 < u < math.inf else None,
+            ndig=settings.ndig,
+        ),
+        reported=Reported(estimate=y_txt, U=u_txt),
     )
 
 
@@ -604,23 +944,23 @@ class StudyResult:
         """One row per quantity: estimate, u, U, k, intervals, GUM u, §8 verdict."""
         rows = []
         for q in self.quantities:
-            mc, g, v = q.mc, q.gum or {}, q.validation or {}
+            mc, g, v = q.mc, q.gum, q.validation
             rows.append(
                 (
                     q.name,
                     q.unit,
-                    mc["estimate"],
-                    mc["u"],
-                    mc["U"],
-                    mc["k"] if mc["k"] is not None else "",
-                    mc["p"],
-                    mc["shortest"][0],
-                    mc["shortest"][1],
-                    mc["symmetric"][0],
-                    mc["symmetric"][1],
-                    g.get("u", ""),
-                    g.get("k", ""),
-                    "" if not v else v["verdict"],
+                    mc.estimate,
+                    mc.u,
+                    mc.U,
+                    mc.k if mc.k is not None else "",
+                    mc.p,
+                    mc.shortest[0],
+                    mc.shortest[1],
+                    mc.symmetric[0],
+                    mc.symmetric[1],
+                    "" if g is None else g.u,
+                    "" if g is None else g.k,
+                    "" if v is None else v.verdict,
                 )
             )
         return Table(
@@ -651,14 +991,14 @@ class StudyResult:
         budget_rows = [
             (
                 q.name,
-                b["name"],
-                b["components"],
-                b["estimate"],
-                b["u"],
-                b["sensitivity"],
-                b["contribution"],
-                b["share"],
-                b.get("dof"),
+                b.name,
+                b.components,
+                b.estimate,
+                b.u,
+                b.sensitivity,
+                b.contribution,
+                b.share,
+                b.dof,
             )
             for q in self.quantities
             for b in q.budget

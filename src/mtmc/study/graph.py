@@ -451,12 +451,12 @@ def _load(top: Fields, kind: str) -> GraphStudy:
 
 
 @register_kind("graph", "a measurement graph: Monte Carlo and GUM of its places")
-def load_graph_study(top: Fields) -> GraphStudy:
+def read_graph_study(top: Fields) -> GraphStudy:
     """Validate a ``graph`` study file (see ``docs/study-format.md``)."""
     return _load(top, "graph")
 
 
 @register_kind("sweep", "a measurement graph on a grid of uncertainties, with a surrogate")
-def load_sweep_study(top: Fields) -> GraphStudy:
+def read_sweep_study(top: Fields) -> GraphStudy:
     """Validate a ``sweep`` study file (see ``docs/study-format.md``)."""
     return _load(top, "sweep")

@@ -193,7 +193,7 @@ def _check_error_size(et: Fields, name: str, d: Distribution, machine: Machine) 
 
 
 @register_kind("kinematics", "ISO 230 geometric errors through a machine's forward kinematics")
-def load_kinematics(top: Fields) -> KinematicsStudy:
+def read_kinematics_study(top: Fields) -> KinematicsStudy:
     """Validate a ``kinematics`` study file (see ``docs/study-format.md``)."""
     top.only(("kind", "title", "machine", "poses", "angles", "errors", "run"))
     name = top.text("machine")

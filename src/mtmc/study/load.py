@@ -28,11 +28,18 @@ from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
 from mtmc.study.base import (
     RESULT_FORMAT,
+    BudgetLine,
+    Convergence,
+    GumSummary,
+    Histogram,
+    MonteCarloSummary,
     PointField,
     Quantity,
     Region,
+    Reported,
     StudyResult,
     Table,
+    ValidationSummary,
     quantity,
     region,
 )
@@ -77,28 +84,19 @@ def _dof(obj: Any) -> Any:
 
 
 def _quantity(d: Mapping[str, Any]) -> Quantity:
-    kw: dict[str, Any] = {}
-    for f in dataclasses.fields(Quantity):
-        key = "monte_carlo" if f.name == "mc" else f.name
-        if key in d:
-            kw[f.name] = d[key]
-    hist = dict(kw.get("histogram") or {})
-    for key in ("edges", "density"):
-        if key in hist:
-            hist[key] = np.array(hist[key], dtype=np.float64)
-    kw["histogram"] = hist
-    conv = dict(kw.get("convergence") or {})
-    if "m" in conv:
-        conv["m"] = np.array(conv["m"], dtype=np.int64)
-    for key in ("estimate", "u"):
-        if key in conv:
-            conv[key] = np.array(conv[key], dtype=np.float64)
-    kw["convergence"] = conv
-    for key in ("mc", "gum", "validation", "reported", "conformity"):
-        if key in kw:
-            kw[key] = _dof(kw[key])
-    kw["budget"] = tuple(_dof(b) for b in kw.get("budget", ()))
-    return Quantity(**kw)
+    gum, validation, conformity = d["gum"], d["validation"], d.get("conformity")
+    return Quantity(
+        name=d["name"],
+        unit=d["unit"],
+        mc=MonteCarloSummary.from_dict(d["monte_carlo"]),
+        gum=None if gum is None else GumSummary.from_dict(gum),
+        validation=None if validation is None else ValidationSummary.from_dict(validation),
+        budget=tuple(BudgetLine.from_dict(b) for b in d["budget"]),
+        histogram=Histogram.from_dict(d["histogram"]),
+        convergence=Convergence.from_dict(d["convergence"]),
+        reported=Reported.from_dict(d["reported"]),
+        conformity=None if conformity is None else _dof(conformity),
+    )
 
 
 def _region(d: Mapping[str, Any]) -> Region:

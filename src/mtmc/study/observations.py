@@ -41,7 +41,7 @@ from mtmc.uncertainty.typea import (
     with_dof,
 )
 
-__all__ = ["input_record", "read_csv_column", "read_input_table"]
+__all__ = ["input_record", "load_csv_column", "read_input_table"]
 
 #: The keys of an input given as a table.
 TABLE_KEYS = ("data", "column", "pooled_s", "pooled_dof", "dist", "dof", "u_rel_u")
@@ -101,7 +101,7 @@ def read_input_table(table: Fields, name: str) -> Distribution:
     if isinstance(data, str):
         column = table.text("column", name)
         path = table.source.resolve(data, (*table.path, "data"))
-        values = read_csv_column(path, column)
+        values = load_csv_column(path, column)
         least = 1 if pooled_s is not None else 2
         if values.size < least:
             raise InputError(
@@ -176,7 +176,7 @@ def _stated(table: Fields) -> Distribution:
         raise table.error(exc.message, key) from None
 
 
-def read_csv_column(path: str | Path, column: str) -> NDArray[np.float64]:
+def load_csv_column(path: str | Path, column: str) -> NDArray[np.float64]:
     """The numbers of one column of a CSV file.
 
     The first line that is neither empty nor a ``#`` comment names the columns; the

@@ -51,7 +51,7 @@ __all__ = [
     "OutputsStudy",
     "check_vector_use",
     "joint_summary",
-    "load_outputs",
+    "read_outputs_study",
 ]
 
 
@@ -336,7 +336,9 @@ def joint_summary(
     return out
 
 
-def load_outputs(top: Fields, inputs_t: Fields, inputs: dict[str, Distribution]) -> OutputsStudy:
+def read_outputs_study(
+    top: Fields, inputs_t: Fields, inputs: dict[str, Distribution]
+) -> OutputsStudy:
     """Validate a ``propagate`` study with an ``[outputs]`` table (``docs/study-format.md``).
 
     Parameters

@@ -1,6 +1,6 @@
 """Study kind ``positioning``: an ISO 230-2 positioning test with its uncertainty.
 
-The study names the CSV file of the readings (:func:`mtmc.positioning.read_positioning_csv`)
+The study names the CSV file of the readings (:func:`mtmc.positioning.load_positioning_csv`)
 and the influences on the test (:class:`mtmc.positioning.UncertaintyModel`): the air and
 material in ``[environment]``, the laser in ``[instrument]``, the Type A evaluation in
 ``[uncertainty]``, tolerances in ``[tolerances]`` (``docs/positioning.md``). The run is
@@ -118,7 +118,7 @@ class PositioningStudy(Study):
                 samples[sym] = mc.samples
         # a constant parameter (passed None, "not applicable") is no disagreement
         validated = {
-            q.name: (q.validation or {}).get("passed", True) is not False for q in quantities
+            q.name: q.validation is None or q.validation.passed is not False for q in quantities
         }
         notes = disagreement_notes(res, validated)
         readings = res.readings
@@ -128,13 +128,13 @@ class PositioningStudy(Study):
                 NAMES[q.name],
                 unit,
                 float(getattr(readings, q.name)),
-                q.gum["estimate"] if q.gum else "",
-                q.gum["U"] if q.gum else "",
-                q.mc["estimate"],
-                q.mc["U"],
-                q.mc[q.mc["interval"]][0],
-                q.mc[q.mc["interval"]][1],
-                (q.validation or {}).get("verdict", ""),
+                q.gum.estimate if q.gum else "",
+                q.gum.U if q.gum else "",
+                q.mc.estimate,
+                q.mc.U,
+                q.mc.coverage_interval[0],
+                q.mc.coverage_interval[1],
+                "" if q.validation is None else q.validation.verdict,
             )
             for q in quantities
         )
@@ -222,7 +222,7 @@ class PositioningStudy(Study):
         by_name = {q.name: q for q in quantities}
         for sym, tol in self.tolerances.items():
             q = by_name[sym]
-            w = q.mc["U"] if self.guard_band == "U" else float(self.guard_band)
+            w = q.mc.U if self.guard_band == "U" else float(self.guard_band)
             c = conformity(res.monte_carlo(sym), res.gum_result(sym), tol, w, p=settings.p)
             rows.append(
                 (
@@ -468,9 +468,9 @@ def positioning_study(
     -------
     PositioningStudy
     """
-    from mtmc.positioning import UncertaintyModel, read_positioning_csv
+    from mtmc.positioning import UncertaintyModel, load_positioning_csv
 
-    test = read_positioning_csv(data, columns=columns, units=units)
+    test = load_positioning_csv(data, columns=columns, units=units)
     if source is None:
         text = f'kind = "positioning"\ndata = {Path(data).as_posix()!r}\n'
         source = Source.from_text(text, str(data), None)
@@ -487,7 +487,7 @@ def positioning_study(
 
 
 @register_kind("positioning", "an ISO 230-2 positioning test: parameters with U by GUM and MC")
-def load_positioning(top: Fields) -> PositioningStudy:
+def read_positioning_study(top: Fields) -> PositioningStudy:
     """Validate a ``positioning`` study file (``docs/positioning.md``)."""
     top.only(
         (
@@ -566,16 +566,20 @@ def summary(result: StudyResult) -> dict[str, Any]:
     readings = {row[0]: row[3] for row in tables["parameters"].rows}
     params: dict[str, Any] = {}
     for q in result.quantities:
-        mc, g = q.mc, q.gum or {}
+        mc, g = q.mc, q.gum
         params[q.name] = {
-            "estimate": g.get("estimate", mc["estimate"]),
-            "U": mc["U"],
-            "u": mc["u"],
-            "interval": mc[mc["interval"]],
-            "mc_estimate": mc["estimate"],
+            "estimate": mc.estimate if g is None else g.estimate,
+            "U": mc.U,
+            "u": mc.u,
+            "interval": list(mc.coverage_interval),
+            "mc_estimate": mc.estimate,
             "readings": readings[q.name],
-            "gum": {"u": g.get("u"), "U": g.get("U"), "k": g.get("k")},
-            "validated": bool((q.validation or {}).get("passed", False)),
+            "gum": {
+                "u": None if g is None else g.u,
+                "U": None if g is None else g.U,
+                "k": None if g is None else g.k,
+            },
+            "validated": q.validation is not None and q.validation.passed is True,
         }
     out: dict[str, Any] = {
         "data": pos["data"],

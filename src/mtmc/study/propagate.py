@@ -20,7 +20,7 @@ from mtmc.study.conformity import ConformitySpec, assess, read_conformity
 from mtmc.study.correlation import CorrelationSpec, correlation_record, read_correlation
 from mtmc.study.observations import input_record, read_input_table
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.outputs import check_vector_use, load_outputs
+from mtmc.study.outputs import check_vector_use, read_outputs_study
 from mtmc.study.sensitivity import SensitivitySettings, read_sensitivity, sensitivity_record
 from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.distributions import Distribution, as_distribution, parse_distribution
@@ -157,7 +157,7 @@ class PropagateStudy(Study):
                 seed=settings.seed,
                 output=self.output,
                 unit=self.unit,
-                u_mc=q.mc["u"],
+                u_mc=q.mc.u,
                 gum_result=g,
                 parallel=settings.parallel,
             )
@@ -169,11 +169,11 @@ class PropagateStudy(Study):
 
 
 @register_kind("propagate", "an expression of named inputs: Monte Carlo beside the GUM")
-def load_propagate(top: Fields) -> Study:
+def read_propagate_study(top: Fields) -> Study:
     """Validate a ``propagate`` study file (see ``docs/study-format.md``).
 
     A file with an ``[outputs]`` table is a study of several outputs
-    (:func:`mtmc.study.outputs.load_outputs`).
+    (:func:`mtmc.study.outputs.read_outputs_study`).
     """
     top.only(
         (
@@ -207,7 +207,7 @@ def load_propagate(top: Fields) -> Study:
     if top.has("outputs"):
         outputs_inputs = top.table("inputs")
         assert outputs_inputs is not None
-        return load_outputs(top, outputs_inputs, read_inputs(outputs_inputs))
+        return read_outputs_study(top, outputs_inputs, read_inputs(outputs_inputs))
     text = top.text("model")
     try:
         model = expression(text)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from mtmc.document import Fields, parse_toml, read_text
+from mtmc.document import Fields, loads_toml, read_text
 from mtmc.errors import InputError, MtmcError
 
 #: The most Monte Carlo trials ``[run] trials`` may ask for.
@@ -207,7 +207,7 @@ def study_kinds() -> dict[str, StudyKind]:
 
 def loads_study(text: str, *, file: str = "<study>", folder: Path | None = None) -> Study:
     """Read and validate a study from TOML text (see :func:`load_study`)."""
-    top = parse_toml(text, file, folder)
+    top = loads_toml(text, file, folder)
     data = top.data
     known = study_kinds()
     kind = top.text("kind") if "kind" in data else None

@@ -206,7 +206,7 @@ def _inputs(s: Any, tracker: Any, points: NDArray[np.float64]) -> tuple[dict[str
 
 
 @register_kind("verification", "a laser-tracker volumetric verification (Aguado et al.)")
-def load_verification_kind(top: Fields) -> VerificationKindStudy:
+def read_verification_kind(top: Fields) -> VerificationKindStudy:
     """Validate a ``verification`` study file (reader: :mod:`mtmc.verification.study`)."""
     from mtmc.verification.study import RUN_KEYS, read_verification_study
 

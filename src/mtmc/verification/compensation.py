@@ -12,12 +12,12 @@ Three file formats, each with a writer and a reader:
 - **ISG CSV** (ISG kernel / Beckhoff TF5280 volumetric compensation): ``//`` comments,
   blocks separated by a ``#`` line, each a header line of names then whitespace-separated
   rows; a block of position errors has one row, a block of component errors has the axis
-  (the argument) as its first column. :func:`isg_csv_text`, :func:`read_isg_csv`.
+  (the argument) as its first column. :func:`dumps_isg_csv`, :func:`loads_isg_csv`.
 - **Etalon exchange format**, "Vendor" variant (INI-like): one ``[NAME]`` block per error,
   ``VALUE = v`` for a constant, ``Gridpoints = { position value ... }`` for a table.
-  :func:`etalon_text`, :func:`read_etalon`.
+  :func:`dumps_etalon`, :func:`loads_etalon`.
 - **plain CSV**: one row per value, ``error,axis,position,position_unit,value,value_unit``.
-  :func:`plain_csv_text`, :func:`read_plain_csv`.
+  :func:`dumps_plain_csv`, :func:`loads_plain_csv`.
 
 Units in the files: displacements in mm, rotations in rad, positions of linear axes in mm
 and of rotary axes in degrees (the ISG convention); inside the code rotary positions are
@@ -69,14 +69,14 @@ __all__ = [
     "ErrorCurve",
     "compensation_table",
     "measured_grid",
-    "etalon_text",
-    "isg_csv_text",
+    "dump_compensation",
+    "dumps_etalon",
+    "dumps_isg_csv",
+    "dumps_plain_csv",
     "load_compensation",
-    "plain_csv_text",
-    "read_etalon",
-    "read_isg_csv",
-    "read_plain_csv",
-    "write_compensation",
+    "loads_etalon",
+    "loads_isg_csv",
+    "loads_plain_csv",
 ]
 
 #: The file formats: ISG CSV, Etalon exchange ("Vendor"), plain CSV.
@@ -451,7 +451,7 @@ def _columns(rows: list[list[str]]) -> list[str]:
     return ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip() for r in rows]
 
 
-def isg_csv_text(table: CompensationTable) -> str:
+def dumps_isg_csv(table: CompensationTable) -> str:
     """The table in the ISG CSV format.
 
     Position (squareness, location) errors form the first block, one header line of
@@ -513,7 +513,7 @@ def _groups(curves: tuple[ErrorCurve, ...]) -> list[tuple[str, list[ErrorCurve]]
     return groups
 
 
-def etalon_text(table: CompensationTable) -> str:
+def dumps_etalon(table: CompensationTable) -> str:
     """The table in the Etalon exchange format ("Vendor" variant).
 
     One block per error: ``[NAME]`` (position errors without the leading ``E``), then
@@ -549,7 +549,7 @@ def etalon_text(table: CompensationTable) -> str:
 _CSV_HEADER = "error,axis,position,position_unit,value,value_unit"
 
 
-def plain_csv_text(table: CompensationTable) -> str:
+def dumps_plain_csv(table: CompensationTable) -> str:
     """The table as a plain CSV: one row per value.
 
     Columns ``error,axis,position,position_unit,value,value_unit``: a constant has empty
@@ -582,10 +582,10 @@ def plain_csv_text(table: CompensationTable) -> str:
     return "\n".join(out) + "\n"
 
 
-_WRITERS = {"isg": isg_csv_text, "etalon": etalon_text, "csv": plain_csv_text}
+_WRITERS = {"isg": dumps_isg_csv, "etalon": dumps_etalon, "csv": dumps_plain_csv}
 
 
-def write_compensation(table: CompensationTable, path: str | Path, fmt: str) -> Path:
+def dump_compensation(table: CompensationTable, path: str | Path, fmt: str) -> Path:
     """Write a table in one of :data:`FORMATS`, atomically (:mod:`mtmc.io`).
 
     Parameters
@@ -762,8 +762,8 @@ _Curve = tuple[str, list[float], list[float], int]
 _Rows = list[tuple[int, list[str]]]
 
 
-def read_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:
-    """Read a table in the ISG CSV format (see :func:`isg_csv_text`).
+def loads_isg_csv(text: str, file: str = "<isg>") -> CompensationTable:
+    """Read a table in the ISG CSV format (see :func:`dumps_isg_csv`).
 
     Blocks are separated by ``#`` lines; ``//`` starts a comment. A block whose header
     has no axis letter holds position errors and one row; a block whose first column is
@@ -919,8 +919,8 @@ _BLOCK = re.compile(r"^\[\s*([A-Za-z0-9]+)\s*\]$")
 _KV = re.compile(r"^([A-Za-z_]+)\s*=\s*(.*)$")
 
 
-def read_etalon(text: str, file: str = "<etalon>") -> CompensationTable:
-    """Read a table in the Etalon exchange format (see :func:`etalon_text`).
+def loads_etalon(text: str, file: str = "<etalon>") -> CompensationTable:
+    """Read a table in the Etalon exchange format (see :func:`dumps_etalon`).
 
     Parameters
     ----------
@@ -1077,8 +1077,8 @@ class _EtalonReader:
             )
 
 
-def read_plain_csv(text: str, file: str = "<csv>") -> CompensationTable:
-    """Read a table in the plain CSV format (see :func:`plain_csv_text`).
+def loads_plain_csv(text: str, file: str = "<csv>") -> CompensationTable:
+    """Read a table in the plain CSV format (see :func:`dumps_plain_csv`).
 
     Parameters
     ----------
@@ -1169,7 +1169,7 @@ def read_plain_csv(text: str, file: str = "<csv>") -> CompensationTable:
     return _table(consts, rows, _sign_of(lines, "#", file), file)
 
 
-_READERS = {"isg": read_isg_csv, "etalon": read_etalon, "csv": read_plain_csv}
+_READERS = {"isg": loads_isg_csv, "etalon": loads_etalon, "csv": loads_plain_csv}
 
 
 def load_compensation(path: str | Path, fmt: str) -> CompensationTable:

@@ -18,7 +18,7 @@ Two layouts, told apart by the header (``#`` lines and blank lines are skipped):
 Examples
 --------
 >>> rows = ["X,Y,Z,x_lt,y_lt,z_lt", "0,0,0,1,2,3", "10,0,0,11,2,3"]
->>> d = parse_identification_csv(chr(10).join(rows), ("X", "Y", "Z"), {}, "d.csv")
+>>> d = loads_identification_csv(chr(10).join(rows), ("X", "Y", "Z"), {}, "d.csv")
 >>> d.kind, d.q.tolist(), d.readings[1].tolist()
 ('coordinates', [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]], [11.0, 2.0, 3.0])
 """
@@ -42,9 +42,9 @@ from mtmc.kinematics.machine import Machine
 
 __all__ = [
     "IdentificationData",
+    "load_identification_csv",
+    "loads_identification_csv",
     "measured_points",
-    "parse_identification_csv",
-    "read_identification_csv",
 ]
 
 _F = NDArray[np.float64]
@@ -85,7 +85,7 @@ def _rows(text: str) -> list[tuple[int, list[str]]]:
     return out
 
 
-def parse_identification_csv(
+def loads_identification_csv(
     text: str, axes: tuple[str, ...], stations: Mapping[str, object], file: str = "<data>"
 ) -> IdentificationData:
     """Parse the CSV text (see the module notes).
@@ -177,17 +177,17 @@ def parse_identification_csv(
     return IdentificationData(kind, arr[:, :n], arr[:, n:], names)
 
 
-def read_identification_csv(
+def load_identification_csv(
     path: str | Path, axes: tuple[str, ...], stations: Mapping[str, object]
 ) -> IdentificationData:
-    """Read an identification CSV file (see :func:`parse_identification_csv`).
+    """Read an identification CSV file (see :func:`loads_identification_csv`).
 
     Raises
     ------
     InputError
-        If the file cannot be read, or as :func:`parse_identification_csv`.
+        If the file cannot be read, or as :func:`loads_identification_csv`.
     """
-    return parse_identification_csv(read_text(path, "data"), axes, stations, str(path))
+    return loads_identification_csv(read_text(path, "data"), axes, stations, str(path))
 
 
 def measured_points(

@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.document import Fields, Source, check_number, parse_toml, read_text
+from mtmc.document import Fields, Source, check_number, loads_toml, read_text
 from mtmc.errors import InputError, TopologyError
 from mtmc.io import write_text_atomic
 from mtmc.kinematics.topology import is_linear, is_rotary
@@ -45,6 +45,7 @@ __all__ = [
     "DIALECTS",
     "NCSettings",
     "TimeEstimate",
+    "dumps_program",
     "estimate_time",
     "heidenhain_program",
     "iso_program",
@@ -52,7 +53,6 @@ __all__ = [
     "loads_plan_study",
     "nc_from_dict",
     "points_table",
-    "program_text",
     "read_nc",
     "trapezoid_time",
     "write_programs",
@@ -361,7 +361,7 @@ def heidenhain_program(plan: MeasurementPlan, settings: NCSettings) -> str:
     return "\n".join(f"{n} {line}" for n, line in enumerate(body)) + "\n"
 
 
-def program_text(plan: MeasurementPlan, settings: NCSettings, dialect: str) -> str:
+def dumps_program(plan: MeasurementPlan, settings: NCSettings, dialect: str) -> str:
     """The program of one dialect (``"iso"`` or ``"heidenhain"``).
 
     Raises
@@ -462,7 +462,7 @@ def write_programs(
     out: dict[str, Path] = {}
     for dialect in settings.dialects:
         out[dialect] = write_text_atomic(
-            d / f"{settings.output}{SUFFIX[dialect]}", program_text(plan, settings, dialect)
+            d / f"{settings.output}{SUFFIX[dialect]}", dumps_program(plan, settings, dialect)
         )
     out["points"] = write_text_atomic(
         d / f"{settings.output}_points.csv", points_table(plan, settings)
@@ -862,7 +862,7 @@ def loads_plan_study(text: str, file: str = "<study>") -> tuple[MeasurementPlan,
     InputError
         On any wrong field, naming the file, the line and the field.
     """
-    top = parse_toml(text, file)
+    top = loads_toml(text, file)
     axes = _machine_axes(top)
     ws = top.table("workspace")
     nc = top.table("nc")

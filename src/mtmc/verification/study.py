@@ -535,7 +535,7 @@ def _plan_tables(top: Fields, axes: tuple[str, ...]) -> None:
 
 
 def read_verification_study(top: Fields) -> VerificationStudy:
-    """The verification study of a parsed study file (:func:`mtmc.document.parse_toml`).
+    """The verification study of a parsed study file (:func:`mtmc.document.loads_toml`).
 
     One reader per table, in file order: ``[machine]``, ``[model]``, ``[truth]``,
     ``[tracker]`` (:func:`read_trackers`), ``[points]``, and the keys of ``[run]`` that

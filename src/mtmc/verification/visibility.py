@@ -31,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.document import Fields, parse_toml, read_text
+from mtmc.document import Fields, loads_toml, read_text
 from mtmc.errors import MtmcError
 from mtmc.instruments.laser_tracker import (
     LaserTracker,
@@ -232,7 +232,7 @@ def load_plan_visibility(
     """
     from mtmc.verification.study import read_trackers
 
-    top = parse_toml(read_text(path, "study file"), str(path), Path(path).parent)
+    top = loads_toml(read_text(path, "study file"), str(path), Path(path).parent)
     if "tracker" not in top.data:
         return None
     tf = top.table("tracker")
