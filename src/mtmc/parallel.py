@@ -15,14 +15,25 @@ and the results are put back in trial order. This module is the one place that d
   with ``scheduler=None`` a :class:`distributed.LocalCluster` of ``workers`` worker
   processes started for the call and closed after it; with ``scheduler`` a running
   cluster, by the address of its scheduler (``"tcp://host:8786"``) or a
-  :class:`distributed.Client`. Each block of trials is one Dask task, submitted with
-  ``pure=False`` a few blocks ahead per worker; a block lost with its worker is
-  computed again by the scheduler, and gives the same numbers. :func:`local_cluster`
+  :class:`distributed.Client`. The function (the model and what it was built from) is
+  sent to every worker once; each task (a few blocks of trials) is submitted with
+  ``pure=False`` a few tasks ahead per worker; a task lost with its worker is computed
+  again by the scheduler, and gives the same numbers. :func:`local_cluster`
   starts such a cluster to keep across many runs;
 * any :class:`concurrent.futures.Executor` given by the caller.
 
 Whichever is used, the numbers are the same: the random numbers of a block depend only
 on the seed and the trial indices, and the blocks' results are merged in trial order.
+
+Blocks are the unit of parallelism, so the BLAS inside a block runs on one thread
+(:func:`one_blas_thread`): in this process for the time of the map, in a pool's or a
+Dask cluster's worker for the time of each task; the BLAS setting of the process is
+restored after it, so what a program computes outside Monte Carlo blocks keeps the
+user's setting. A block's model multiplies thin matrices (the artefact's 45 products
+``(m·R, 90) @ (90, 3)`` a block, the batched solves of a verification) for which
+threaded OpenBLAS costs more in waking and synchronising its threads than it gains; on
+a 2-core machine under load these 45 products took 6.0 s with the default threads and
+0.27 s with one (``docs/performance.md``).
 
 Examples
 --------
@@ -34,9 +45,11 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures as cf
+import contextlib
 import itertools
 import pickle
 from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 from mtmc.errors import InputError
@@ -44,7 +57,14 @@ from mtmc.errors import InputError
 if TYPE_CHECKING:  # Dask is optional: imported by the functions that use it
     from distributed import LocalCluster
 
-__all__ = ["WORKER_MALLOC_ENV", "ExecutorKind", "local_cluster", "map_blocks"]
+__all__ = [
+    "BLAS_THREADS",
+    "WORKER_MALLOC_ENV",
+    "ExecutorKind",
+    "local_cluster",
+    "map_blocks",
+    "one_blas_thread",
+]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -70,6 +90,45 @@ WORKER_MALLOC_ENV: dict[str, str] = {
     "MALLOC_MMAP_THRESHOLD_": str(32 * 2**20),
     "MALLOC_TRIM_THRESHOLD_": str(256 * 2**20),
 }
+
+
+#: BLAS threads inside a block of trials (:func:`one_blas_thread`); None leaves the
+#: process's setting (a model of a few large matrix products a block may gain from
+#: threads where the blocks run one at a time).
+BLAS_THREADS: int | None = 1
+
+
+@contextlib.contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """Run the body with the BLAS libraries of this process on :data:`BLAS_THREADS` threads.
+
+    The libraries loaded (NumPy's and SciPy's OpenBLAS, MKL, BLIS) are found by
+    ``threadpoolctl``; their thread counts are set for the body and restored after it,
+    whatever happens in it. Setting and restoring take about 0.7 ms. A library that the
+    body loads for the first time keeps its own setting.
+
+    Yields
+    ------
+    None
+    """
+    if BLAS_THREADS is None:
+        yield
+        return
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=BLAS_THREADS, user_api="blas"):
+        yield
+
+
+@dataclass(frozen=True)
+class _OneBlasThread:
+    """``fn`` run with :func:`one_blas_thread` (a task in a worker process); picklable."""
+
+    fn: Callable[[Any], Any]
+
+    def __call__(self, task: Any) -> Any:
+        with one_blas_thread():
+            return self.fn(task)
 
 
 def _import_distributed() -> Any:
@@ -153,22 +212,35 @@ def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:
     return client, (client,)
 
 
+def _apply(fn: Callable[[T], R], task: T) -> R:
+    """``fn(task)``: a Dask task whose function was sent to the workers once."""
+    return fn(task)
+
+
 def _dask_map(fn: Callable[[T], R], tasks: list[T], client: Any) -> Iterator[R]:
-    """Submit ``fn(task)`` as Dask tasks a few ahead of the one awaited; yield in order."""
+    """Submit ``fn(task)`` as Dask tasks a few ahead of the one awaited; yield in order.
+
+    ``fn`` (the model with what it was built from: the operators of a verification of
+    5408 points are 17 MiB) is sent to every worker once, not with every task.
+    """
     ahead = DASK_AHEAD * max(1, len(client.scheduler_info().get("workers", {})))
+    sent = client.scatter(fn, broadcast=True, hash=False)
     pending: list[Any] = []
     it = iter(tasks)
-    for task in it:
-        pending.append(client.submit(fn, task, pure=False))
-        if len(pending) >= ahead:
-            break
-    while pending:
-        fut = pending.pop(0)
-        yield fut.result()
-        fut.release()
-        nxt = next(it, None)
-        if nxt is not None:
-            pending.append(client.submit(fn, nxt, pure=False))
+    try:
+        for task in it:
+            pending.append(client.submit(_apply, sent, task, pure=False))
+            if len(pending) >= ahead:
+                break
+        while pending:
+            fut = pending.pop(0)
+            yield fut.result()
+            fut.release()
+            nxt = next(it, None)
+            if nxt is not None:
+                pending.append(client.submit(_apply, sent, nxt, pure=False))
+    finally:
+        sent.release()
 
 
 def _pool_map(pool: cf.Executor, fn: Callable[[T], R], tasks: list[T], ahead: int) -> Iterator[R]:
@@ -226,7 +298,9 @@ def map_blocks(
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise InputError(f"expected an integer >= 1, got {workers!r}", field="workers")
     if isinstance(executor, cf.Executor):
-        yield from executor.map(fn, tasks)
+        # set here first, so that a task on a thread of this process restores one thread
+        with one_blas_thread():
+            yield from executor.map(_OneBlasThread(fn), tasks)
         return
     if executor not in ("thread", "process", "dask"):
         raise InputError(
@@ -240,14 +314,16 @@ def map_blocks(
     if executor == "dask":
         client, to_close = _dask_client(scheduler, workers)
         try:
-            yield from _dask_map(fn, list(tasks), client)
+            with one_blas_thread():  # a cluster of threads in this process shares its BLAS
+                yield from _dask_map(_OneBlasThread(fn), list(tasks), client)
         finally:
             for obj in to_close:
                 obj.close()
         return
     if workers == 1:
-        for task in tasks:
-            yield fn(task)
+        with one_blas_thread():
+            for task in tasks:
+                yield fn(task)
         return
     task_list = list(tasks)
     if executor == "process":
@@ -262,10 +338,12 @@ def map_blocks(
                 field="model",
             ) from None
         pool: cf.Executor = cf.ProcessPoolExecutor(max_workers=workers, initializer=_worker_signals)
+        fn = _OneBlasThread(fn)
     else:
         pool = cf.ThreadPoolExecutor(max_workers=workers)
     try:
-        yield from _pool_map(pool, fn, task_list, POOL_AHEAD * workers)
+        with one_blas_thread():  # the threads of a pool share this process's BLAS
+            yield from _pool_map(pool, fn, task_list, POOL_AHEAD * workers)
     except BaseException:
         # interrupted (Ctrl-C, SIGTERM) or closed early: no block is started any more, and
         # worker processes are stopped now rather than left to finish (or to outlive us)

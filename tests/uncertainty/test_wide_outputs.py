@@ -9,6 +9,9 @@ kept samples, and no more than one reduction block of its values waiting in memo
 
 from __future__ import annotations
 
+import concurrent.futures as cf
+import pickle
+
 import numpy as np
 import pytest
 
@@ -69,3 +72,32 @@ def test_values_waiting_for_a_block_are_at_most_one_reduction_block(monkeypatch)
     monkeypatch.setattr(mc_module._Collector, "add", add)
     monte_carlo(wide, INPUTS, trials=TRIALS, seed=3, keep=["y"], block_size=333)
     assert max(held) <= reduction_block_trials(WIDTH) * WIDTH * 8
+
+
+class _Recording(cf.ThreadPoolExecutor):
+    """A thread pool that records the pickled size of what each task hands back."""
+
+    def __init__(self) -> None:
+        super().__init__(max_workers=2)
+        self.sent = 0
+
+    def map(self, fn, *iterables, **_):  # type: ignore[override]
+        for result in super().map(fn, *iterables):
+            self.sent += len(pickle.dumps(result))
+            yield result
+
+
+def test_a_task_reduces_the_reduction_blocks_it_holds_whole(reference, monkeypatch):
+    # evaluation blocks of 777 trials never line up with the 1024-trial reduction blocks
+    # of the 3000-wide output: each block comes as pieces of values, and a task that holds
+    # all the pieces of a block hands back its moments (48 kB) instead of its values
+    # (24 MB); only the blocks cut by a task's ends cross as values
+    monkeypatch.setattr(mc_module, "TASKS_PER_WORKER", 1)
+    assert reduction_block_trials(WIDTH) == 1024
+    pool = _Recording()
+    r = monte_carlo(wide, INPUTS, trials=TRIALS, seed=3, keep=["y"], block_size=777, executor=pool)
+    pool.shutdown()
+    raw = 8 * WIDTH * TRIALS
+    assert pool.sent < 0.3 * raw, pool.sent / raw
+    assert r["comp"].estimate_vector.tobytes() == reference["comp"].estimate_vector.tobytes()
+    assert r["comp"].u_vector.tobytes() == reference["comp"].u_vector.tobytes()

