@@ -268,3 +268,21 @@ def test_u_and_U_are_labelled_and_the_json_states_its_units(
     argv = ["graph", "run", str(GRAPHS / "bcs_origin.toml"), "-n", "200", "--place", "d_ac"]
     data = json.loads(_call([*argv, "--json"], capsys))
     assert data["units"] == {"length": "mm", "angle": "rad"}
+
+
+def _help_texts() -> Iterator[tuple[str, str]]:
+    """(where, text) of every command's help and every option's help."""
+    for path, cmd in _commands():
+        yield path, cmd.help or ""
+        for p in cmd.params:
+            yield f"{path} {p.opts[0]}", getattr(p, "help", None) or ""
+
+
+def test_help_texts_lose_nothing_to_rich_markup():
+    # Typer renders help as Rich markup: an unescaped "[run]" was taken for a style tag
+    # and dropped ("the study's  ndig"); a help text shows what it says
+    from rich.text import Text
+
+    for where, text in _help_texts():
+        shown = Text.from_markup(text).plain
+        assert shown == text.replace("\\[", "["), (where, text, shown)

@@ -230,7 +230,8 @@ def test_the_inputs_of_a_kinematics_study_carry_their_units(folder):
     assert units["EA0C"] == units["EC0Y"] == "rad"
     assert "<th>unit of x</th>" in page
     rows = re.findall(
-        r"<tr><td>(E\w+)</td><td><code>[^<]*</code></td>(?:<td[^>]*>[^<]*</td>){2}<td>(\w+)</td>",
+        # name, PDF, estimate, u and ν (∞: every error's u exactly known), then the unit
+        r"<tr><td>(E\w+)</td><td><code>[^<]*</code></td>(?:<td[^>]*>[^<]*</td>){3}<td>(\w+)</td>",
         page,
     )
     assert dict(rows) == units

@@ -335,7 +335,7 @@ def edit_cmd(
     port: int = typer.Option(0, "--port", help="Port on 127.0.0.1 (default: a free one)."),
     no_browser: bool = typer.Option(False, "--no-browser", help="Print the URL; open nothing."),
 ) -> None:
-    """Edit FILE in the browser and see its uncertainties live (needs mtmc[editor]).
+    """Edit FILE in the browser and see its uncertainties live (the extra ``editor``).
 
     The first line printed is the page's URL (127.0.0.1 only, with a random token).
     Ctrl-C stops the server; over an unsaved edit, press it twice.

@@ -93,7 +93,7 @@ def evaluate_cmd(
     study_file: Path | None = typer.Option(
         None,
         "--study",
-        help="A positioning study whose environment, instrument, tolerances and [run] apply "
+        help="A positioning study whose environment, instrument, tolerances and \\[run] apply "
         "to DATA (default: the Type A evaluation of the readings alone).",
     ),
     units: str = typer.Option(

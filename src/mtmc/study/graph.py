@@ -42,6 +42,7 @@ from mtmc.study.base import (
     quantity,
     region,
 )
+from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.spec import RunSettings, register_kind
 from mtmc.uncertainty.gum import gum
@@ -204,10 +205,7 @@ class GraphStudy(Study):
             sweep_d, table = self._sweep(settings, step)
             extra["sweep"] = sweep_d
             tables.append(table)
-        in_list = tuple(
-            {"name": n, "distribution": str(d), "estimate": float(d.mean), "u": float(d.std)}
-            for n, d in random_inputs(plan).items()
-        )
+        in_list = tuple(input_record(n, d) for n, d in random_inputs(plan).items())
         run = run_record(
             settings, res.trials, res.omitted, blocks=res.blocks, tolerance=res.tolerance
         )

@@ -24,6 +24,7 @@ from mtmc.kinematics.library import library_machine, library_names
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import is_rotary
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
+from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.propagate import read_inputs
 from mtmc.study.spec import RunSettings, register_kind
@@ -140,10 +141,7 @@ class KinematicsStudy(Study):
         units = [f"{a} / {self.angles if is_rotary(a) else 'mm'}" for a in axes]
         inputs = tuple(
             {
-                "name": n,
-                "distribution": str(d),
-                "estimate": float(d.mean),
-                "u": float(d.std),
+                **input_record(n, d),
                 "unit": "rad" if self.machine.error_term(n).angular else "mm",
             }
             for n, d in self.errors.items()
