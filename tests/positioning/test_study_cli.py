@@ -216,3 +216,19 @@ def test_the_study_result_folder_writes(tmp_path):
     assert (out / "report.html").is_file()
     assert load_positioning_csv(DATA).m == 11
     assert isinstance(s.model, UncertaintyModel)
+
+
+def test_parameters_of_the_readings_alone_are_one_value_not_validated(capsys):
+    # the Type A evaluation of the readings alone: the ranges R↑ and R↓ are those of the
+    # readings in every trial; the Monte Carlo's u of R↑ is the rounding of its
+    # arithmetic (4.4e-16 µm at 3.05 µm, seed 7), and the GUM's is 0: nothing to compare
+    # by JCGM 101 §8, whichever of the two the rounding gives
+    assert main(["positioning", "evaluate", str(DATA), "-n", "50000", "-s", "7", "--json"]) == 0
+    params = json.loads(capsys.readouterr().out)["parameters"]
+    for name in ("R_up", "R_down"):
+        p = params[name]
+        assert p["gum"]["u"] == 0.0
+        assert p["u"] <= 16 * np.finfo(float).eps * p["estimate"]
+        assert (p["verdict"], p["validated"]) == ("not applicable", None), name
+    assert params["R_up"]["u"] > 0  # the rounding: the case the rule is for
+    assert (params["A"]["verdict"], params["A"]["validated"]) == ("not validated", False)

@@ -27,7 +27,7 @@ from mtmc.document import Source
 from mtmc.frozen import frozen_array, frozen_floats
 from mtmc.io import to_jsonable
 from mtmc.study.spec import RunSettings
-from mtmc.uncertainty.gum import GumResult, endpoint_std_error, validate
+from mtmc.uncertainty.gum import GumResult, endpoint_std_error, one_value, validate
 from mtmc.uncertainty.results import MonteCarloResult
 from mtmc.uncertainty.sampling import resolve_seed
 from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
@@ -60,7 +60,8 @@ HISTOGRAM_BINS = 60
 CONVERGENCE_POINTS = 60
 #: Trials drawn as dots in the plots of a coverage region.
 SCATTER_POINTS = 400
-#: The JCGM 101 §8 verdict of an output that both methods give as one value (u = 0).
+#: The JCGM 101 §8 verdict of an output that both methods give as one value
+#: (:func:`mtmc.uncertainty.gum.one_value`).
 NOT_APPLICABLE = "not applicable"
 
 ProgressFn = Callable[[int, int | None], None]
@@ -245,7 +246,7 @@ class ValidationSummary(_Written):
         The numerical tolerance δ of ``u`` to ``ndig`` significant digits (JCGM 101
         §7.9.2).
     passed : bool or None
-        Whether both ``d`` are within δ; None where both methods give ``u = 0``.
+        Whether both ``d`` are within δ; None where both methods give one value.
     kind : str
         The kind of Monte Carlo interval compared: ``"symmetric"`` or ``"shortest"``.
     ndig : int
@@ -256,7 +257,8 @@ class ValidationSummary(_Written):
     verdict : str
         "validated", "not validated", or "not validated within Monte Carlo noise" (a
         ``d`` above δ by less than three endpoint standard errors); "not applicable"
-        where both methods give ``u = 0``: a constant output, for which δ is 0.
+        where both methods give one value: ``u = 0``, or the Monte Carlo's at the rounding
+        of the estimate (:func:`~mtmc.uncertainty.gum.one_value`).
     """
 
     d_low: float
@@ -666,9 +668,9 @@ def quantity(
         )
         v = validate(gum_result, mc, p=p, ndig=settings.ndig, kind=settings.interval)  # type: ignore[arg-type]
         noise = endpoint_std_error(u, mc.m, p)
-        # both methods give one value and no interval: δ (JCGM 101 §7.9.2) is 0 and the
-        # JCGM 101 §8 comparison has nothing to compare
-        constant = not u > 0 and not gu > 0
+        # both methods give one value and no interval: the JCGM 101 §8 comparison has
+        # nothing to compare
+        constant = one_value(u, gu, mc.estimate)
         verdict = NOT_APPLICABLE if constant else v.verdict(noise)
         val_s = ValidationSummary(
             d_low=float(v.d_low),

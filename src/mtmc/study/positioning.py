@@ -558,7 +558,8 @@ def summary(result: StudyResult) -> dict[str, Any]:
         corrected by the expected corrections), ``U`` (Monte Carlo: half the length of
         its coverage interval), ``u``, ``interval``, ``mc_estimate``, ``readings`` (the
         definitions applied to the readings as they are), ``gum`` (``u``, ``U``, ``k``),
-        ``validated`` (JCGM 101 §8), all in the deviation unit; ``conformity`` by symbol
+        ``validated`` (JCGM 101 §8; null where both methods give one value) and its
+        ``verdict``, all in the deviation unit; ``conformity`` by symbol
         where the study gives tolerances.
     """
     pos = result.extra["positioning"]
@@ -579,7 +580,10 @@ def summary(result: StudyResult) -> dict[str, Any]:
                 "U": None if g is None else g.U,
                 "k": None if g is None else g.k,
             },
-            "validated": q.validation is not None and q.validation.passed is True,
+            # JCGM 101 §8: true or false, null where there is nothing to compare (a
+            # parameter that both methods give as one value: "not applicable")
+            "validated": None if q.validation is None else q.validation.passed,
+            "verdict": None if q.validation is None else q.validation.verdict,
         }
     out: dict[str, Any] = {
         "data": pos["data"],

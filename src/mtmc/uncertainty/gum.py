@@ -51,8 +51,10 @@ __all__ = [
     "GumResult",
     "Validation",
     "NOISE_MARGIN",
+    "ROUNDING_SPREAD",
     "coverage_factor",
     "endpoint_std_error",
+    "one_value",
     "gum",
     "validate",
     "welch_satterthwaite",
@@ -414,6 +416,33 @@ class Validation:
 #: How many endpoint standard errors (:func:`endpoint_std_error`) a ``d`` of the JCGM 101
 #: §8 comparison must exceed δ by for the GUM to be "not validated" outright.
 NOISE_MARGIN = 3.0
+
+
+#: A standard uncertainty at most this many units in the last place of the estimate
+#: (``ε |y|``) is the rounding of the arithmetic, not a spread of the quantity.
+ROUNDING_SPREAD = 16.0
+
+
+def one_value(u_mc: float, u_gum: float, estimate: float) -> bool:
+    """Whether both methods give one value, so that the JCGM 101 §8 comparison is moot.
+
+    The GUM's ``u`` is zero and the Monte Carlo's is zero or the rounding of its
+    arithmetic: at most :data:`ROUNDING_SPREAD` · ``ε |y|`` (``ε`` the double precision's
+    machine epsilon). Such an output has no coverage interval to compare (δ of JCGM 101
+    §7.9.2 is zero or below the rounding of ``y``): a parameter of an ISO 230-2 test
+    computed from the readings alone, whose Monte Carlo values differ in the last bits
+    only (``u = 4.4·10⁻¹⁶`` µm at ``y = 3.05`` µm), or an angle fixed by the graph.
+
+    Examples
+    --------
+    >>> one_value(0.0, 0.0, 3.05), one_value(4.4e-16, 0.0, 3.05), one_value(1e-9, 0.0, 3.05)
+    (True, True, False)
+    >>> one_value(4.4e-16, 1e-3, 3.05)
+    False
+    """
+    if u_gum > 0 or not math.isfinite(u_mc):
+        return False
+    return bool(u_mc <= ROUNDING_SPREAD * float(np.finfo(np.float64).eps) * abs(estimate))
 
 
 def endpoint_std_error(u: float, m: int, p: float) -> float:
