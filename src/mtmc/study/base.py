@@ -316,8 +316,19 @@ def _same_fields(a: Any, b: Any) -> bool:
     return True
 
 
+class _ArrayFields:
+    """A frozen value with array fields: equal where every field is (arrays element-wise)."""
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return _same_fields(self, other)
+
+    __hash__ = None  # type: ignore[assignment]
+
+
 @dataclass(frozen=True, eq=False)
-class Histogram:
+class Histogram(_ArrayFields):
     """The histogram of the Monte Carlo values of a quantity.
 
     Attributes
@@ -335,13 +346,6 @@ class Histogram:
         object.__setattr__(self, "edges", frozen_floats(self.edges))
         object.__setattr__(self, "density", frozen_floats(self.density))
 
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, Histogram):
-            return NotImplemented
-        return _same_fields(self, other)
-
-    __hash__ = None  # type: ignore[assignment]
-
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (``histogram`` of a quantity)."""
         return _plain_dict({"edges": self.edges, "density": self.density})
@@ -353,7 +357,7 @@ class Histogram:
 
 
 @dataclass(frozen=True, eq=False)
-class Convergence:
+class Convergence(_ArrayFields):
     """How the estimate and ``u`` of a quantity settle as the trials grow (JCGM 101 §7.9).
 
     Attributes
@@ -383,13 +387,6 @@ class Convergence:
         object.__setattr__(self, "m", frozen_array(np.asarray(self.m, dtype=np.int64)))
         object.__setattr__(self, "estimate", frozen_floats(self.estimate))
         object.__setattr__(self, "u", frozen_floats(self.u))
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, Convergence):
-            return NotImplemented
-        return _same_fields(self, other)
-
-    __hash__ = None  # type: ignore[assignment]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (``convergence`` of a quantity)."""
