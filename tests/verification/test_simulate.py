@@ -267,3 +267,29 @@ def test_a_verification_on_a_process_pool_gives_the_same_bits(setup, monkeypatch
     there = simulate(ver, 120, 13, workers=2, executor="process")
     for name in ("ve_samples", "coef_samples", "comp_u", "compensated_point_mean"):
         np.testing.assert_array_equal(getattr(there, name), getattr(here, name))
+
+
+def test_gum_propagation_equals_the_dense_sandwich():
+    """A Σ Aᵀ (+ Σ E Eᵀ) and G cov Gᵀ against the products with Σ written out whole."""
+    from mtmc.verification.simulate import _gum_propagate
+
+    rng = np.random.default_rng(3)
+    p, n, k = 7, 40, 9
+    A = rng.normal(size=(p, 3 * n))
+    L = rng.normal(size=(n, 3, 3))
+    C = L @ L.transpose(0, 2, 1) + 0.1 * np.eye(3)
+    G = rng.normal(size=(n, 3, p))
+    E = rng.normal(size=(n, 3, k))
+    cov, pc = _gum_propagate(A, C, G, [E])
+    sigma = np.zeros((3 * n, 3 * n))
+    for i in range(n):
+        sigma[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = C[i]
+    e = E.reshape(3 * n, k)
+    want = A @ (sigma + e @ e.T) @ A.T
+    # well-conditioned sums of products: a few ulps of the largest term
+    np.testing.assert_allclose(cov, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    assert np.array_equal(cov, cov.T)
+    for i in range(n):
+        w = G[i] @ want @ G[i].T
+        np.testing.assert_allclose(pc[i], w, rtol=1e-11, atol=1e-11 * np.abs(w).max())
+    assert np.array_equal(pc, pc.transpose(0, 2, 1))
