@@ -48,6 +48,7 @@ ALLOWED: dict[str, set[str]] = {
     },
     "workbench": {"geometry", "graph", "report", "study", "uncertainty"},
     "demo": {"report", "study"},
+    "_warm": set(),  # imports the modules of the layers by name (importlib)
     "cli": {
         "artefact",
         "demo",

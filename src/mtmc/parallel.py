@@ -147,7 +147,8 @@ def local_cluster(workers: int = 2, **kwargs: Any) -> LocalCluster:
 
     One single-threaded worker process per core, on the loopback interface, dashboard
     on a free port, the workers' allocator set by :data:`WORKER_MALLOC_ENV` (variables
-    already in the environment win). Keep it, and pass it (or a
+    already in the environment win), and mtmc's modules imported by each worker as it
+    starts (``mtmc._warm``, after any preload of the Dask configuration). Keep it, and pass it (or a
     ``distributed.Client`` of it) as ``scheduler`` to many runs: its start-up (about
     0.5 s) is then paid once. ``executor="dask"`` without a scheduler starts one of these
     for the call.
@@ -178,6 +179,8 @@ def local_cluster(workers: int = 2, **kwargs: Any) -> LocalCluster:
         "n_workers": workers,
         "threads_per_worker": 1,
         "processes": True,
+        # the modules a task's model needs, imported as each worker starts (mtmc._warm)
+        "preload": [*(dask.config.get("distributed.worker.preload") or []), "mtmc._warm"],
         "host": "127.0.0.1",
         "dashboard_address": ":0",
     }

@@ -19,6 +19,9 @@ Stryczek (Fig. 4): the sum of N(0, 1) and N(0.5, 0.5) has u = √1.25 ≈ 1.118.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
+import contextlib
+import dataclasses
 import functools
 import math
 import os
@@ -53,6 +56,7 @@ from mtmc.uncertainty.sampling import (
     evaluation_block_size,
     resolve_seed,
 )
+from mtmc.uncertainty.shared_rows import SharedRows, SharedRowsRef
 from mtmc.uncertainty.sketch import QuantileSketch
 from mtmc.uncertainty.tolerance import numerical_tolerance
 
@@ -207,6 +211,11 @@ class _Digest:
     #: sketches of whole groups of :data:`SKETCH_GROUP` seed blocks, merged where the
     #: blocks ran (by group number; the pieces of those seed blocks then carry none)
     merged: dict[int, dict[str, QuantileSketch]] = field(default_factory=dict)
+    #: which trials were finite, where some were not (``None`` where all were)
+    ok: NDArray[np.bool_] | None = None
+    #: the kept outputs' rows (all ``m``, finite or not) were written by the worker into
+    #: the run's shared arrays (:mod:`mtmc.uncertainty.shared_rows`); ``rows`` is empty
+    written: bool = False
 
 
 #: Moments of a group of outputs and the sketches of its outputs (``None`` if no rows).
@@ -312,6 +321,7 @@ def _digest(
         first_bad=start + int(np.argmin(ok)) if nbad else None,
         bad_outputs=bad,
         pieces=pieces,
+        ok=ok if nbad else None,
     )
 
 
@@ -328,6 +338,8 @@ class _BlockJob:
     sketch: frozenset[str]
     sampling: Sampling = "random"
     joint: _JointSampler | None = None
+    #: the run's shared arrays of kept rows, which a worker writes into where it can
+    shared: SharedRowsRef | None = None
 
     def __call__(self, span: tuple[int, int]) -> _Digest:
         a, b = span
@@ -352,9 +364,14 @@ class _TaskJob:
         j = self.job
         source = _BlockSource(j.dists, j.seed, j.method, j.sampling, j.joint)
         out = []
-        for a, b in spans:
-            outs = _evaluate(j.model, source.trials(a, b), a, b)
-            out.append(_digest(a, outs, j.keep, j.total, j.sketch))
+        with j.shared.writer() if j.shared else contextlib.nullcontext() as rows:
+            for a, b in spans:
+                outs = _evaluate(j.model, source.trials(a, b), a, b)
+                d = _digest(a, outs, j.keep, j.total, j.sketch)
+                if rows is not None:  # the kept rows go to the client's arrays directly
+                    rows.write(a, outs)
+                    d.rows, d.written = {}, True
+                out.append(d)
         _join_pieces(out, spans[0][0], spans[-1][1], j.total, j.sketch)
         if j.sketch:
             _merge_groups(out, spans[0][0], spans[-1][1], j.total)
@@ -473,6 +490,10 @@ class _Collector:
         self.shapes: dict[str, tuple[int, ...]] | None = None
         self.kept: dict[str, NDArray[np.float64]] = {}
         self.filled = 0  # rows written to the kept arrays
+        # kept arrays shared with workers (share()): every block's rows at its trials'
+        # positions from trial ``base``, the non-finite ones left out at the end
+        self.base: int | None = None
+        self.masks: list[tuple[int, NDArray[np.bool_]]] = []
         self.omitted = 0
         self.first_bad: int | None = None
         self.bad_outputs: set[str] = set()
@@ -581,8 +602,19 @@ class _Collector:
         self.bad_outputs.update(d.bad_outputs)
         self.omitted += d.omitted
         good = d.m - d.omitted
-        for n, kept in self.kept.items():
-            kept[self.filled : self.filled + good] = d.rows[n]
+        if self.base is None:
+            for n, kept in self.kept.items():
+                kept[self.filled : self.filled + good] = d.rows[n]
+        else:
+            pos = d.start - self.base
+            if d.ok is not None:
+                self.masks.append((pos, d.ok))
+            if not d.written:  # a worker that could not reach the shared arrays
+                for n, kept in self.kept.items():
+                    if d.ok is None:
+                        kept[pos : pos + d.m] = d.rows[n]
+                    else:
+                        kept[pos : pos + d.m][d.ok] = d.rows[n]
         self.filled += good
         for g, k, complete, part in d.pieces:
             scalar = not self.shapes[g[0]]  # reduced by seed block, its sketches too
@@ -597,6 +629,20 @@ class _Collector:
                 self._close(g)
             if scalar:
                 self._end_of_group(k, d.merged)
+
+    def share(self, shared: SharedRows, base: int) -> None:
+        """Keep the samples in ``shared``'s arrays, row ``t - base`` for trial ``t``."""
+        self.kept = dict(shared.arrays)
+        self.base = base
+
+    def _kept(self, n: str) -> NDArray[np.float64]:
+        """The kept samples of output ``n``, without the non-finite trials."""
+        if not self.masks:
+            return self.kept[n][: self.filled]
+        ok = np.ones(self.kept[n].shape[0], dtype=np.bool_)
+        for pos, mask in self.masks:
+            ok[pos : pos + mask.size] = mask
+        return self.kept[n][ok]
 
     def _close(self, g: tuple[str, ...]) -> None:
         if self.buffer[g[0]]:
@@ -643,9 +689,7 @@ class _Collector:
         out: dict[str, MonteCarloResult] = {}
         for n, shape in self.shapes.items():
             if n in self.kept:
-                out[n] = MonteCarloResult(
-                    samples=self.kept[n][: self.filled], omitted=self.omitted, **run
-                )
+                out[n] = MonteCarloResult(samples=self._kept(n), omitted=self.omitted, **run)
             else:
                 out[n] = MonteCarloResult(
                     samples=None,
@@ -702,6 +746,27 @@ class _Runner:
         with one_blas_thread():  # the first block too, which runs here before the map
             self._run(start, stop, collector, progress)
 
+    def _shared(self, collector: _Collector, start: int) -> SharedRows | None:
+        """The kept arrays in shared memory, where worker processes would send them back.
+
+        Worker processes of this machine then write the kept rows straight into them;
+        threads of this process hand theirs over without a copy anyway.
+        """
+        if not collector.kept or not (
+            self.executor in ("process", "dask")
+            or (
+                isinstance(self.executor, cf.Executor)
+                and not isinstance(self.executor, cf.ThreadPoolExecutor)
+            )
+        ):
+            return None
+        assert collector.shapes is not None
+        shapes = {n: collector.shapes[n] for n in collector.kept}
+        shared = SharedRows.create(collector.total, shapes, start)
+        if shared is not None:
+            collector.share(shared, start)
+        return shared
+
     def _run(
         self,
         start: int,
@@ -734,6 +799,7 @@ class _Runner:
         assert keep != "auto"
         tasks: list[tuple[tuple[int, int], ...]]
         run_task: Callable[[tuple[tuple[int, int], ...]], list[_Digest]]
+        shared: SharedRows | None = None
         if serial:
             # in this process, one evaluation block at a time, drawing from self.source
             # (whose last seed block carries over to the next evaluation block)
@@ -780,22 +846,26 @@ class _Runner:
             for span in spans:
                 cut.setdefault(span[0] // (per * bs), []).append(span)
             tasks = [tuple(t) for t in cut.values()]
+            shared = self._shared(collector, start)
+            if shared is not None:
+                job = dataclasses.replace(job, shared=shared.ref)
             run_task = _TaskJob(job)
-        for task, digests in zip(
+        digests_in_order = map_blocks(
+            run_task,
             tasks,
-            map_blocks(
-                run_task,
-                tasks,
-                workers=self.workers,
-                executor=self.executor,
-                scheduler=self.scheduler,
-            ),
-            strict=True,
-        ):
-            for (_, b), digest in zip(task, digests, strict=True):
-                collector.add(digest)
-                if progress is not None:
-                    progress(b, stop)
+            workers=self.workers,
+            executor=self.executor,
+            scheduler=self.scheduler,
+        )
+        try:
+            for task, digests in zip(tasks, digests_in_order, strict=True):
+                for (_, b), digest in zip(task, digests, strict=True):
+                    collector.add(digest)
+                    if progress is not None:
+                        progress(b, stop)
+        finally:
+            if shared is not None:
+                shared.close()  # the file's name; the arrays keep the mapping
 
 
 def _check_names(value: Any, field: str, allowed: tuple[Any, ...]) -> Any:
@@ -947,7 +1017,10 @@ def monte_carlo(
         beyond this number of trials.
     executor : {"thread", "process", "dask"} or concurrent.futures.Executor, keyword-only
         Where the blocks run when ``workers > 1`` (or an executor used as is);
-        ``"dask"``: a Dask cluster, see :func:`mtmc.parallel.map_blocks`.
+        ``"dask"``: a Dask cluster, see :func:`mtmc.parallel.map_blocks`. Worker
+        processes on this machine write kept samples straight into this process's
+        arrays, in shared memory (:mod:`mtmc.uncertainty.shared_rows`); others send them
+        back. The numbers are the same bits either way.
     scheduler : str or distributed.Client, optional, keyword-only
         With ``executor="dask"``, a running cluster (its scheduler's address, e.g.
         ``"tcp://127.0.0.1:8786"``, or a client); ``None`` starts a local cluster of

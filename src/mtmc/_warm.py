@@ -1,0 +1,27 @@
+"""Imported by each worker process of :func:`mtmc.parallel.local_cluster` as it starts.
+
+A task reaches a Dask worker pickled, and unpickling its model imports the modules the
+model was built from: a graph's take 0.2 s, a verification's 0.3 s, a worker. A fresh
+cluster's first run would pay that while its workers wait for their first task (the
+Stryczek sweep of 25 grid points: 1.29 s on a fresh cluster against 1.06–1.14 s after).
+The workers import them here instead, once per cluster, as they start (0.38 s, the
+workers side by side).
+"""
+
+from __future__ import annotations
+
+import importlib
+
+#: What the models of the study kinds are made of, and the engine's blocks.
+MODULES = (
+    "mtmc.uncertainty.montecarlo",
+    "mtmc.study",
+    "mtmc.graph.run",
+    "mtmc.verification.simulate",
+    "mtmc.artefact.study",
+    "mtmc.kinematics.machine",
+    "mtmc.positioning.uncertainty",
+)
+
+for _name in MODULES:
+    importlib.import_module(_name)
