@@ -59,3 +59,40 @@ def test_a_map_of_tasks_and_an_error_in_a_task_restore_the_setting():
         with pytest.raises(RuntimeError, match="a model error"):
             list(map_blocks(fails, range(2)))
         assert _blas_threads() == before
+
+
+def test_nested_bodies_set_the_threads_once_and_the_outermost_restores(monkeypatch):
+    import threading
+
+    import threadpoolctl
+
+    from mtmc.parallel import one_blas_thread
+
+    made = []
+    plain = threadpoolctl.threadpool_limits
+
+    def counting(*args, **kwargs):
+        made.append(1)
+        return plain(*args, **kwargs)
+
+    monkeypatch.setattr(threadpoolctl, "threadpool_limits", counting)
+    inside = threading.Barrier(2)
+
+    def body():
+        with one_blas_thread():
+            inside.wait(timeout=10)  # both threads in their bodies at once
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        with one_blas_thread(), one_blas_thread():
+            with one_blas_thread():
+                assert _blas_threads() == 1
+            assert _blas_threads() == 1
+        assert _blas_threads() == 2
+        assert len(made) == 1  # set once for three nested bodies
+        threads = [threading.Thread(target=body) for _ in range(2)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert _blas_threads() == 2
+    assert len(made) == 2  # once for two bodies open at the same time
