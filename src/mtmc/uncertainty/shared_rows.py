@@ -15,7 +15,9 @@ The file holds a random token in its first bytes, which a worker checks before i
 writes, so a file of the same name elsewhere is never written. It is removed when the
 run ends, however it ends; the arrays keep the mapping (and its memory) for as long as
 they live. A file left by a process that died before removing it is removed by the next
-run that makes one.
+run that makes one. (Where containers with their own process ids share one ``/dev/shm``,
+a running process's file may be taken for a dead one's: its workers then find no file
+and send their rows back, which changes the speed and nothing else.)
 """
 
 from __future__ import annotations
