@@ -17,7 +17,7 @@ from conftest import absent
 from mtmc.errors import InputError
 from mtmc.graph import load_graph, run_graph
 from mtmc.graph.sweep import sweep_graph
-from mtmc.parallel import WORKER_MALLOC_ENV, local_cluster
+from mtmc.parallel import WORKER_CONFIG, WORKER_MALLOC_ENV, local_cluster
 from mtmc.uncertainty.montecarlo import monte_carlo
 
 try:
@@ -75,6 +75,20 @@ def test_local_cluster_workers_start_with_mtmc_imported():
         (seen,) = c.run(_mtmc_modules).values()
     for m in ("colorsys", "mtmc.graph.run", "mtmc.verification.simulate", "mtmc.artefact.model"):
         assert m in seen
+
+
+def _worker_config():
+    import dask
+
+    return {k: dask.config.get(k) for k in WORKER_CONFIG}
+
+
+def test_local_cluster_workers_sample_neither_stacks_nor_disks(client):
+    seen = client.run(_worker_config)
+    assert len(seen) == 2
+    for config in seen.values():
+        assert config == WORKER_CONFIG
+    assert all(v is False for v in WORKER_CONFIG.values())
 
 
 def test_local_cluster_rejects_a_bad_worker_count():
