@@ -24,4 +24,7 @@ MODULES = (
 )
 
 for _name in MODULES:
-    importlib.import_module(_name)
+    try:
+        importlib.import_module(_name)
+    except ImportError:  # a warm-up never stops a worker: its tasks import what they need
+        pass
