@@ -45,18 +45,24 @@ def client():
 _BEFORE = {k: os.environ.get(k) for k in WORKER_MALLOC_ENV}
 
 
-def _malloc_env():
-    return {k: os.environ.get(k) for k in WORKER_MALLOC_ENV}
+def _worker_settings():
+    import dask
+
+    env = {k: os.environ.get(k) for k in WORKER_MALLOC_ENV}
+    return env, {k: dask.config.get(k) for k in WORKER_CONFIG}
 
 
-def test_local_cluster_workers_reuse_heap_memory(client):
-    # Dask's default MALLOC_TRIM_THRESHOLD_=65536 maps every large array afresh
-    seen = client.run(_malloc_env)
+def test_local_cluster_workers_allocator_and_dask_settings(client):
+    seen = client.run(_worker_settings)
     assert len(seen) == 2
-    for env in seen.values():
+    for env, config in seen.values():
+        # Dask's default MALLOC_TRIM_THRESHOLD_=65536 maps every large array afresh
         for name, value in WORKER_MALLOC_ENV.items():
             assert env[name] == (_BEFORE[name] or value)
+        # neither the statistical profiler nor the disk counters sample a worker
+        assert config == WORKER_CONFIG
     assert int(WORKER_MALLOC_ENV["MALLOC_MMAP_THRESHOLD_"]) >= 8 * 2**20  # a 2^20-trial column
+    assert all(v is False for v in WORKER_CONFIG.values())
 
 
 def _mtmc_modules():
@@ -75,20 +81,6 @@ def test_local_cluster_workers_start_with_mtmc_imported():
         (seen,) = c.run(_mtmc_modules).values()
     for m in ("colorsys", "mtmc.graph.run", "mtmc.verification.simulate", "mtmc.artefact.model"):
         assert m in seen
-
-
-def _worker_config():
-    import dask
-
-    return {k: dask.config.get(k) for k in WORKER_CONFIG}
-
-
-def test_local_cluster_workers_sample_neither_stacks_nor_disks(client):
-    seen = client.run(_worker_config)
-    assert len(seen) == 2
-    for config in seen.values():
-        assert config == WORKER_CONFIG
-    assert all(v is False for v in WORKER_CONFIG.values())
 
 
 def test_local_cluster_rejects_a_bad_worker_count():

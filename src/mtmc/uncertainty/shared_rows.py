@@ -99,9 +99,7 @@ class RowWriter:
 
     def __init__(self, mm: mmap.mmap, ref: SharedRowsRef) -> None:
         self.base = ref.base
-        self.arrays: dict[str, NDArray[np.float64]] = {
-            name: _view(mm, offset, ref.rows, width) for name, offset, width in ref.layout
-        }
+        self.arrays = _views(mm, ref)
 
     def write(self, start: int, outs: Mapping[str, NDArray[np.float64]]) -> None:
         """Write every row of the kept outputs of trials ``start..``, at their positions."""
@@ -111,11 +109,14 @@ class RowWriter:
             arr[start - self.base : start - self.base + m] = value.reshape(m, -1)
 
 
-def _view(mm: mmap.mmap, offset: int, rows: int, width: int) -> NDArray[np.float64]:
-    """The ``(rows, width)`` float64 array at ``offset`` bytes of the mapping."""
-    return np.frombuffer(mm, dtype=np.float64, count=rows * width, offset=offset).reshape(
-        rows, width
-    )
+def _views(mm: mmap.mmap, ref: SharedRowsRef) -> dict[str, NDArray[np.float64]]:
+    """The ``(rows, values a trial)`` float64 arrays of the mapping, by output."""
+    return {
+        name: np.frombuffer(mm, dtype=np.float64, count=ref.rows * width, offset=offset).reshape(
+            ref.rows, width
+        )
+        for name, offset, width in ref.layout
+    }
 
 
 class SharedRows:
@@ -129,9 +130,8 @@ class SharedRows:
         self, path: Path, mm: mmap.mmap, ref: SharedRowsRef, shapes: Mapping[str, tuple[int, ...]]
     ) -> None:
         self.path, self.ref = path, ref
-        self.arrays: dict[str, NDArray[np.float64]] = {
-            name: _view(mm, offset, ref.rows, width).reshape(ref.rows, *shapes[name])
-            for name, offset, width in ref.layout
+        self.arrays = {
+            name: a.reshape(ref.rows, *shapes[name]) for name, a in _views(mm, ref).items()
         }
 
     @classmethod
