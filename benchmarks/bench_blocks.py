@@ -93,7 +93,7 @@ class _Before(VerificationModel):
     ) -> dict[str, Any]:
         return self._trials(noise, repeatability, pose, reflector)  # the block in one pass
 
-    def solve(self, x_meas: Any) -> tuple[Any, Any, Any, Any]:
+    def _solve(self, x_meas: Any) -> tuple[Any, Any, Any, Any]:
         m, N = x_meas.shape[:2]
         k = self.n_theta
         est = np.broadcast_to(self.est0, (m, self.est0.size)).copy()
@@ -118,8 +118,7 @@ class _Before(VerificationModel):
             est[:, k : k + 3] = rotation_vector_from_matrix(np.swapaxes(self.R_nom, -1, -2) @ R)
             est[:, k + 3 : k + 6] = t - self.t_nom
         p = self.p_fit + _rows(est[:, :k] - self.est0[:k], Jt).reshape(m, N, 3)
-        r = (p - t[:, None, :]) @ R - x_meas
-        return est, r, R, t
+        return est, (p - t[:, None, :]) @ R, R, t  # the model readings (see _trials)
 
     def gradient(self, est: Any, R: Any, t: Any, x_meas: Any) -> Any:
         m, N = x_meas.shape[:2]
@@ -153,6 +152,7 @@ class _Before(VerificationModel):
 def _before(vm: VerificationModel) -> _Before:
     kw = {f.name: getattr(vm, f.name) for f in dataclasses.fields(vm)}
     kw["noise_at"] = _PerBlockNoise(vm.noise, vm.x_true)
+    kw["at_measured"] = False  # the compensated readings by their own product, as before
     return _Before(**kw)
 
 

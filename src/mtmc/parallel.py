@@ -264,7 +264,7 @@ def _dask_map(fn: Callable[[T], R], tasks: list[T], client: Any) -> Iterator[R]:
     """Submit ``fn(task)`` as Dask tasks a few ahead of the one awaited; yield in order.
 
     ``fn`` (the model with what it was built from: the operators of a verification of
-    5408 points are 17 MiB) is sent to every worker once, not with every task.
+    5408 points are 13 MiB) is sent to every worker once, not with every task.
     """
     ahead = DASK_AHEAD * max(1, len(client.scheduler_info().get("workers", {})))
     sent = client.scatter(fn, broadcast=True, hash=False)

@@ -269,6 +269,63 @@ def test_a_verification_on_a_process_pool_gives_the_same_bits(setup, monkeypatch
         np.testing.assert_array_equal(getattr(there, name), getattr(here, name))
 
 
+def test_evaluation_at_the_measured_points_gives_the_bits_of_the_general_path(setup) -> None:  # type: ignore[no-untyped-def]
+    # without eval_q the compensated readings are the identification's model readings,
+    # computed once; eval_q given as a copy of q takes the general path (the evaluation
+    # points' own Jacobian and positions): every output the same bits, optional inputs too
+    import pickle
+
+    s = setup
+    z = np.random.default_rng(np.random.SeedSequence(8)).normal(size=(30, 3 * len(s["q"])))
+    rep = np.random.default_rng(np.random.SeedSequence(9)).normal(size=z.shape)
+    for extra in ({}, {"repeatability": 1e-3}):
+        ver = _ver(s)
+        vm = VerificationModel.build(ver, reference_identification(ver), **extra)
+        other = _ver(s, eval_q=np.array(s["q"]))
+        vg = VerificationModel.build(other, reference_identification(other), **extra)
+        assert vm.at_measured
+        assert not vg.at_measured
+        # one array for both, and one in the copy a worker gets
+        assert vm.Jpe is vm.Jp
+        assert vm.pe_fit is vm.p_fit
+        assert vm.xe_true is vm.x_true
+        sent = pickle.loads(pickle.dumps(vm))
+        assert sent.Jpe is sent.Jp
+        draws = {"noise": z, "repeatability": rep} if extra else {"noise": z}
+        here, general = vm(**draws), vg(**draws)
+        assert sorted(here) == sorted(general)
+        for key in here:
+            np.testing.assert_array_equal(here[key], general[key])
+
+
+def test_chord_operators_equal_their_sums() -> None:
+    """G, S and K of the module notes against their sums over the points written out."""
+    from mtmc.geometry.transforms import matrix_from_rotation_vector
+    from mtmc.verification.simulate import _chord_operators
+
+    rng = np.random.default_rng(5)
+    p, n, k = 6, 50, 4
+    A = rng.normal(size=(p, 3 * n))
+    p_fit = rng.normal(size=(n, 3)) * 100.0
+    Jp = rng.normal(size=(n, 3, k))
+    R = matrix_from_rotation_vector(np.array([0.1, -0.2, 0.3]))
+    t = np.array([1.0, 2.0, -3.0])
+    y, G, S, K = _chord_operators(A, p_fit, Jp, R, t)
+    A3 = A.reshape(p, n, 3)
+    want_y = np.array([R.T @ (p_fit[i] - t) for i in range(n)])
+    want_G = np.zeros((p, 3, 3))
+    want_K = np.zeros((p, 3, 3, k))
+    for i in range(3):
+        for j in range(3):
+            want_G[:, i, j] = A3[:, :, j] @ want_y[:, i]
+            want_K[:, i, j] = A3[:, :, j] @ Jp[:, i]
+    # sums of n products (BLAS): a few ulps of the largest term
+    for got, want in ((y, want_y), (G, want_G.reshape(p, 9)), (K, want_K.reshape(p, 9 * k))):
+        assert got.flags.c_contiguous
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-13 * np.abs(want).max())
+    np.testing.assert_allclose(S, A3.sum(axis=1), rtol=0, atol=1e-14 * np.abs(A3).max() * n)
+
+
 def test_gum_propagation_equals_the_dense_sandwich():
     """A Σ Aᵀ (+ Σ E Eᵀ) and G cov Gᵀ against the products with Σ written out whole."""
     from mtmc.verification.simulate import _gum_propagate
@@ -293,3 +350,40 @@ def test_gum_propagation_equals_the_dense_sandwich():
         w = G[i] @ want @ G[i].T
         np.testing.assert_allclose(pc[i], w, rtol=1e-11, atol=1e-11 * np.abs(w).max())
     assert np.array_equal(pc, pc.transpose(0, 2, 1))
+
+
+def test_the_set_up_and_the_gum_run_blas_on_one_thread(setup, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # thin factorisations and products, whose idle BLAS threads would spin on the
+    # workers' cores: one thread in the reference identification, the model's build and
+    # the GUM; the process's setting comes back after the run
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from mtmc.verification import simulate as sim
+
+    def threads() -> int:
+        return max(d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas")
+
+    seen: list[tuple[str, int]] = []
+
+    def spy(name, fn):  # type: ignore[no-untyped-def]
+        def wrapped(*a, **kw):  # type: ignore[no-untyped-def]
+            seen.append((name, threads()))
+            return fn(*a, **kw)
+
+        return wrapped
+
+    monkeypatch.setattr(sim, "reference_identification", spy("ref", sim.reference_identification))
+    monkeypatch.setattr(sim, "gum_verification", spy("gum", sim.gum_verification))
+    build = VerificationModel.build.__func__  # type: ignore[attr-defined]
+    monkeypatch.setattr(
+        VerificationModel,
+        "build",
+        classmethod(spy("build", lambda cls, *a, **kw: build(cls, *a, **kw))),
+    )
+    with threadpool_limits(limits=2, user_api="blas"):
+        before = threads()
+        sim.simulate(_ver(setup), 20, 1)
+        after = threads()
+    assert before == 2
+    assert seen == [("ref", 1), ("build", 1), ("gum", 1)]
+    assert after == before

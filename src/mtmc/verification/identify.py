@@ -394,7 +394,7 @@ class _Problem:
         for ie, (_, idx, B) in enumerate(self.basis):  # chain rule: dp/de times the basis
             Jfull[..., idx] = Je[..., ie, None] * B[None, :, None, :]
         Jp = Jfull[..., self.free]
-        Jt = np.einsum("mij,mnik->mnjk", R, Jp)
+        Jt = np.swapaxes(R, 1, 2)[:, None] @ Jp  # Rᵀ ∂p/∂θ, point by point
         if self.pose:
             xc = self.cache.get("x")
             if xc is not None and xc.shape == x.shape and np.array_equal(xc, x):
