@@ -14,10 +14,11 @@ Three runs of the scaling page (docs/scaling.md), each with the defaults a user 
 Every parallel run is checked to give the same numbers as the in-process one. The Dask
 cluster (`mtmc.parallel.local_cluster`) is started once, before the timings (its start-up
 is printed apart), as a user with many runs would. Each run is timed in rounds (the
-sweep 3, the kept samples and the verification 2, `keep=False` 1), each round in-process,
-then 2 threads, then Dask, so that a change in the machine's load falls on the three
-alike; the table gives the best of the rounds, their range, and the ratios of the best
-times. For the fastest Dask round the time is split:
+sweep 5, the verification 3, the kept samples 2, `keep=False` 1: the short runs more
+often, as the machine's load moves them more), each round in-process, then 2 threads,
+then Dask, so that a change in the load falls on the three alike; the table gives the
+best of the rounds, their range, and the ratios of the best times. For the fastest Dask
+round the time is split:
 
 * workers' compute: the tasks' compute time on the workers (Dask's task stream), summed
   and divided by the workers, against the in-process run;
@@ -186,7 +187,7 @@ def main() -> None:
     def same_sweep(a: Any, b: Any) -> bool:
         return bool(np.array_equal(a.u, b.u))
 
-    case(f"sweep 25 x {n_sweep:.0e} trials", sweep, same_sweep, rounds=3)
+    case(f"sweep 25 x {n_sweep:.0e} trials", sweep, same_sweep, rounds=5)
 
     # the defaults a user gets: samples kept while they fit in 2 GiB; then the same run
     # with keep=False (moments and the quantile sketch, streamed)
@@ -217,7 +218,7 @@ def main() -> None:
     def same_ver(a: Any, b: Any) -> bool:
         return bool(np.array_equal(a.ve_u, b.ve_u) and np.array_equal(a.ve_samples, b.ve_samples))
 
-    case(f"verification 5408 pts x {n_ver}", verification, same_ver, rounds=2)
+    case(f"verification 5408 pts x {n_ver}", verification, same_ver, rounds=3)
 
     def span(ts: list[float]) -> str:
         return f"{min(ts):.2f}" + (f" ({min(ts):.2f}-{max(ts):.2f})" if len(ts) > 1 else "")
