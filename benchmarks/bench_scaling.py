@@ -3,7 +3,7 @@
 Three runs of the scaling page (docs/scaling.md), each with the defaults a user gets:
 
 * the Stryczek Fig. 14 sweep of examples/graphs/bcs_origin.toml: 25 grid points
-  (u_probe x u_axis, 5 x 5) of 10^5 trials each; one grid point is one task;
+  (u_probe x u_axis, 5 x 5) of 10^5 trials each, grouped into about 4 tasks a worker;
 * a scalar Monte Carlo of 10^8 trials (samples kept while they fit in 2 GiB; blocks
   grouped into about 8 tasks a worker), then with keep=False (moments and quantile
   sketches, merged by groups of 2^20 trials where they ran);

@@ -103,3 +103,56 @@ def test_apply_setting_and_sweep_errors():
         apply_setting(g, "probe.u_x", 1.0)
     with pytest.raises(GraphError, match="needs a scalar output place"):
         sweep_graph(g, {"probe.u_axis": [0.001]}, "p", trials=10, seed=1)
+
+
+def test_point_groups_are_consecutive_larger_first_and_end_as_one_point_a_task():
+    import heapq
+    import math
+
+    from mtmc.graph.sweep import SWEEP_TASKS_PER_WORKER, _point_groups
+
+    assert [len(g) for g in _point_groups(25, 2)] == [4, 3, 3, 3, 3, 3, 3, 3]
+    assert _point_groups(0, 2) == []
+    for n in range(1, 121):
+        for w in range(1, 17):
+            groups = _point_groups(n, w)
+            assert [i for g in groups for i in g] == list(range(n))
+            sizes = [len(g) for g in groups]
+            assert len(sizes) == min(n, SWEEP_TASKS_PER_WORKER * w)
+            assert sizes == sorted(sizes, reverse=True)
+            assert sizes[0] - sizes[-1] <= 1
+            # w workers of equal speed, each taking the next task when it is free, end
+            # within ceil(n / w) points: what one point a task gives
+            free = [0] * w
+            for s in sizes:
+                heapq.heappush(free, heapq.heappop(free) + s)
+            assert max(free) == math.ceil(n / w), (n, w)
+
+
+@pytest.mark.parametrize("executor", ["thread", "process"])
+def test_a_sweep_in_groups_of_points_on_workers_gives_the_bits_of_one_process(executor):
+    # 7 grid points on 2 workers would be 7 tasks of one point; with 2 tasks a worker they
+    # are 4 tasks of 2, 2, 2 and 1 points, whose results come back point by point
+    from unittest import mock
+
+    from mtmc.graph import sweep as sweep_mod
+
+    g = load_graph(EXAMPLES / "bcs_origin.toml")
+    vary = {"probe.u_probe": np.linspace(0.001, 0.004, 7)}
+    plain = sweep_graph(g, vary, "d_ac", trials=600, seed=9)
+    seen: list[int] = []
+    with mock.patch.object(sweep_mod, "SWEEP_TASKS_PER_WORKER", 2):
+        assert [len(x) for x in sweep_mod._point_groups(7, 2)] == [2, 2, 2, 1]
+        res = sweep_graph(
+            g,
+            vary,
+            "d_ac",
+            trials=600,
+            seed=9,
+            workers=2,
+            executor=executor,
+            progress=lambda done, _total: seen.append(done),
+        )
+    np.testing.assert_array_equal(res.u, plain.u)
+    np.testing.assert_array_equal(res.estimate, plain.estimate)
+    assert seen == [600 * (i + 1) for i in range(7)]
