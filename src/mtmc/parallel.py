@@ -65,6 +65,7 @@ __all__ = [
     "ExecutorKind",
     "local_cluster",
     "map_blocks",
+    "planned_workers",
     "one_blas_thread",
 ]
 
@@ -229,6 +230,21 @@ def local_cluster(workers: int = 2, **kwargs: Any) -> LocalCluster:
     with dask.config.set({**env, **WORKER_CONFIG}):
         cluster: LocalCluster = distributed.LocalCluster(**options)
     return cluster
+
+
+def planned_workers(workers: int, executor: ExecutorKind | cf.Executor) -> int:
+    """The workers a run's tasks are cut for: ``workers``, and at least 2 on Dask.
+
+    A Dask cluster's size is not known before it is reached (``workers`` is the size of
+    the cluster started for the call, 1 by default), so tasks on Dask are planned for at
+    least two workers; the engine's blocks and a sweep's grid points are grouped by it.
+
+    Examples
+    --------
+    >>> planned_workers(1, "dask"), planned_workers(4, "dask"), planned_workers(1, "thread")
+    (2, 4, 1)
+    """
+    return max(workers, 2) if executor == "dask" else workers
 
 
 def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:

@@ -41,7 +41,7 @@ from mtmc.errors import GraphError, InputError, MtmcError
 from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import SCALAR_TYPES, ProbeDefaults
 from mtmc.graph.run import run_graph
-from mtmc.parallel import ExecutorKind, map_blocks
+from mtmc.parallel import ExecutorKind, map_blocks, planned_workers
 from mtmc.uncertainty.montecarlo import NanPolicy
 from mtmc.uncertainty.sampling import resolve_seed
 
@@ -496,8 +496,8 @@ def sweep_graph(
             est.append(e)
             omitted += left_out
     else:
-        n_workers = max(workers, 2) if executor == "dask" else workers
-        tasks = [graphs[g.start : g.stop] for g in _point_groups(len(graphs), n_workers)]
+        groups = _point_groups(len(graphs), planned_workers(workers, executor))
+        tasks = [graphs[g.start : g.stop] for g in groups]
         results = map_blocks(
             _SweepGroup(point), tasks, workers=workers, executor=executor, scheduler=scheduler
         )

@@ -34,7 +34,7 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import ConvergenceError, InputError
-from mtmc.parallel import ExecutorKind, map_blocks, one_blas_thread
+from mtmc.parallel import ExecutorKind, map_blocks, one_blas_thread, planned_workers
 from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.copula import _JointSampler, joint_sampler
 from mtmc.uncertainty.distributions import Distribution, NormalMethod
@@ -827,8 +827,8 @@ class _Runner:
             assert collector.shapes is not None
             shapes = collector.shapes
             width = sum(max(1, math.prod(shapes[n])) for n in collector.kept) + len(sketch)
-            workers = max(self.workers, 2) if self.executor == "dask" else self.workers
             bs = self.block_size
+            workers = planned_workers(self.workers, self.executor)
             per = _blocks_per_task(len(spans), workers, 8 * bs * width)
             group = SKETCH_GROUP * SEED_BLOCK_SIZE
             if sketch and group % bs == 0:  # whole sketch groups in a task
