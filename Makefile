@@ -26,10 +26,13 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
-# coverage of src/mtmc by the tests, with a floor; uncovered lines listed per file
+# coverage of src/mtmc by the tests, with a floor; uncovered lines listed per file. The tests
+# run on every core (pytest-xdist), a test file to a worker, so that a module's fixtures (a
+# demo run, a rendered report) are computed once; TEST_WORKERS=0 runs them in this process.
 COV_FLOOR ?= 93
+TEST_WORKERS ?= auto
 unit: $(STAMP)
-	$(BIN)/pytest --cov=mtmc --cov-report=term-missing:skip-covered --cov-fail-under=$(COV_FLOOR)
+	$(BIN)/pytest -n $(TEST_WORKERS) --dist loadfile --cov=mtmc --cov-report=term-missing:skip-covered --cov-fail-under=$(COV_FLOOR)
 
 ## fuzz: hostile input at a larger budget: the property of tests/fuzz (2000 cases), then a
 ## random campaign over every reader and command that reads a file, with counts by outcome
