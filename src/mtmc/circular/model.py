@@ -71,6 +71,7 @@ __all__ = [
     "design",
     "default_terms",
     "identify",
+    "linear_identification",
     "structural_notes",
 ]
 
@@ -388,6 +389,37 @@ class CircularIdentification:
         return np.asarray(self.estimates[:, self.design.names.index(name)], dtype=np.float64)
 
 
+def linear_identification(
+    matrix: npt.ArrayLike, names: Sequence[str], readings: npt.ArrayLike
+) -> tuple[_F, _F, _F, _F, Identifiability]:
+    """Linear least squares of readings ``(M, N)`` on a design ``(N, p)``, all trials at once.
+
+    Returns
+    -------
+    estimates (M, p), covariance (M, p, p), residuals (M, N), rms (M,), identifiability
+        ``covariance = s² (AᵀA)⁻¹`` with ``s² = Σ r² / (N - p)`` of each trial.
+
+    Raises
+    ------
+    IdentifiabilityError
+        When the design cannot separate its parameters (the message names the
+        combinations) or has no more rows than columns.
+    """
+    A = np.asarray(matrix, dtype=np.float64)
+    dev = check_trace(readings, A.shape[0], "readings")
+    ident = identifiability(A, list(names))
+    if not ident.ok or A.shape[0] <= A.shape[1]:
+        raise IdentifiabilityError(
+            "the test cannot separate these errors: " + ident.text(), field="terms"
+        )
+    pinv = np.linalg.pinv(A)
+    est = dev @ pinv.T
+    res = dev - est @ A.T
+    s2 = np.einsum("mn,mn->m", res, res) / (A.shape[0] - A.shape[1])
+    cov = s2[:, None, None] * (pinv @ pinv.T)[None, :, :]  # pinv pinvᵀ = (AᵀA)⁻¹
+    return est, cov, res, np.sqrt(s2), ident
+
+
 def identify(design_: CircularDesign, deviation: npt.ArrayLike) -> CircularIdentification:
     """Identify the errors of the design from traces ``(M, N)`` (both paths, CCW first).
 
@@ -397,27 +429,13 @@ def identify(design_: CircularDesign, deviation: npt.ArrayLike) -> CircularIdent
         When the design cannot separate its terms (its report names the combinations:
         leave one term of each out).
     """
-    A = design_.matrix
-    dev = check_trace(deviation, A.shape[0])
-    ident = identifiability(A, design_.names)
-    if not ident.ok or A.shape[0] <= A.shape[1]:
-        raise IdentifiabilityError(
-            "the circular test cannot separate these errors: " + ident.text(), field="terms"
-        )
-    pinv = np.linalg.pinv(A)
-    est = dev @ pinv.T
-    res = dev - est @ A.T
-    dof = A.shape[0] - A.shape[1]
-    s2 = np.einsum("mn,mn->m", res, res) / dof
-    cinv = pinv @ pinv.T  # (AᵀA)⁻¹
-    cov = s2[:, None, None] * cinv[None, :, :]
-    notes = structural_notes(design_.plane, len(design_.directions))
+    est, cov, res, rms, ident = linear_identification(design_.matrix, design_.names, deviation)
     return CircularIdentification(
         design=design_,
         estimates=est,
         covariance=cov,
         residuals=res,
-        rms=np.sqrt(s2),
+        rms=rms,
         identifiability=ident,
-        notes=notes,
+        notes=structural_notes(design_.plane, len(design_.directions)),
     )
