@@ -32,6 +32,7 @@ ALLOWED: dict[str, set[str]] = {
     "graph": {"geometry", "uncertainty"},
     "verification": {"geometry", "instruments", "kinematics", "uncertainty"},
     "artefact": {"geometry", "kinematics", "uncertainty"},
+    "circular": {"geometry", "kinematics", "uncertainty", "verification"},
     "positioning": {"geometry", "uncertainty", "verification"},
     "report": {"graph", "kinematics", "uncertainty"},
     "study": {
