@@ -413,7 +413,7 @@ def linear_identification(
             "the test cannot separate these errors: " + ident.text(), field="terms"
         )
     pinv = np.linalg.pinv(A)
-    est = dev @ pinv.T
+    est = dev @ np.ascontiguousarray(pinv.T)
     res = dev - est @ A.T
     s2 = np.einsum("mn,mn->m", res, res) / (A.shape[0] - A.shape[1])
     cov = s2[:, None, None] * (pinv @ pinv.T)[None, :, :]  # pinv pinvᵀ = (AᵀA)⁻¹

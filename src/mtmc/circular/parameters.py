@@ -156,9 +156,10 @@ def lsc_fit(theta: npt.ArrayLike, dev: npt.ArrayLike) -> tuple[_F, _F]:
     t = check_angles(theta)
     d = check_trace(dev, t.size)
     B = _basis(t)
-    # one pseudo-inverse for every trial: the angles are shared
-    coef = d @ np.linalg.pinv(B).T
-    return coef, d - coef @ B.T
+    # one pseudo-inverse for every trial: the angles are shared (the small factors made
+    # contiguous: a transposed one sends matmul off BLAS)
+    coef = d @ np.ascontiguousarray(np.linalg.pinv(B).T)
+    return coef, d - coef @ np.ascontiguousarray(B.T)
 
 
 def minimum_zone(
@@ -204,21 +205,23 @@ def minimum_zone(
     ts = t[order]
     ds = d[:, order]
     B = _basis(ts)
-    m, n = ds.shape
+    BT = np.ascontiguousarray(B.T)
+    m = ds.shape[0]
     scale = float(np.max(np.abs(ds))) if ds.size else 0.0
-    ref = np.tile((np.arange(4) * n) // 4, (m, 1))
+    ref = _start(ts, ds - (ds @ np.ascontiguousarray(np.linalg.pinv(B).T)) @ BT)
     sigma = np.array([1.0, -1.0, 1.0, -1.0])
     coef = np.zeros((m, 3))
     h = np.zeros(m)
     active = np.arange(m)
     for _ in range(max_iterations):
         r = ref[active]
+        da = ds if active.size == m else ds[active]
         S = np.concatenate([B[r], np.broadcast_to(sigma, (r.shape[0], 4))[..., None]], axis=2)
-        rhs = np.take_along_axis(ds[active], r, axis=1)
+        rhs = np.take_along_axis(da, r, axis=1)
         sol = np.linalg.solve(S, rhs[..., None])[..., 0]
         coef[active] = sol[:, :3]
         h[active] = sol[:, 3]
-        e = ds[active] - sol[:, :3] @ B.T
+        e = da - sol[:, :3] @ BT
         j = np.argmax(np.abs(e), axis=1)
         ej = np.take_along_axis(e, j[:, None], axis=1)[:, 0]
         done = np.abs(ej) <= np.abs(sol[:, 3]) * (1.0 + 1e-12) + 1e-15 * scale
@@ -243,6 +246,44 @@ def minimum_zone(
             f"{active.size} of {m} traces"
         )
     return 2.0 * np.abs(h), coef
+
+
+def _start(theta: _F, r: _F) -> NDArray[np.int64]:
+    """A first reference of four points for the exchange, from the LSC residuals ``r``.
+
+    ``theta`` sorted. The circle in eight octants; quadrants of two octants from the
+    octant of the largest residual on: the largest residual in the first and third, the
+    smallest in the second and fourth (the alternation of the two-lobed traces of
+    squareness, scale mismatch and servo mismatch). Any four distinct points would do;
+    these save exchanges. With an empty octant, four points a quarter turn apart.
+    """
+    m, n = r.shape
+    octant = np.minimum((theta // (0.25 * np.pi)).astype(np.int64), 7)
+    counts = np.bincount(octant, minlength=8)
+    if np.any(counts == 0):
+        return np.tile((np.arange(4) * n) // 4, (m, 1))
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    width = int(counts.max())
+    # the points of each octant, padded with its last point: (8, width)
+    idx = np.minimum(starts[:, None] + np.arange(width), (starts + counts - 1)[:, None])
+    g = r[:, idx]  # (m, 8, width)
+    imax = np.take_along_axis(idx[None], np.argmax(g, axis=2)[..., None], 2)[..., 0]
+    imin = np.take_along_axis(idx[None], np.argmin(g, axis=2)[..., None], 2)[..., 0]
+    vmax = np.take_along_axis(r, imax, axis=1)
+    vmin = np.take_along_axis(r, imin, axis=1)
+    top = np.argmax(vmax, axis=1)
+    rows = np.arange(m)
+    ref = np.empty((m, 4), dtype=np.int64)
+    for k in range(4):
+        o1 = (top + 2 * k) % 8
+        o2 = (top + 2 * k + 1) % 8
+        if k % 2 == 0:
+            first = vmax[rows, o1] >= vmax[rows, o2]
+            ref[:, k] = np.where(first, imax[rows, o1], imax[rows, o2])
+        else:
+            first = vmin[rows, o1] <= vmin[rows, o2]
+            ref[:, k] = np.where(first, imin[rows, o1], imin[rows, o2])
+    return np.sort(ref, axis=1)
 
 
 def periodic_interpolation(
@@ -368,8 +409,8 @@ def _lsc_joint(ta: _F, a: _F, tb: _F, b: _F) -> tuple[_F, _F]:
     """The LSC of both paths together (one centre, one radius): coefficients, residuals."""
     B = np.concatenate([_basis(ta), _basis(tb)])
     d = np.concatenate([a, b], axis=1)
-    coef = d @ np.linalg.pinv(B).T
-    return coef, d - coef @ B.T
+    coef = d @ np.ascontiguousarray(np.linalg.pinv(B).T)
+    return coef, d - coef @ np.ascontiguousarray(B.T)
 
 
 def summary(values: Mapping[str, _F]) -> dict[str, float]:
