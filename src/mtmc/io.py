@@ -35,6 +35,7 @@ from mtmc.errors import ParseError
 __all__ = [
     "atomic_path",
     "decode_utf8",
+    "loads_json",
     "naming_os_errors",
     "to_jsonable",
     "write_bytes_atomic",
@@ -77,7 +78,7 @@ class _WriteError(OSError):
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike[str], *, follow: bool = True) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success rename it over ``path``.
 
     Use it for writers that want a file name (Matplotlib's ``savefig``, ``np.savetxt``).
@@ -92,10 +93,17 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
       the node itself is never replaced;
     - anything else (a folder, a block device, a socket) is refused.
 
+    With ``follow=False`` (a file inside a folder someone else made, such as the report of
+    a result folder that came as an archive) a symbolic link, a FIFO or a device at
+    ``path`` is itself replaced by the file: nothing outside the folder is written.
+
     Parameters
     ----------
     path : path-like
         The destination. Its folder must exist.
+    follow : bool
+        Write through a link, a FIFO or a character device at ``path`` (default), or
+        replace it.
 
     Yields
     ------
@@ -114,8 +122,8 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         One that names no file (NumPy's ``1000000 requested and 259568 written``) is
         given the name of ``path`` (:func:`naming_os_errors`).
     """
-    dest = _resolve(Path(path))
-    mode = _destination_mode(dest)
+    dest = _resolve(Path(path)) if follow else Path(path)
+    mode = _destination_mode(dest) if follow or not _replaceable(dest) else None
     through = mode is not None and (stat.S_ISFIFO(mode) or stat.S_ISCHR(mode))
     # A write-through target lives in a folder such as /dev: keep the temporary elsewhere.
     folder = None if through else dest.parent
@@ -206,6 +214,15 @@ def _resolve(dest: Path) -> Path:
     return dest
 
 
+def _replaceable(dest: Path) -> bool:
+    """Whether a link, FIFO or device stands at ``dest`` (which a rename replaces)."""
+    try:
+        mode = os.lstat(dest).st_mode
+    except FileNotFoundError:
+        return False
+    return stat.S_ISLNK(mode) or stat.S_ISFIFO(mode) or stat.S_ISCHR(mode)
+
+
 def _destination_mode(dest: Path) -> int | None:
     """``st_mode`` of what stands at ``dest`` (None if nothing); refuse what cannot be written."""
     try:
@@ -222,9 +239,15 @@ def _destination_mode(dest: Path) -> int | None:
     return mode
 
 
-def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` (UTF-8, newlines as given) to ``path`` atomically and return the path."""
-    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+def write_text_atomic(path: str | os.PathLike[str], text: str, *, follow: bool = True) -> Path:
+    """Write ``text`` (UTF-8, newlines as given) to ``path`` atomically and return the path.
+
+    ``follow=False`` replaces a link, FIFO or device at ``path`` (:func:`atomic_path`).
+    """
+    with (
+        atomic_path(path, follow=follow) as tmp,
+        open(tmp, "w", encoding="utf-8", newline="") as fh,
+    ):
         fh.write(text)
     return Path(path)
 
@@ -320,3 +343,92 @@ def decode_utf8(data: bytes, file: str) -> str:
             line=line,
             column=column,
         ) from None
+
+
+#: How deep JSON that mtmc reads may nest (a result's deepest table is some six levels).
+JSON_MAX_DEPTH = 64
+#: The most digits of a JSON integer mtmc reads (a 128-bit seed has 39).
+JSON_MAX_DIGITS = 40
+
+
+def _json_int(text: str) -> int:
+    digits = len(text.lstrip("-"))
+    if digits > JSON_MAX_DIGITS:
+        raise ValueError(f"an integer of {digits} digits (at most {JSON_MAX_DIGITS})")
+    return int(text)
+
+
+def _json_float(text: str) -> float:
+    x = float(text)
+    if not math.isfinite(x):
+        raise ValueError(f"{text} is beyond the largest number (about 1.8e308)")
+    return x
+
+
+def _json_constant(name: str) -> float:
+    raise ValueError(f"{name} is not JSON")
+
+
+def loads_json(text: str, file: str, *, max_depth: int = JSON_MAX_DEPTH) -> Any:
+    """JSON text read within limits: a clear :class:`ParseError` for what would break a reader.
+
+    Every JSON document mtmc reads from outside (a result folder, a request to the
+    workbench) is read here: not JSON, nested deeper than ``max_depth`` arrays and
+    objects, an integer of more than :data:`JSON_MAX_DIGITS` digits, a number beyond
+    the largest float (``1e400``, which Python would read as infinite), and the words
+    ``NaN``, ``Infinity`` and ``-Infinity`` (which Python writes and JSON does not know)
+    are each one message, never a ``RecursionError`` or a ``ValueError`` of the parser.
+
+    Parameters
+    ----------
+    text : str
+        The JSON text.
+    file : str
+        Its name, for the message.
+    max_depth : int
+        The deepest nesting of arrays and objects accepted.
+
+    Returns
+    -------
+    Any
+        The value.
+
+    Raises
+    ------
+    ParseError
+        Naming the file (and the line, where the parser gives one).
+
+    Examples
+    --------
+    >>> loads_json('{"a": [1, 2.5]}', "r.json")
+    {'a': [1, 2.5]}
+    >>> loads_json("[" * 100 + "]" * 100, "r.json")
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.ParseError: r.json: not JSON: nested deeper than 64 arrays and objects
+    """
+    import json
+
+    deep = f"not JSON: nested deeper than {max_depth} arrays and objects"
+    try:
+        value = json.loads(
+            text, parse_int=_json_int, parse_float=_json_float, parse_constant=_json_constant
+        )
+    except json.JSONDecodeError as exc:
+        raise ParseError(f"not JSON: {exc.msg}", file=file, line=exc.lineno) from None
+    except ValueError as exc:
+        raise ParseError(f"not JSON: {exc}", file=file) from None
+    except RecursionError:
+        raise ParseError(deep, file=file) from None
+    level = [value]
+    for _ in range(max_depth):  # breadth first, one level of nesting at a time
+        level = [
+            x
+            for v in level
+            if isinstance(v, dict | list)
+            for x in (v.values() if isinstance(v, dict) else v)
+            if isinstance(x, dict | list)
+        ]
+        if not level:
+            return value
+    raise ParseError(deep, file=file)

@@ -24,7 +24,7 @@ from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import MAX_MAGNITUDE, Place, ProbeDefaults, Transition
 from mtmc.io import write_text_atomic
 
-__all__ = ["dump_graph", "dumps_graph", "loads_graph"]
+__all__ = ["dump_graph", "dumps_graph", "loads_graph", "toml_string"]
 
 _TOP_KEYS = ("title", "units", "probe", "place", "transition")
 _PLACE_KEYS = ("name", "type", "value", "u", "dist", "unit", "pos")
@@ -199,6 +199,12 @@ def _places(data: dict[str, Any], lines: _Lines, err: _Err, units: str = "mm") -
         raise err("place must be an array of tables [[place]]", lines.top.get("place"), "place")
     for i, entry in enumerate(raw_places):
         line, keys = lines.entries["place"][i] if i < len(lines.entries["place"]) else (None, {})
+        if not isinstance(entry, dict):
+            raise err(
+                f"place #{i + 1}: expected a table (name = ..., type = ...), got {_kind(entry)}",
+                line if line is not None else lines.top.get("place"),
+                "place",
+            )
         for key in entry:
             if key not in _PLACE_KEYS:
                 raise err(
@@ -234,6 +240,13 @@ def _transitions(data: dict[str, Any], lines: _Lines, err: _Err) -> list[Transit
         line, keys = (
             lines.entries["transition"][i] if i < len(lines.entries["transition"]) else (None, {})
         )
+        if not isinstance(entry, dict):
+            raise err(
+                f"transition #{i + 1}: expected a table (name = ..., op = ..., out = ...), got "
+                f"{_kind(entry)}",
+                line if line is not None else lines.top.get("transition"),
+                "transition",
+            )
         label = entry.get("name", f"#{i + 1}")
         for key in ("name", "op", "out"):
             if key not in entry:
@@ -257,6 +270,31 @@ def _transitions(data: dict[str, Any], lines: _Lines, err: _Err) -> list[Transit
     return transitions
 
 
+def _kind(v: Any) -> str:
+    """What a TOML value is, for a message: ``a boolean``, ``an array``, ..."""
+    kinds = ((bool, "a boolean"), (int, "an integer"), (float, "a number"), (str, "a string"))
+    for t, name in kinds:
+        if isinstance(v, t):
+            return f"{name} ({v!r})"[:80]
+    return "an array" if isinstance(v, list) else f"a {type(v).__name__}"
+
+
+def toml_string(s: str) -> str:
+    r"""``s`` as a TOML basic string, which every TOML reader reads back as ``s``.
+
+    JSON's escapes (quotes, backslash, the C0 controls) are TOML's; DEL (U+007F), which
+    JSON writes raw and TOML refuses raw, is escaped too. Characters beyond U+FFFF are
+    written as themselves (JSON's ASCII form would write them as surrogate pairs, which
+    TOML refuses).
+
+    Examples
+    --------
+    >>> print(toml_string('a "b"\x7f😀'))
+    "a \"b\"\u007f😀"
+    """
+    return json.dumps(s, ensure_ascii=False).replace("\x7f", "\\u007f")
+
+
 def _fmt(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
@@ -269,7 +307,7 @@ def _fmt(v: Any) -> str:
             return "inf" if v > 0 else "-inf"
         return repr(v)
     if isinstance(v, str):
-        return json.dumps(v, ensure_ascii=False)
+        return toml_string(v)
     if isinstance(v, list | tuple):
         return "[" + ", ".join(_fmt(x) for x in v) + "]"
     raise TypeError(f"cannot write {v!r} to TOML")

@@ -20,40 +20,69 @@ __all__ = ["file_unit", "place_dimension", "unit_of"]
 _LENGTH_PARTS = frozenset({"point", "centre", "radius", "translation"})
 
 
-def _scalar_dimension(plan: Plan, name: str, seen: frozenset[str] = frozenset()) -> tuple[int, int]:
+def _marked(plan: Plan, name: str) -> tuple[int, int]:
+    """The dimension a place's ``unit`` says (none: a length)."""
+    place = plan.graph.place(name)
+    unit = place.unit if place is not None else None
+    if unit == "1":
+        return (0, 0)
+    if unit in ("rad", "deg"):
+        return (0, 1)
+    return (1, 0)
+
+
+def _rule(plan: Plan, name: str) -> tuple[int, int] | tuple[str, tuple[str, ...]]:
+    """A place's dimension where it is known at once, else (op, the inputs it follows)."""
+    type_ = plan.types[name]
+    if type_ in ("x", "y", "z", "point"):
+        return (1, 0)
+    if type_ == "direction":
+        return (0, 0)
+    if name not in plan.producer:
+        return _marked(plan, name)
+    t = plan.graph.transition(plan.producer[name])
+    assert t is not None
+    if t.op == "angle":
+        return (0, 1)
+    if t.op == "ratio":
+        return ("ratio", tuple(t.inputs[:2]))
+    if t.op in ("middle", "displace") and t.inputs:
+        return ("same", (t.inputs[0],))
+    return (1, 0)  # distance, vector, meas and the rest: lengths
+
+
+def _scalar_dimension(plan: Plan, name: str) -> tuple[int, int]:
     """Dimension of the value of an x/y/z/real/vector place: (power of length, of angle).
 
     A marked place says it (``unit``: none = a length, ``1``, ``rad``/``deg``); a produced
     one follows its op: ``distance`` and ``vector`` give lengths, ``angle`` radians,
     ``ratio`` the product of its inputs' dimensions, ``middle`` and ``displace`` the
     dimension of their first input; ``meas`` and the coordinates of points are lengths.
+    Walked with a stack of its own, not recursion: a chain of thousands of
+    ``displace`` transitions is as good as a short one. A place met again on the way (a
+    cycle, which a checked graph has not) counts as marked.
     """
-    type_ = plan.types[name]
-    if type_ in ("x", "y", "z", "point"):
-        return (1, 0)
-    if type_ == "direction":
-        return (0, 0)
-    place = plan.graph.place(name)
-    if name not in plan.producer or name in seen:
-        unit = place.unit if place is not None else None
-        if unit == "1":
-            return (0, 0)
-        if unit in ("rad", "deg"):
-            return (0, 1)
-        return (1, 0)
-    t = plan.graph.transition(plan.producer[name])
-    assert t is not None
-    inner = seen | {name}
-    if t.op == "angle":
-        return (0, 1)
-    if t.op in ("distance", "vector"):
-        return (1, 0)
-    if t.op == "ratio":
-        a, b = (_scalar_dimension(plan, p, inner) for p in t.inputs[:2])
-        return (a[0] + b[0], a[1] + b[1])
-    if t.op in ("middle", "displace") and t.inputs:
-        return _scalar_dimension(plan, t.inputs[0], inner)
-    return (1, 0)
+    memo: dict[str, tuple[int, int]] = {}
+    stack, path = [name], set()
+    while stack:
+        n = stack[-1]
+        rule = _rule(plan, n)
+        if isinstance(rule[0], int):
+            memo[n] = rule
+        else:
+            op, inputs = rule
+            path.add(n)
+            pending = [p for p in inputs if p not in memo and p not in path]
+            if pending:
+                stack.append(pending[0])
+                continue
+            dims = [memo.get(p) or _marked(plan, p) for p in inputs]
+            memo[n] = (
+                (dims[0][0] + dims[1][0], dims[0][1] + dims[1][1]) if op == "ratio" else dims[0]
+            )
+        stack.pop()
+        path.discard(n)
+    return memo[name]
 
 
 def place_dimension(plan: Plan, name: str, part: str = "value") -> tuple[int, int]:

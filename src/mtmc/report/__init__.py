@@ -206,25 +206,37 @@ def render(folder: str | Path) -> Path:
     InputError
         If the folder holds no readable ``result.json``.
     """
+    import jinja2
+    import numpy as np
+
+    from mtmc.report.folder import read_folder
+
     d = Path(folder)
-    if not (d / "result.json").is_file():
-        raise InputError("not a result folder: it has no result.json", file=str(d))
-    result = _read_json(d / "result.json")
-    prov = _read_json(d / "provenance.json") if (d / "provenance.json").is_file() else None
+    read = read_folder(d, samples=False)  # every file checked before the report reads it
     try:
-        page = html(result, prov)
+        # values at the ends of the float range (1e308, within the format) overflow in
+        # Matplotlib's tick arithmetic, which handles them: no warning for the reader
+        with np.errstate(over="ignore", invalid="ignore"):
+            page = html(read.result, read.provenance)
     except KeyError as exc:  # a result.json edited, or of another version
         raise InputError(
             f"not an mtmc result: no {exc.args[0]!r} where the report needs one "
             f"(docs/results-format.md)",
             file=str(d / "result.json"),
         ) from None
-    except (TypeError, IndexError, AttributeError) as exc:
+    except jinja2.UndefinedError as exc:
         raise InputError(
-            f"not an mtmc result: a value of the wrong type ({exc}) (docs/results-format.md)",
+            f"not an mtmc result: {exc.message} where the report needs it (docs/results-format.md)",
             file=str(d / "result.json"),
         ) from None
-    return write_text_atomic(d / "report.html", page)
+    except (TypeError, IndexError, AttributeError, ValueError) as exc:
+        raise InputError(
+            f"not an mtmc result: a value the report cannot show ({exc}) (docs/results-format.md)",
+            file=str(d / "result.json"),
+        ) from None
+    # a report.html that is a link (a result folder unpacked from an archive may carry one
+    # to anywhere) is replaced, never written through: the report stays in its folder
+    return write_text_atomic(d / "report.html", page, follow=False)
 
 
 def render_index(

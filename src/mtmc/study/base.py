@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from mtmc.document import Source
 from mtmc.frozen import frozen_array, frozen_floats
 from mtmc.io import to_jsonable
+from mtmc.report.folder import RESULT_FORMAT  # the ``format`` of result.json: its reader's
 from mtmc.study.spec import RunSettings
 from mtmc.uncertainty.gum import GumResult, endpoint_std_error, one_value, validate
 from mtmc.uncertainty.results import MonteCarloResult
@@ -51,8 +52,6 @@ __all__ = [
     "region",
 ]
 
-#: The ``format`` of ``result.json``.
-RESULT_FORMAT = "mtmc-result/1"
 
 #: Bins of the histograms kept in a result.
 HISTOGRAM_BINS = 60

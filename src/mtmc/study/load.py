@@ -15,19 +15,16 @@ into a :class:`~mtmc.study.base.StudyResult` of kind ``monte_carlo``, so that
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
+from mtmc.report.folder import read_folder
 from mtmc.study.base import (
-    RESULT_FORMAT,
     BudgetLine,
     Convergence,
     GumSummary,
@@ -52,22 +49,6 @@ __all__ = ["load_result", "study_result"]
 #: The keys of ``result.json`` that are :class:`StudyResult` fields of their own; every
 #: other key (but ``format``) is the kind's ``extra``.
 _TOP = ("quantities", "regions", "tables", "fields", "inputs")
-
-
-def _read(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(
-            f"cannot read {path.name}: {exc.strerror or exc}", file=str(path)
-        ) from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"not valid JSON: {exc.msg}", file=str(path), line=exc.lineno) from None
-    if not isinstance(data, dict):
-        raise InputError("expected a JSON object", file=str(path))
-    return data
 
 
 def _dof(obj: Any) -> Any:
@@ -156,20 +137,15 @@ def load_result(folder: str | os.PathLike[str]) -> StudyResult:
     Raises
     ------
     InputError
-        Naming the file: no ``result.json``, not JSON, not an mtmc result, or a
-        quantity, region, table or field without a key it needs.
+        Naming the file (and field): no ``result.json``, not JSON, not an mtmc result, a
+        value not of ``docs/results-format.md``, a link to outside the folder, a FIFO, or
+        samples whose ``.npy`` header does not match the file or the trials
+        (:func:`mtmc.report.folder.read_folder`).
     """
     d = Path(folder)
     path = d / "result.json"
-    if not path.is_file():
-        raise InputError("not a result folder: it has no result.json", file=str(d))
-    doc = _read(path)
-    if not str(doc.get("format", "")).startswith("mtmc-result/"):
-        raise InputError(
-            f"expected an mtmc result (format {RESULT_FORMAT}), got format {doc.get('format')!r}",
-            file=str(path),
-            field="format",
-        )
+    read = read_folder(d)  # every file checked (mtmc.report.folder), the samples read
+    doc = read.result
     try:
         kw: dict[str, Any] = {
             "quantities": tuple(_quantity(q) for q in doc.get("quantities", [])),
@@ -195,17 +171,7 @@ def load_result(folder: str | os.PathLike[str]) -> StudyResult:
         ) from None
     known = {"format", *_TOP, *named}
     kw["extra"] = {k: v for k, v in doc.items() if k not in known}
-    samples: dict[str, np.ndarray[Any, Any]] = {}
-    sdir = d / "samples"
-    if sdir.is_dir():
-        for f in sorted(sdir.glob("*.npy")):
-            try:
-                arr = np.load(f, allow_pickle=False)
-            except (OSError, ValueError) as exc:
-                raise InputError(f"cannot read the samples: {exc}", file=str(f)) from None
-            arr.setflags(write=False)
-            samples[f.stem] = arr
-    kw["samples"] = samples
+    kw["samples"] = read.samples
     return StudyResult(**kw)
 
 

@@ -501,15 +501,14 @@ def full_run(
     Path
         The result folder.
     """
-    import json
-
+    from mtmc.graph.toml_format import toml_string
     from mtmc.study import loads_study, write_result
 
     lines = [
         'kind = "graph"',
-        f"title = {json.dumps(title or graph_path.stem)}",
-        f"graph = {json.dumps(graph_path.name)}",
-        f"outputs = {json.dumps(outputs)}",
+        f"title = {toml_string(title or graph_path.stem)}",
+        f"graph = {toml_string(graph_path.name)}",
+        f"outputs = [{', '.join(toml_string(o) for o in outputs)}]",
         "",
         "[run]",
         f"trials = {int(trials)}",
@@ -517,7 +516,8 @@ def full_run(
     if seed is not None:
         lines.append(f"seed = {int(seed)}")
     text = "\n".join(lines) + "\n"
-    study = loads_study(text, file=f"{graph_path.stem}-study.toml", folder=graph_path.parent)
+    # the study exists only as this text: its errors name the graph file's full run
+    study = loads_study(text, file=f"full run of {graph_path.name}", folder=graph_path.parent)
     result = study.run()
     dest = graph_path.parent / f"{graph_path.stem}-result"
     argv = ["mtmc", "graph", "edit", str(graph_path), "(full run)"]

@@ -19,8 +19,8 @@ read by the graph's own parser, and nothing it sends is evaluated.
 from __future__ import annotations
 
 import asyncio
+import hashlib
 import hmac
-import json
 import secrets
 import signal
 import socket
@@ -42,7 +42,7 @@ from starlette.routing import Mount, Route
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from mtmc.errors import InputError, MtmcError
-from mtmc.io import decode_utf8, to_jsonable, write_text_atomic
+from mtmc.io import decode_utf8, loads_json, to_jsonable, write_text_atomic
 from mtmc.workbench import compute
 from mtmc.workbench.view import GraphDocument, check_payload, graph_json
 
@@ -88,29 +88,48 @@ class Session:
     unsaved: bool = False
     latest: dict[str, int] = field(default_factory=dict)
     result_dir: Path | None = None
+    loaded_sha: str | None = field(init=False, default=None)
     compute_lock: threading.Lock = field(default_factory=threading.Lock)
     file_lock: threading.Lock = field(default_factory=threading.Lock)
 
     def __post_init__(self) -> None:
-        text = ""
-        if self.path.exists():
-            try:
-                data = self.path.read_bytes()
-            except OSError as exc:
-                raise InputError(
-                    f"cannot read the graph file: {exc.strerror or exc}", file=str(self.path)
-                ) from None
-            text = decode_utf8(data, self.path.name)
-        elif not self.path.parent.is_dir():
+        if not self.path.exists() and not self.path.parent.is_dir():
             raise InputError(
                 f"no folder {self.path.parent} to create the graph file in", file=str(self.path)
             )
+        self.load()
+
+    def on_disk(self) -> bytes | None:
+        """The graph file's bytes as they are now (None where there is no file)."""
+        if not self.path.exists():
+            return None
+        try:
+            return self.path.read_bytes()
+        except OSError as exc:
+            raise InputError(
+                f"cannot read the graph file: {exc.strerror or exc}", file=str(self.path)
+            ) from None
+
+    def load(self) -> None:
+        """Read the graph file (again), and remember its SHA-256 to see a later change on disk."""
+        data = self.on_disk()
+        text = "" if data is None else decode_utf8(data, self.path.name)
         self.doc = GraphDocument(text, self.path.name)
+        self.loaded_sha = _sha(data)
+        self.unsaved = False
+
+    def changed_on_disk(self) -> bool:
+        """Whether the file on disk is no longer the one the page was given (or last saved)."""
+        return _sha(self.on_disk()) != self.loaded_sha
 
     @property
     def name(self) -> str:
         """The file's name, as messages give it."""
         return self.path.name
+
+
+def _sha(data: bytes | None) -> str | None:
+    return None if data is None else hashlib.sha256(data).hexdigest()
 
 
 class _Refused(Exception):
@@ -223,8 +242,8 @@ async def _body(request: Request) -> dict[str, Any]:
         chunks.append(chunk)
     raw = b"".join(chunks)
     try:
-        data = json.loads(raw.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        data = loads_json(raw.decode("utf-8"), "the body")
+    except UnicodeDecodeError as exc:
         raise _Refused(400, f"the body is not JSON: {exc}") from None
     if not isinstance(data, dict):
         raise _Refused(400, "the body must be a JSON object")
@@ -280,6 +299,9 @@ def _static_files() -> dict[str, tuple[bytes, str]]:
 
 
 async def _get_graph(_: Request, s: Session) -> Any:
+    with s.file_lock:
+        if s.changed_on_disk():  # edited on disk: a page (re)loading shows the file as it is
+            s.load()
     text = s.doc.text
     plan, report = await run_in_threadpool(compute.check_text, text, s.name)
     return {
@@ -349,8 +371,16 @@ async def _save(request: Request, s: Session) -> Any:
 
     def write() -> None:
         with s.file_lock:
+            if s.changed_on_disk():
+                raise _Refused(
+                    409,
+                    f"{s.name} was changed on disk after this page loaded it; not saved, so "
+                    "that change is kept. Reload the page to edit the file as it is now "
+                    "(the edits made here since are lost).",
+                )
             write_text_atomic(s.path, text)
             s.doc.rebase(text)
+            s.loaded_sha = _sha(text.encode("utf-8"))
             s.unsaved = False
 
     try:
