@@ -38,6 +38,7 @@ def test_json_equals_library_result_with_correlation(copula, engine, capsys):
     [
         (["--correlate", "a,b"], "field --correlate: expected A,B,R"),
         (["--copula", "t"], "field --copula: expected 'gaussian' or 't:DOF'"),
+        (["--copula", "t:1e-3"], "field copula.dof: expected 0.1 <= dof < inf"),
         (["--correlate", "a,q,0.5"], "field correlation[q]: 'q' is not an input"),
         (["--correlate", "a,b,1.5"], "field correlation[a, b]: expected a coefficient in [-1, 1]"),
         (["--sensitivity"], "field --correlate: --sensitivity varies each input alone"),

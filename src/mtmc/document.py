@@ -23,6 +23,7 @@ from __future__ import annotations
 import hashlib
 import math
 import re
+import sys
 import tomllib
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -46,6 +47,7 @@ __all__ = [
     "key_lines",
     "load_toml",
     "loads_toml",
+    "read_number",
     "read_text",
 ]
 
@@ -419,6 +421,62 @@ def check_number(
             rng = f"{'<' if open_high else '<='} {high:g}"
         raise err(f"expected a number {rng}, got {v!r}")
     return f
+
+
+#: A number as a file or a command line writes it: an optional sign, ASCII digits with an
+#: optional decimal point, an optional exponent; no ``_``, no other script's digits.
+NUMBER_TEXT = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+#: The longest text :func:`read_number` reads: 17 significant digits carry every double,
+#: and a number written with more than this many characters is no measurement's.
+MAX_NUMBER_CHARS = 100
+
+
+def read_number(text: str, err: Callable[[str], Exception]) -> float:
+    """The finite float that a text writes, or ``err(message)`` raised.
+
+    The one reader of a number given as text: a cell of a CSV file, a parameter of a
+    distribution, a literal of a model expression. It takes what :data:`NUMBER_TEXT`
+    matches and nothing else (Python's :class:`float` would also take ``1_0``, ``inf``,
+    ``nan``, ``0x1p3`` by other routes, and the digits of every script: Arabic-Indic, fullwidth).
+
+    Parameters
+    ----------
+    text : str
+        The text (white space around it is ignored).
+    err : callable
+        Makes the exception to raise from a message (it adds the file, line and field).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> read_number(" -1.5e3 ", InputError)
+    -1500.0
+    >>> read_number("1_0", InputError)
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.InputError: expected a finite number written with the digits 0-9 (an \
+optional sign, decimal point and exponent: -1.5e-3), got '1_0'
+    >>> read_number("1e400", InputError)
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.InputError: expected a finite number at most 1.8e+308 in size, got '1e400'
+    """
+    s = text.strip()
+    shown = repr(s) if len(s) <= 40 else f"'{s[:4]}...{s[-1]}' ({len(s)} characters)"
+    if len(s) > MAX_NUMBER_CHARS or NUMBER_TEXT.fullmatch(s) is None:
+        raise err(
+            "expected a finite number written with the digits 0-9 (an optional sign, decimal "
+            f"point and exponent: -1.5e-3), got {shown}"
+            + ("" if len(s) <= MAX_NUMBER_CHARS else f"; at most {MAX_NUMBER_CHARS} characters")
+        )
+    v = float(s)
+    if not math.isfinite(v):
+        raise err(f"expected a finite number at most {sys.float_info.max:.2g} in size, got {shown}")
+    return v
 
 
 def read_text(path: str | Path, what: str = "file") -> str:

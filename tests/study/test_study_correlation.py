@@ -137,6 +137,13 @@ CASES = [
         "correlation.copula.dof",
         "> 0",
     ),
+    (
+        'copula = "gaussian"',
+        'copula = {kind = "t", dof = 1e-3}',  # ran, normal(0, 1) gave u = 0.34
+        13,
+        "correlation.copula.dof",
+        "expected 0.1 <= dof < inf for the t copula, got 0.001 (below 0.1",
+    ),
     ('copula = "gaussian"', "colour = 1", 13, "correlation.colour", "unknown key"),
     (
         'pairs = [["a", "b", 0.7]]',

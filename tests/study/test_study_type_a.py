@@ -319,8 +319,10 @@ def test_errors_name_file_line_and_field(study_dir, old, new, file, line, field,
 @pytest.mark.parametrize(
     ("csv", "line", "words"),
     [
-        ("run,x\n1,10.1\n2,abc\n", 3, "expected a finite number, got 'abc'"),
-        ("run,x\n1,10.1\n2,nan\n", 3, "expected a finite number, got 'nan'"),
+        ("run,x\n1,10.1\n2,abc\n", 3, "exponent: -1.5e-3), got 'abc'"),
+        ("run,x\n1,10.1\n2,nan\n", 3, "exponent: -1.5e-3), got 'nan'"),
+        ("run,x\n1,10.1\n2,1_0\n", 3, "exponent: -1.5e-3), got '1_0'"),
+        ("run,x\n1,10.1\n2,\uff11\n", 3, "exponent: -1.5e-3), got '\uff11'"),
         ("run,x\n1,10.1\n2\n", 3, "expected 2 or more fields"),
         ("run,x\n1,10.1\n", None, "has 1 value; input x needs at least 2"),
         ("# nothing\n\n", None, "expected a header line"),

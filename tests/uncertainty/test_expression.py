@@ -213,3 +213,26 @@ def test_formula_like_text_parses_or_raises_and_evaluates_finite_shape(text):
     with np.errstate(all="ignore"):
         out = np.broadcast_to(expr(**values), (3,))
     assert out.shape == (3,)
+
+
+@pytest.mark.parametrize(
+    ("text", "column", "words"),
+    [
+        ("a + 1_0", 5, "got '1_0'"),  # Python reads 10
+        ("a * 0x10", 5, "got '0x10'"),  # Python reads 16
+        ("a + 1" + "0" * 400, 5, "(401 characters); at most 100 characters"),  # OverflowError
+        ("a + 1e400", 5, "expected a finite number at most 1.8e+308 in size, got '1e400'"),
+    ],
+)
+def test_a_literal_is_read_as_a_number_of_a_file(text, column, words):
+    with pytest.raises(ExpressionError) as info:
+        expression(text)
+    assert info.value.column == column
+    assert words in info.value.message
+
+
+def test_a_literal_written_in_other_digits_is_refused_with_its_column():
+    for text in ("a + \u0661\u0660", "a + \uff11\uff10"):  # Arabic-Indic, fullwidth 10
+        with pytest.raises(ExpressionError) as info:
+            expression(text)
+        assert info.value.column == 5

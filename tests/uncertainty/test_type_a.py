@@ -10,8 +10,10 @@ Welch–Satterthwaite formula written out by hand.
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -423,3 +425,36 @@ def test_quasi_random_sampling_takes_the_extra_coordinate():
     by_hand = by_hand + stats.t.ppf(u[:, layout["c"][0]], 6)
     # scipy's quantile functions against scipy.special's: agreement to rounding
     assert np.allclose(np.asarray(mc.samples), by_hand, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "obs", [[1e-200, 2e-200, 3e-200, 1e-200], [1e300, 1.1e300, -1.2e300, 1e300], [1.0, 1.1, 1.3]]
+)
+def test_s_and_r1_of_tiny_and_huge_observations_equal_exact_arithmetic(obs, recwarn):
+    d = type_a(obs)
+    x = [Fraction(v) for v in obs]  # exact: no square under- or overflows
+    mean = sum(x) / len(x)
+    dev = [v - mean for v in x]
+    k = math.frexp(max(abs(v) for v in obs))[1]  # s = 2^k √(var / 4^k), var exact
+    s = math.ldexp(math.sqrt(sum(v * v for v in dev) / (len(x) - 1) / Fraction(4) ** k), k)
+    r1 = float(sum(a * b for a, b in itertools.pairwise(dev)) / sum(v * v for v in dev))
+    # a few ulp: the float sums round at each of n ≤ 4 steps where the Fractions do not
+    assert d.s == pytest.approx(s, rel=1e-14)
+    assert d.r1 == pytest.approx(r1, rel=1e-13, abs=1e-15)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_observations_equal_or_below_the_doubles_name_the_value_as_a_number():
+    with pytest.raises(DistributionError) as info:
+        type_a([5e-324, 5e-324, 5e-324])
+    assert "all equal (5e-324)" in info.value.message  # was "np.float64(5e-324)"
+    with pytest.raises(DistributionError) as info:
+        type_a([5e-324, 1e-323, 5e-324])  # not equal: s underflows
+    assert "below the smallest normal double" in info.value.message
+
+
+def test_a_relative_uncertainty_whose_square_underflows_is_refused():
+    assert dof_from_relative_uncertainty(1.5e-154) == pytest.approx(0.5 / 1.5e-154**2)
+    with pytest.raises(DistributionError) as info:  # was ZeroDivisionError
+        parse_distribution("normal(0, 1, u_rel_u=1e-200)")
+    assert "expected u_rel_u >= 1.5e-154, got 1e-200" in info.value.message

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, read_text
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, read_number, read_text
 from mtmc.errors import InputError
 
 __all__ = [
@@ -260,14 +259,7 @@ def _reading(
 
     def number(key: str) -> float:
         text = cells[where[key]]
-        try:
-            v = float(text)
-        except ValueError:
-            v = math.nan
-        if not math.isfinite(v):
-            raise InputError(
-                f"expected a finite number, got {text!r}", file=file, line=k, field=key
-            ) from None
+        v = read_number(text, lambda m: InputError(m, file=file, line=k, field=key))
         if abs(v) > limits[key]:
             raise InputError(
                 f"expected a number at most {limits[key]:g} in size, got {text!r}",

@@ -93,7 +93,10 @@ def _read_copula(table: Fields) -> Copula:
             raise sub.error("the Gaussian copula has no degrees of freedom", "dof")
         return Copula()
     dof = sub.number("dof", low=0.0, open_low=True)
-    return Copula("t", float(dof))
+    try:
+        return Copula("t", float(dof))
+    except InputError as exc:  # below MIN_T_DOF: at the line of dof
+        raise sub.error(exc.message, "dof") from None
 
 
 def _where(message_field: str | None, pairs: list[Any] | None) -> tuple[str | int, ...]:

@@ -23,13 +23,14 @@ import csv
 import io
 import math
 import warnings
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import Fields, KeyPath, check_number, read_text
+from mtmc.document import Fields, KeyPath, check_number, read_number, read_text
 from mtmc.errors import InputError, MtmcError
 from mtmc.uncertainty.distributions import Distribution, StudentT, parse_distribution
 from mtmc.uncertainty.typea import (
@@ -236,15 +237,7 @@ def load_csv_column(path: str | Path, column: str) -> NDArray[np.float64]:
         cell = cells[index]
         if cell == "":
             continue
-        try:
-            v = float(cell)
-        except ValueError:
-            v = math.nan
-        if not math.isfinite(v):
-            raise InputError(
-                f"expected a finite number, got {cell!r}", file=file, line=k, field=column
-            )
-        out.append(v)
+        out.append(read_number(cell, partial(InputError, file=file, line=k, field=column)))
     return np.asarray(out, dtype=np.float64)
 
 

@@ -36,11 +36,13 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import TYPE_CHECKING, Any, ClassVar, Literal, NoReturn, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.document import read_number
 from mtmc.errors import DistributionError, MtmcError
 from mtmc.uncertainty.expression import parse_tree
 
@@ -1252,7 +1254,7 @@ class Constant(Distribution):
 
 # --------------------------------------------------------------------------- parsing
 _TOKEN = re.compile(
-    r"\s*(?:(?P<num>[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
+    r"\s*(?:(?P<num>[+-]?\.?\d(?:[\w.]|(?<=[eE])[+-])*)"  # read by read_number
     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)|(?P<punct>[()\[\],=]))"
 )
 
@@ -1287,15 +1289,23 @@ class _Reader:
             self.tokens.append((kind, m.group(kind), m.start(kind) + 1))
             pos = m.end()
         self.at = {col: tok for _, tok, col in self.tokens}
+        self.numbers = {
+            col: read_number(tok, partial(self.error, column=col))
+            for kind, tok, col in self.tokens
+            if kind == "num"
+        }
 
-    def fail(self, message: str, column: int | None = None) -> NoReturn:
-        raise DistributionError(
+    def error(self, message: str, column: int | None = None) -> DistributionError:
+        return DistributionError(
             f"{message} in {self.text.strip()!r}",
             file=self.file,
             line=self.line,
             column=column,
             field=self.field,
         )
+
+    def fail(self, message: str, column: int | None = None) -> NoReturn:
+        raise self.error(message, column)
 
     def _expected(self, what: str, tok: _Token) -> NoReturn:
         self.fail(
@@ -1415,7 +1425,7 @@ class _Reader:
             return self.distribution(node, start)
         if isinstance(node, ast.List):
             return [self.value(n, start) for n in node.elts]
-        return float(self.at[start + node.col_offset])  # the number as written
+        return self.numbers[start + node.col_offset]  # the number as written
 
     def distribution(self, node: ast.Call, start: int) -> Distribution:
         col = start + node.col_offset

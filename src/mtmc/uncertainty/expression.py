@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
+from mtmc.document import read_number
 from mtmc.errors import ExpressionError, MtmcError
 
 __all__ = [
@@ -364,6 +365,14 @@ class _Checker(ast.NodeVisitor):
         value = node.value
         if isinstance(value, bool) or not isinstance(value, int | float):
             self._fail(node, f"the constant {value!r} (only real numbers are)")
+        written = ast.get_source_segment(self.text, node) or ""  # 1_0, 0x10: Python's forms
+
+        def error(message: str) -> ExpressionError:
+            return ExpressionError(
+                f"{message} in {self.text!r}", line=node.lineno, column=node.col_offset + 1
+            )
+
+        read_number(written, error)
 
     def visit_Name(self, node: ast.Name) -> None:
         if node.id.startswith("_"):

@@ -113,6 +113,10 @@ def lag1_autocorrelation(x: ArrayLike) -> float:
     if a.size < 2:
         return math.nan
     d = a - a.mean()
+    top = float(np.max(np.abs(d)))
+    if top == 0.0 or not math.isfinite(top):
+        return math.nan
+    d = np.ldexp(d, -math.frexp(top)[1])  # |d| < 1 by a power of 2: no square under/overflows
     den = float(d @ d)
     if den == 0.0:
         return math.nan
@@ -161,15 +165,30 @@ def dof_from_relative_uncertainty(u_rel_u: float) -> float:
     Raises
     ------
     DistributionError
-        If ``u_rel_u`` is not a finite number > 0.
+        If ``u_rel_u`` is not a finite number > 0, or below 1.5e-154 (its square
+        underflows).
 
     Examples
     --------
     >>> dof_from_relative_uncertainty(0.25), dof_from_relative_uncertainty(0.1)
     (8.0, 50.0)
+    >>> dof_from_relative_uncertainty(1e-200)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.DistributionError: field u_rel_u: expected u_rel_u >= 1.5e-154, got 1e-200: ...
     """
     r = _positive("u_rel_u", u_rel_u)
+    if r < _MIN_U_REL_U:
+        raise DistributionError(
+            f"expected u_rel_u >= {_MIN_U_REL_U:.2g}, got {u_rel_u!r}: u_rel_u² underflows "
+            "and ν = ½ u_rel_u⁻² is lost (leave u_rel_u out: a u known exactly has ν = ∞)",
+            field="u_rel_u",
+        )
     return 0.5 / (r * r)
+
+
+#: The smallest ``Δu/u``: its square is the smallest normal double (ν = 2.2e307).
+_MIN_U_REL_U = math.sqrt(sys.float_info.min)
 
 
 def _positive(name: str, value: Any, what: str = "a finite number > 0") -> float:
@@ -312,11 +331,18 @@ class TypeA(Distribution):
         if pooled:
             object.__setattr__(self, "pooled_s", _positive("pooled_s", self.pooled_s))
             object.__setattr__(self, "pooled_dof", _positive("pooled_dof", self.pooled_dof))
-        if self.u == 0.0:
+        if not pooled and np.all(x == x[0]):
             raise DistributionError(
-                f"type_a: the {x.size} observations are all equal ({_number_text(x[0])}), "
-                "so s = 0; give a pooled_s and pooled_dof from an earlier series "
-                "(JCGM 100 §4.2.4), or the resolution of the indication as a Type B input",
+                f"type_a: the {x.size} observations are all equal "
+                f"({_number_text(float(x[0]))}), so s = 0; give a pooled_s and pooled_dof from "
+                "an earlier series (JCGM 100 §4.2.4), or the resolution of the indication as a "
+                "Type B input",
+                field="observations",
+            )
+        if not self.u >= sys.float_info.min:
+            raise DistributionError(
+                f"type_a: u = s/√n = {self.u:.3g} of the {x.size} observations is below the "
+                f"smallest normal double ({sys.float_info.min:.3g}); give them in a smaller unit",
                 field="observations",
             )
         object.__setattr__(self, "_t", StudentT(self.dof, self.mean, self.u))
@@ -355,7 +381,15 @@ class TypeA(Distribution):
         """Experimental standard deviation ``s`` (JCGM 100 eq. (4)); NaN for ``n = 1``."""
         if self.n < 2:
             return math.nan
-        return float(np.std(self.observations, ddof=1))
+        x = self.observations
+        with np.errstate(over="ignore", under="ignore"):
+            s = float(np.std(x, ddof=1))
+        if (s == 0.0 or not math.isfinite(s)) and np.any(x != x[0]):
+            # the squared deviations underflowed (or overflowed): the same sum on x / 2^k,
+            # an exact scaling, with 2^k the size of the largest |x|
+            k = math.frexp(float(np.max(np.abs(x))))[1]
+            s = math.ldexp(float(np.std(np.ldexp(x, -k), ddof=1)), k)
+        return s
 
     @property
     def r1(self) -> float:
