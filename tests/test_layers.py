@@ -52,6 +52,7 @@ ALLOWED: dict[str, set[str]] = {
     "_warm": set(),  # imports the modules of the layers by name (importlib)
     "cli": {
         "artefact",
+        "circular",
         "demo",
         "graph",
         "kinematics",

@@ -175,6 +175,14 @@ def _positioning_evaluate(_tmp: Path) -> list[str]:
     return ["positioning", "evaluate", str(data), "--study", str(study), "-n", "50"]
 
 
+def _circle_evaluate(tmp: Path) -> list[str]:
+    rows = ["angle,direction,deviation"]
+    for d in ("ccw", "cw"):
+        rows += [f"{a},{d},{((a * 7) % 11) / 10}" for a in range(0, 360, 30)]
+    (tmp / "trace.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    return ["circle", "evaluate", str(tmp / "trace.csv"), "--radius", "100", "-n", "50"]
+
+
 #: A short run of every command that runs a Monte Carlo (its seed is added to it).
 RUNS: dict[str, Callable[[Path], list[str]]] = {
     "propagate": _propagate,
@@ -186,6 +194,7 @@ RUNS: dict[str, Callable[[Path], list[str]]] = {
     "verify place": _verify_place,
     "artefact simulate": _artefact_simulate,
     "positioning evaluate": _positioning_evaluate,
+    "circle evaluate": _circle_evaluate,
 }
 
 

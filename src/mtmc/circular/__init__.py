@@ -9,10 +9,17 @@ the GUM (:mod:`~mtmc.circular.uncertainty`). This package knows nothing of study
 reports or the command line.
 """
 
-from mtmc.circular import model, parameters, simulate, uncertainty
+from mtmc.circular import data, model, parameters, simulate, uncertainty
+from mtmc.circular.data import *  # noqa: F403
 from mtmc.circular.model import *  # noqa: F403
 from mtmc.circular.parameters import *  # noqa: F403
 from mtmc.circular.simulate import *  # noqa: F403
 from mtmc.circular.uncertainty import *  # noqa: F403
 
-__all__: list[str] = [*model.__all__, *parameters.__all__, *simulate.__all__, *uncertainty.__all__]
+__all__: list[str] = [
+    *data.__all__,
+    *model.__all__,
+    *parameters.__all__,
+    *simulate.__all__,
+    *uncertainty.__all__,
+]

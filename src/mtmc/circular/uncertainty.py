@@ -65,6 +65,7 @@ __all__ = [
     "CircularUncertainty",
     "circular_model",
     "evaluate_uncertainty",
+    "evaluate_trace",
 ]
 
 _F = NDArray[np.float64]
@@ -317,3 +318,83 @@ def evaluate_uncertainty(
     }
     notes = structural_notes(model.design.plane, len(model.design.directions))
     return CircularUncertainty(model.outputs, mc, g, val, notes)
+
+
+def _report_unit(unit: str, deviation_unit: str) -> tuple[float, str]:
+    """The factor from the model's unit and the reported unit's name (angles in µrad)."""
+    if unit == "mm":
+        return (1e3, "um") if deviation_unit == "um" else (1.0, "mm")
+    if unit == "rad":
+        return 1e6, "urad"
+    if unit == "s":
+        return 1e3, "ms"
+    return 1e6, "um/m"
+
+
+def evaluate_trace(
+    theta_ccw: npt.ArrayLike | None,
+    ccw: npt.ArrayLike | None,
+    theta_cw: npt.ArrayLike | None,
+    cw: npt.ArrayLike | None,
+    *,
+    radius: float,
+    feed: float = 1000.0 / 60.0,
+    plane: str = "XY",
+    ballbar: Ballbar | None = None,
+    trials: int | None = 10_000,
+    seed: int | None = None,
+    p: float = 0.95,
+    deviation_unit: str = "um",
+    **engine: Any,
+) -> dict[str, Any]:
+    """Evaluate a measured trace: every parameter and identified error with U.
+
+    The errors of :func:`~mtmc.circular.model.default_terms` are identified; the noise of
+    each reading is the ballbar's, or, where it gives none, the residual scatter of the
+    identification (a Type A evaluation of the trace's own repeatability). The
+    parameters' and errors' estimates are those of the trace (the GUM's, at the input
+    estimates); ``U`` is half the Monte Carlo's probabilistically symmetric interval.
+
+    Returns
+    -------
+    dict
+        ``parameters`` and ``errors``: name -> ``estimate``, ``U``, ``U_gum``, ``unit``,
+        ``validated`` (JCGM 101 §8), ``mc_mean``; ``notes`` (what the test cannot
+        separate), ``identifiability``, ``rms`` (mm) and ``result`` (the
+        :class:`CircularUncertainty`).
+    """
+    from mtmc.circular.model import design as make_design
+    from mtmc.circular.model import identify
+
+    des = make_design(radius=radius, theta_ccw=theta_ccw, theta_cw=theta_cw, plane=plane, feed=feed)
+    meas = np.concatenate(
+        [np.asarray(x, dtype=np.float64).reshape(-1) for x in (ccw, cw) if x is not None]
+    )
+    ident = identify(des, meas)
+    bar = ballbar or Ballbar()
+    if bar.noise == 0:
+        bar = Ballbar(
+            bar.length_error, bar.alpha, bar.temperature, bar.resolution, float(ident.rms[0])
+        )
+    model, inputs = circular_model(des, bar, measured=meas)
+    res = evaluate_uncertainty(model, inputs, trials, seed, p=p, **engine)
+    units = dict(zip(des.names, des.units, strict=True))
+    out: dict[str, Any] = {"parameters": {}, "errors": {}}
+    for name in res.outputs:
+        mc, g = res.monte_carlo(name), res.gum_result(name)
+        lo, hi = mc.coverage_interval(p)
+        f, unit = _report_unit(units.get(name, "mm"), deviation_unit)
+        entry = {
+            "estimate": g.estimate * f,
+            "U": 0.5 * (hi - lo) * f,
+            "U_gum": g.expanded_uncertainty(p) * f,
+            "unit": unit,
+            "validated": res.validation[name].passed,
+            "mc_mean": mc.estimate * f,
+        }
+        out["errors" if name in units else "parameters"][name] = entry
+    out["notes"] = list(res.notes)
+    out["identifiability"] = ident.identifiability.text()
+    out["rms"] = float(ident.rms[0])
+    out["result"] = res
+    return out

@@ -19,7 +19,7 @@ from types import FrameType
 import typer
 
 from mtmc import __version__
-from mtmc.cli import artefact, graph, kinematics, positioning, propagate, run, verify
+from mtmc.cli import artefact, circle, graph, kinematics, positioning, propagate, run, verify
 
 app = typer.Typer(
     name="mtmc",
@@ -37,6 +37,7 @@ app.add_typer(kinematics.app, name="kinematics")
 app.add_typer(verify.app, name="verify")
 app.add_typer(artefact.app, name="artefact")
 app.add_typer(positioning.app, name="positioning")
+app.add_typer(circle.app, name="circle")
 
 
 def _version(value: bool) -> None:

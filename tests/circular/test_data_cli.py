@@ -1,0 +1,128 @@
+"""Reading a measured trace; `mtmc circle evaluate` prints what the library computes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtmc.circular import (
+    AxisEffects,
+    circular_parameters,
+    design,
+    identify,
+    load_circular_csv,
+    loads_circular_csv,
+    simulate_circle,
+)
+from mtmc.circular.data import parse_units
+from mtmc.cli.main import main
+from mtmc.errors import InputError
+from mtmc.kinematics import Machine
+
+R = 100.0
+STEP = 2.0  # degrees
+
+
+def _trace(tmp_path: Path, rng: np.random.Generator) -> tuple[Path, dict[str, np.ndarray]]:
+    """A trace of XFYZ with a squareness and backlash, exported with an overrun of 10°."""
+    m = Machine.from_topology("XFYZ")
+    deg = np.arange(-10.0, 370.0, STEP)
+    t = np.radians(np.arange(0.0, 360.0, STEP))
+    eff = AxisEffects(backlash={"X": 0.004, "Y": 0.002}, lag={"X": 5e-4})
+    rows = ["Angle;Dir;Error"]
+    devs = {}
+    for d, word in ((1, "counter"), (-1, "clockwise")):
+        dev = simulate_circle(m, t, radius=R, direction=d, errors={"EC0Y": 3e-5}, effects=eff)[0]
+        dev = dev + rng.normal(0, 2e-4, dev.size)
+        devs[word] = dev
+        for a in deg:  # the overrun arcs repeat the trace: they are left out
+            rows.append(f"{a:g};{word};{dev[round(a / STEP) % t.size] * 1e3:.6f}")
+    p = tmp_path / "trace.csv"
+    p.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    return p, devs
+
+
+def test_reader_keeps_one_turn(tmp_path: Path) -> None:
+    p, devs = _trace(tmp_path, np.random.default_rng(1))
+    tr = load_circular_csv(
+        p,
+        columns={"angle": "Angle", "direction": "Dir", "deviation": "error"},
+        directions={"counter": "ccw"},
+    )
+    assert tr.theta_ccw is not None
+    assert tr.ccw is not None
+    np.testing.assert_allclose(tr.theta_ccw, np.radians(np.arange(0.0, 360.0, STEP)))
+    # written with 6 decimals of µm: read back to 5e-10 mm
+    np.testing.assert_allclose(tr.ccw, devs["counter"], atol=6e-10)
+    assert tr.cw is not None
+    np.testing.assert_allclose(tr.cw, devs["clockwise"], atol=6e-10)
+
+
+def test_reader_errors_name_file_line_and_column() -> None:
+    ok = "angle,direction,deviation\n0,ccw,1\n90,ccw,2\n180,ccw,3\n270,ccw,4\n"
+    assert loads_circular_csv(ok).ccw is not None
+    with pytest.raises(InputError, match=r"f.csv:3: field deviation: expected a finite number"):
+        loads_circular_csv(ok.replace("90,ccw,2", "90,ccw,x"), "f.csv")
+    with pytest.raises(InputError, match=r"f.csv:4: field direction: expected a direction"):
+        loads_circular_csv(ok.replace("180,ccw", "180,left"), "f.csv")
+    with pytest.raises(InputError, match=r"f.csv:1: field angle: no column 'angle'"):
+        loads_circular_csv(ok.replace("angle,", "theta,"), "f.csv")
+    with pytest.raises(InputError, match=r"f.csv:5: a second reading at 180 deg ccw"):
+        loads_circular_csv(ok.replace("270,ccw", "180,ccw"), "f.csv")
+    with pytest.raises(InputError, match="at least 4 readings ccw"):
+        loads_circular_csv("angle,direction,deviation\n0,ccw,1\n")
+    with pytest.raises(InputError, match="units"):
+        parse_units("deg,inch")
+    assert parse_units("rad,mm") == ("rad", "mm")
+
+
+def test_cli_evaluate_json(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    p, devs = _trace(tmp_path, np.random.default_rng(2))
+    argv = ["circle", "evaluate", str(p), "--radius", str(R), "--json", "-n", "2000"]
+    argv += ["--columns", "angle=Angle,direction=Dir,deviation=Error", "--seed", "5"]
+    argv += ["--directions", "counter=ccw"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    t = np.radians(np.arange(0.0, 360.0, STEP))
+    # the parameters: those of the trace as written (6 decimals of µm)
+    ref = circular_parameters(theta_ccw=t, ccw=devs["counter"], theta_cw=t, cw=devs["clockwise"])
+    for sym in ("F_max", "F_min", "G_lsc", "G_mz", "H", "G_b"):
+        assert out["parameters"][sym]["estimate"] == pytest.approx(ref[sym][0] * 1e3, abs=1e-5)
+        assert out["parameters"][sym]["unit"] == "um"
+        assert out["parameters"][sym]["U"] > 0
+    # the errors: the identification of the trace, in µm and µrad
+    des = design(radius=R, theta_ccw=t, theta_cw=t)
+    ident = identify(des, np.concatenate([devs["counter"], devs["clockwise"]]))
+    sq = out["errors"]["squareness"]
+    assert sq["unit"] == "urad"
+    assert sq["estimate"] == pytest.approx(ident.value("squareness")[0] * 1e6, abs=1e-3)
+    # 30 µrad injected, recovered within its U
+    assert abs(sq["estimate"] - 30.0) < sq["U"]
+    assert abs(out["errors"]["backlash_x"]["estimate"] - 4.0) < out["errors"]["backlash_x"]["U"]
+    assert any("servo" not in n for n in out["notes"])
+
+
+def test_cli_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    bad = tmp_path / "bad.csv"
+    bad.write_text("angle,direction,deviation\n0,ccw,1\n90,sideways,2\n", encoding="utf-8")
+    assert main(["circle", "evaluate", str(bad), "--radius", "100"]) == 2
+    err = capsys.readouterr().err
+    assert "bad.csv:3: field direction" in err
+    assert main(["circle", "evaluate", str(bad), "--radius", "100", "--directions", "x"]) == 2
+    assert "--directions" in capsys.readouterr().err
+
+
+def test_cli_evaluate_table(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    p, _ = _trace(tmp_path, np.random.default_rng(3))
+    argv = ["circle", "evaluate", str(p), "--radius", str(R), "-n", "500", "--seed", "1"]
+    argv += ["--columns", "angle=Angle,direction=Dir,deviation=Error"]
+    argv += ["--directions", "counter=ccw", "--units", "deg,um"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "G_mz" in out
+    assert "squareness" in out
+    assert "urad" in out
+    assert "note: radius" in out
