@@ -16,6 +16,7 @@ import math
 import numpy as np
 import pytest
 
+from mtmc.errors import MtmcError
 from mtmc.graph import loads_graph, run_graph
 
 M = 20_000
@@ -72,3 +73,24 @@ def test_random_direction_places_are_renormalised(runs):
     # the sample standard deviation of a χ² law (kurtosis 9): relative error √(8/4M)
     assert n.u_vector[2] == pytest.approx(s2, rel=4 * math.sqrt(2 / M) + 4 * s2)
     np.testing.assert_allclose(n.u_vector[:2], SIGMA, rtol=4 / math.sqrt(2 * M) + 2 * s2)
+
+
+@pytest.mark.parametrize(
+    ("units", "dist", "words"),
+    [
+        ("mm", "normal(0, 1e300)", "standard uncertainty of dist at most 1e+06 mm"),  # u = ∞
+        ("mm", "uniform(-3e6, 3e6)", "standard uncertainty of dist at most 1e+06 mm"),
+        ("um", "normal(2e9, 1)", "expectation of dist at most 1e+09 um"),
+        ("mm", "t(1)", "got nan for 't(1)'"),  # Cauchy: no expectation, no u
+    ],
+)
+def test_a_place_dist_has_the_limits_of_a_value_and_u(units, dist, words):
+    text = f'units = "{units}"\n[[place]]\nname = "a"\ntype = "real"\n\ndist = "{dist}"\n'
+    text += '[[transition]]\nname = "t"\nop = "ratio"\nin = ["a", "a"]\nout = "b"\n'
+    with pytest.raises(MtmcError) as info:
+        loads_graph(text, file="g.toml")
+    err = info.value
+    assert (err.file, err.line, err.field) == ("g.toml", 6, "dist")
+    assert words in err.message
+    # within the limit (as a u of 10⁶ mm is): accepted
+    loads_graph(text.replace(dist, "normal(0, 1e6)" if units == "mm" else "normal(0, 1e9)"))

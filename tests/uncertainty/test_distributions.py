@@ -371,3 +371,17 @@ def test_equality_and_hash():
     assert Normal(0, 1) == Normal(0.0, 1.0)
     assert Normal(0, 1) != Uniform(0, 1)
     assert len({Normal(0, 1), Normal(0.0, 1.0), Uniform(0, 1)}) == 2
+
+
+@pytest.mark.parametrize(
+    ("text", "components"),
+    [("iid(normal(0, 1), 1e9)", 10**9), ("iid(normal(0, 1), 100000000)", 10**8)],
+)
+def test_a_text_of_more_components_than_the_gum_holds_is_refused_before_drawing(text, components):
+    # 10⁹ ended in ArrayMemoryError, 10⁸ ran at 0 trials/s (the GUM's k × k covariance)
+    with pytest.raises(DistributionError) as info:
+        parse_distribution(text, file="s.toml", line=8, field="inputs.a")
+    err = info.value
+    assert (err.file, err.line, err.column, err.field) == ("s.toml", 8, 1, "inputs.a")
+    assert f"iid: expected at most 4096 components, got {components}" in err.message
+    assert parse_distribution("iid(normal(0, 1), 4096)").dim == 4096

@@ -189,3 +189,19 @@ def test_result_is_frozen_and_read_only():
     assert s["seed"] == 5
     assert s["trials"] == 3
     assert s["estimate"] == 2.0
+
+
+def test_histogram_of_values_a_few_ulp_apart_has_distinct_edges():
+    # uniform(1, 1.00000000000001) spans 45 ulp: 60 bins ended in "Too many bins"
+    from mtmc.uncertainty import Uniform, monte_carlo
+
+    r = monte_carlo(lambda a: a, {"a": Uniform(1.0, 1.00000000000001)}, 20_000, 3, keep=True)
+    h = r.histogram(60)
+    assert 1 <= len(h.counts) <= 60
+    assert np.all(np.diff(h.edges) > 0)
+    # every value in its bin, counted once (bit-for-bit: the same comparisons of doubles)
+    assert int(h.counts.sum()) == 20_000
+    idx = np.clip(np.searchsorted(h.edges, r.samples, side="right") - 1, 0, len(h.counts) - 1)
+    assert np.array_equal(np.bincount(idx, minlength=len(h.counts)), h.counts)
+    wide = monte_carlo(lambda a: a, {"a": Uniform(1.0, 2.0)}, 20_000, 3, keep=True)
+    assert len(wide.histogram(60).counts) == 60  # a range of many ulp keeps its bins

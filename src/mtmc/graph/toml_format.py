@@ -18,11 +18,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, KeyPath, loads_toml
 from mtmc.errors import GraphError, MtmcError
 from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import MAX_MAGNITUDE, Place, ProbeDefaults, Transition
 from mtmc.io import write_text_atomic
+from mtmc.uncertainty.distributions import parse_distribution
 
 __all__ = ["dump_graph", "dumps_graph", "loads_graph", "toml_string"]
 
@@ -189,6 +192,22 @@ def _check_place_range(place: Place, units: str, keys: dict[str, int], line: int
                 line=keys.get(key, line),
                 field=key,
             )
+    if place.dist is not None:  # its expectation and standard deviation: a value and a u
+        try:
+            dist = parse_distribution(place.dist)
+        except MtmcError:
+            return  # the graph's check names what does not parse
+        u = getattr(dist, "u", dist.std)  # the stated u of a Type A or a u with dof
+        for what, x in (("expectation", dist.mean), ("standard uncertainty", u)):
+            size = float(np.max(np.abs(np.asarray(x, dtype=np.float64))))
+            if not size <= limit:
+                raise GraphError(
+                    f"place {place.name}: expected the {what} of dist at most {limit:g}"
+                    f"{' ' + unit if unit else ''} in size (as value and u), got {size:g} "
+                    f"for {place.dist!r}",
+                    line=keys.get("dist", line),
+                    field="dist",
+                )
 
 
 def _places(data: dict[str, Any], lines: _Lines, err: _Err, units: str = "mm") -> list[Place]:

@@ -438,6 +438,26 @@ class Moments:
         return self.m2 / (self.n - 1)
 
 
+def _fewer_bins(values: NDArray[np.float64], bins: int | str) -> int | str:
+    """``bins``, or fewer where the range of the values holds fewer distinct doubles.
+
+    Values within a few ulp of each other (an input ``uniform(1, 1.00000000000001)``: a
+    range of 45 ulp) cannot be cut into 60 bins of distinct edges, and NumPy refuses
+    ("Too many bins for data range"): the bins then are as many as the edges that
+    ``linspace`` keeps distinct.
+    """
+    if not isinstance(bins, int) or values.size == 0:
+        return bins
+    lo, hi = float(np.min(values)), float(np.max(values))
+    if not lo < hi:
+        return bins
+    ulp = float(np.spacing(max(abs(lo), abs(hi))))
+    n = max(1, min(bins, int((hi - lo) / ulp)))
+    while n > 1 and np.any(np.diff(np.linspace(lo, hi, n + 1)) <= 0.0):
+        n -= 1
+    return n
+
+
 @dataclass(frozen=True)
 class MonteCarloResult:
     """The values of a Monte Carlo run and their summaries (JCGM 101 §7.5–7.7).
@@ -852,10 +872,10 @@ class MonteCarloResult:
                     field="bins",
                 )
             vals, wts = self.sketch.weighted_values()
-            c, edges = np.histogram(vals, bins=bins, weights=wts)
+            c, edges = np.histogram(vals, bins=_fewer_bins(vals, bins), weights=wts)
             counts = np.rint(c).astype(np.int64)
             return Histogram(edges=edges, counts=counts, density=c / (self.m * np.diff(edges)))
-        counts, edges = np.histogram(self.values, bins=bins)
+        counts, edges = np.histogram(self.values, bins=_fewer_bins(self.values, bins))
         density = counts / (self.m * np.diff(edges))
         return Histogram(edges=edges, counts=counts.astype(np.int64), density=density)
 
