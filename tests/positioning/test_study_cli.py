@@ -153,7 +153,7 @@ def _edit(tmp_path: Path, old: str, new: str) -> Path:
         ('data = "positioning_x.csv"', 'data = "none.csv"', "data", "existing file"),
         ("dead_path_mm = 60.0", "dead_path_mm = -1.0", "instrument.dead_path_mm", ">= 0"),
         ('drift = "uniform(-1.0, 1.0)"', "drift = inf", "environment.drift", "finite"),
-        ('equation = "bonsch-potulski"', 'equation = "x"', "instrument.equation", "one of"),
+        ('equation = "ciddor"', 'equation = "x"', "instrument.equation", "one of"),
     ],
 )
 def test_study_errors_name_the_line_and_field(tmp_path, old, new, field, match):

@@ -174,7 +174,7 @@ def test_model_errors():
     with pytest.raises(InputError, match="together"):
         UncertaintyModel(expansion=11.5)
     with pytest.raises(InputError, match="equation"):
-        UncertaintyModel(equation="ciddor")
+        UncertaintyModel(equation="edlen-1953")
     with pytest.raises(InputError, match="type_a"):
         UncertaintyModel(type_a="all")
     with pytest.raises(InputError, match=">= 0"):

@@ -41,6 +41,7 @@ from mtmc.positioning.uncertainty import (
     conformity,
     disagreement_notes,
     evaluate_uncertainty,
+    physical_ranges,
     positioning_model,
 )
 
@@ -64,6 +65,7 @@ __all__ = [
     "load_positioning_csv",
     "loads_positioning_csv",
     "parse_units",
+    "physical_ranges",
     "pitch_compensation",
     "positioning_model",
     "reading_times",

@@ -48,9 +48,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from mtmc.errors import InputError
+from mtmc.errors import DistributionError, InputError
 from mtmc.positioning.data import PositioningTest, reading_times
-from mtmc.positioning.edlen import EQUATIONS, HENE_WAVELENGTH_NM, refractive_index
+from mtmc.positioning.edlen import (
+    DEFAULT_EQUATION,
+    DOMAINS,
+    EQUATIONS,
+    HENE_WAVELENGTH_NM,
+    refractive_index,
+)
 from mtmc.positioning.parameters import (
     SYMBOLS,
     PositioningParameters,
@@ -72,12 +78,15 @@ from mtmc.uncertainty.montecarlo import monte_carlo
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = [
+    "OUTSIDE",
     "TYPE_A",
     "PositioningUncertainty",
     "UncertaintyModel",
+    "check_deviation_ranges",
     "conformity",
     "disagreement_notes",
     "evaluate_uncertainty",
+    "physical_ranges",
     "positioning_model",
 ]
 
@@ -115,6 +124,166 @@ _LENGTH_ONLY = (
 )
 
 
+#: The probability a PDF may put outside its input's physical range (:func:`physical_ranges`):
+#: its central ``1 - OUTSIDE`` interval, from its quantiles, must lie inside the range (a
+#: normal PDF: mean ± 4.9 sd). At the 10⁶ trials JCGM 101 suggests, about one draw falls
+#: outside, and only just; a PDF without a quantile function is held to mean ± 1000 sd,
+#: which bounds the probability outside to ``OUTSIDE`` by Chebyshev's inequality.
+OUTSIDE = 1e-6
+
+# The physical ranges that depend on neither the equation nor the deviation unit:
+# (low, high, why), in the unit of INPUT_UNITS.
+_RANGES: dict[str, tuple[float, float, str]] = {
+    "material_temperature": (
+        -40.0,
+        100.0,
+        "a machine's structure in service; the model takes one expansion coefficient, "
+        "and steel's changes by some 10 % over this range",
+    ),
+    "expansion": (
+        -10.0,
+        50.0,
+        "the materials of axes and scales, from carbon-fibre composites (slightly "
+        "negative) and glass ceramics (near 0) through steel (11.5) to aluminium (23) and "
+        "magnesium (26)",
+    ),
+    "misalignment": (
+        -1e4,
+        1e4,
+        "10 mrad: a cosine error of 50 ppm, and a return beam that walks off by 2 cm per "
+        "metre of travel, past any interferometer's aperture",
+    ),
+    "equation_error": (
+        -10.0,
+        10.0,
+        "the equations' own error is some 0.01-0.05 ppm; 10 ppm is 4 % of n - 1 itself",
+    ),
+    "wavelength_error": (
+        -100.0,
+        100.0,
+        "a stabilised laser is known to 0.05 ppm, a free-running one to a few ppm",
+    ),
+    "air_temperature_change": (
+        -10.0,
+        10.0,
+        "the change of the air over one test; more than 10 °C is no test of an axis",
+    ),
+    "air_pressure_change": (
+        -50.0,
+        50.0,
+        "the change of the air over one test; weather moves the pressure by some 30 hPa in a day",
+    ),
+    "dead_path_mm": (
+        0.0,
+        1e5,
+        "the reach of a laser interferometer (some 40-80 m)",
+    ),
+}
+
+# Drift and resolution, in the deviation unit: |drift| <= 1 mm or 0.1°, resolution <= 0.1 mm
+# or 0.01°.
+_DEVIATION_RANGES: dict[str, tuple[float, float]] = {
+    "um": (1e3, 1e2),
+    "mm": (1.0, 0.1),
+    "arcsec": (360.0, 36.0),
+    "urad": (math.radians(0.1) * 1e6, math.radians(0.01) * 1e6),
+}
+
+
+def physical_ranges(
+    equation: str = DEFAULT_EQUATION, unit: str | None = None
+) -> dict[str, tuple[float, float, str]]:
+    """The physical range of each input of the model, with the reason for it.
+
+    A value outside its range, or a PDF that puts more than :data:`OUTSIDE` of its
+    probability outside it, is refused by :class:`UncertaintyModel` (the air, the
+    material, the alignment, the laser, the dead path) and by :func:`positioning_model`
+    (drift and resolution, which are in the deviation unit).
+
+    Parameters
+    ----------
+    equation : str, default :data:`~mtmc.positioning.edlen.DEFAULT_EQUATION`
+        The refractive-index equation: the air and the wavelength are its
+        :data:`~mtmc.positioning.edlen.DOMAINS`.
+    unit : str, optional
+        The deviation unit (``um``, ``mm``, ``arcsec``, ``urad``): adds ``drift`` and
+        ``resolution``.
+
+    Returns
+    -------
+    dict of str to (float, float, str)
+        ``(low, high, why)`` by input name, in the unit of :data:`INPUT_UNITS` (``nm``
+        for ``wavelength_nm``, ``mm`` for ``dead_path_mm``, the deviation unit for
+        ``drift`` and ``resolution``).
+
+    Examples
+    --------
+    >>> physical_ranges()["humidity"][:2]
+    (0.0, 100.0)
+    >>> physical_ranges(unit="um")["drift"][:2]
+    (-1000.0, 1000.0)
+    """
+    d = DOMAINS[equation]
+    air = f"the air over which the {equation} equation is tested against NIST's check values"
+    out = {
+        "air_temperature": (*d.temperature_C, air),
+        "air_pressure": (d.pressure_Pa[0] / 100.0, d.pressure_Pa[1] / 100.0, air),
+        "humidity": (*d.humidity_pct, "relative humidity: above 100 % the vapour condenses"),
+        "co2": (
+            *d.co2_ppm,
+            "a mole fraction, at most five times the outdoor content (the equations' CO2 "
+            "terms are linear corrections)",
+        ),
+        "wavelength_nm": (*d.wavelength_nm, f"where the {equation} equation's dispersion holds"),
+        **_RANGES,
+    }
+    if unit is not None:
+        drift, res = _DEVIATION_RANGES[unit]
+        out["drift"] = (
+            -drift,
+            drift,
+            "a machine that moves by more than 1 mm (0.1° on a rotary axis) over one test is "
+            "not thermally stable enough to be tested",
+        )
+        out["resolution"] = (
+            0.0,
+            res,
+            "a reading coarser than 0.1 mm (0.01°) does not resolve a positioning test",
+        )
+    return out
+
+
+def _check_range(name: str, d: Any, rng: tuple[float, float, str], unit: str) -> None:
+    """Refuse a value or a PDF that reaches outside ``rng`` (rule of :data:`OUTSIDE`)."""
+    low, high, why = rng
+    if not isinstance(d, Distribution):
+        lo = hi = float(d)
+    else:
+        try:
+            lo, hi = (float(v) for v in d.ppf(np.array([0.5 * OUTSIDE, 1.0 - 0.5 * OUTSIDE])))
+        except DistributionError:
+            k = 1.0 / math.sqrt(OUTSIDE)
+            lo, hi = float(d.mean) - k * float(d.std), float(d.mean) + k * float(d.std)
+    if low <= lo and hi <= high:
+        return
+    span = f"{low:g} to {high:g} {unit}".rstrip()
+    if lo == hi:
+        msg = f"{name} = {lo:g} {unit} is outside its physical range {span} ({why})"
+    else:
+        msg = (
+            f"{name} = {d} reaches outside its physical range {span} ({why}): its central "
+            f"{100 * (1 - OUTSIDE):.4f} % lies in [{lo:.6g}, {hi:.6g}] {unit}; give a PDF "
+            "whose central interval lies inside the range (near a limit, a bounded one: "
+            "uniform, triangular, trapezoidal)"
+        )
+    raise InputError(msg, field=name)
+
+
+def _printed(unit: str) -> str:
+    """A deviation unit as printed (``um`` → ``µm``)."""
+    return {"um": "µm", "urad": "µrad"}.get(unit, unit)
+
+
 def _dist(value: Any, name: str) -> Distribution | None:
     if value is None:
         return None
@@ -139,7 +308,7 @@ class UncertaintyModel:
         from them (the sensors' uncertainty). Given together, or not at all.
     co2 : default 400
         CO₂ content of the air, µmol/mol.
-    equation : {"bonsch-potulski", "birch-downs"}
+    equation : {"ciddor", "nist-edlen", "birch-downs", "bonsch-potulski"}, default "ciddor"
         The refractive-index equation (:func:`mtmc.positioning.edlen.refractive_index`).
     equation_error : optional
         The equation's own error, as a relative error of ``n``, ppm.
@@ -175,14 +344,16 @@ class UncertaintyModel:
     ------
     InputError
         On a field that does not parse, air or material given in part, an unknown
-        equation or ``type_a``, a negative dead path or resolution.
+        equation or ``type_a``, a negative dead path or resolution, a value or a PDF
+        that reaches outside its input's physical range (:func:`physical_ranges`, the
+        rule of :data:`OUTSIDE`).
     """
 
     air_temperature: Any = None
     air_pressure: Any = None
     humidity: Any = None
     co2: Any = 400.0
-    equation: str = "bonsch-potulski"
+    equation: str = DEFAULT_EQUATION
     equation_error: Any = None
     wavelength_nm: float = HENE_WAVELENGTH_NM
     wavelength_error: Any = None
@@ -240,6 +411,11 @@ class UncertaintyModel:
             if not (math.isfinite(v) and v >= 0):
                 raise InputError(f"expected a finite number >= 0, got {v!r}", field=name)
             object.__setattr__(self, name, v)
+        ranges = physical_ranges(self.equation)
+        for name, unit in (*INPUT_UNITS.items(), ("dead_path_mm", "mm"), ("wavelength_nm", "nm")):
+            d = getattr(self, name)
+            if d is not None:
+                _check_range(name, d, ranges[name], unit)
         if self.dead_path_mm > 0 and self.air_temperature is None:
             raise InputError(
                 "a dead path needs the air (air_temperature, air_pressure, humidity)",
@@ -379,12 +555,14 @@ def positioning_model(
     Raises
     ------
     InputError
-        A length influence (air, material, alignment, dead path) given for a rotary axis;
+        A drift or resolution outside its physical range (:func:`check_deviation_ranges`);
+        a length influence (air, material, alignment, dead path) given for a rotary axis;
         Type A inputs with fewer than 3 runs (a t PDF with ``ν ≤ 2`` has no variance); a
         model without any uncertain input.
     """
     inputs: dict[str, Distribution] = {}
     _check_rotary(test, model)
+    check_deviation_ranges(test, model)
     for name in (
         "air_temperature",
         "air_pressure",
@@ -417,6 +595,28 @@ def positioning_model(
             field="type_a",
         )
     return _Model(test, model, names_a, names_s), inputs
+
+
+def check_deviation_ranges(test: PositioningTest, model: UncertaintyModel) -> None:
+    """Refuse a drift or a resolution outside its physical range in the test's unit.
+
+    Parameters
+    ----------
+    test : PositioningTest
+    model : UncertaintyModel
+
+    Raises
+    ------
+    InputError
+        Naming ``drift`` or ``resolution``, the range and the reason
+        (:func:`physical_ranges`).
+    """
+    ranges = physical_ranges(model.equation, test.unit)
+    unit = _printed(test.unit)
+    for name in ("drift", "resolution"):
+        d = getattr(model, name)
+        if d is not None:
+            _check_range(name, d, ranges[name], unit)
 
 
 def _check_rotary(test: PositioningTest, model: UncertaintyModel) -> None:
@@ -698,7 +898,7 @@ def disagreement_notes(result: PositioningUncertainty, validated: Mapping[str, b
     """
     notes: list[str] = []
     test = result.test
-    unit = {"um": "µm", "urad": "µrad"}.get(test.unit, test.unit)
+    unit = _printed(test.unit)
     params = _gum_statistics(result)
     for sym in SYMBOLS:
         if validated.get(sym, True):

@@ -387,7 +387,7 @@ def _read_model(top: Fields) -> tuple[dict[str, Any], str]:
 
             kw["equation"] = ins.text("equation", choices=EQUATIONS)
         if ins.has("wavelength_nm"):
-            kw["wavelength_nm"] = ins.number("wavelength_nm", low=350.0, high=1700.0)
+            kw["wavelength_nm"] = ins.number("wavelength_nm")  # its range: the equation's
         for key in ("dead_path_mm", "resolution"):
             if ins.has(key):
                 kw[key] = ins.number(key, low=0.0)
@@ -427,7 +427,7 @@ def _model_error(top: Fields, exc: InputError) -> InputError:
         inv = {v: k for k, v in mapping.items()}
         if name in inv:
             return top.source.error(exc.message, (table, inv[name]))
-    if name == "dead_path_mm":  # the one other check of the model: a dead path needs air
+    if name in ("dead_path_mm", "wavelength_nm", "resolution"):  # the model's other checks
         return top.source.error(exc.message, ("instrument", name))
     return top.source.error(exc.message, ())
 
@@ -469,17 +469,20 @@ def positioning_study(
     PositioningStudy
     """
     from mtmc.positioning import UncertaintyModel, load_positioning_csv
+    from mtmc.positioning.uncertainty import check_deviation_ranges
 
     test = load_positioning_csv(data, columns=columns, units=units)
     if source is None:
         text = f'kind = "positioning"\ndata = {Path(data).as_posix()!r}\n'
         source = Source.from_text(text, str(data), None)
+    uncertainty_model = UncertaintyModel(**dict(model or {}))
+    check_deviation_ranges(test, uncertainty_model)
     return PositioningStudy(
         title=title or f"Positioning test of axis {axis} (ISO 230-2)",
         source=source,
         settings=settings or RunSettings(),
         test=test,
-        model=UncertaintyModel(**dict(model or {})),
+        model=uncertainty_model,
         axis=axis,
         tolerances=dict(tolerances or {}),
         guard_band=guard_band,
