@@ -12,6 +12,8 @@ import ast
 from collections import defaultdict
 from pathlib import Path
 
+import pytest
+
 SRC = Path(__file__).resolve().parents[1] / "src"
 PKG = SRC / "mtmc"
 
@@ -77,10 +79,12 @@ def _modules() -> dict[str, Path]:
     return out
 
 
-def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+def _imports(
+    name: str, path: Path, modules: dict[str, Path], *, typing_too: bool = False
+) -> set[str]:
     tree = ast.parse(path.read_text(encoding="utf-8"))
     skip: set[int] = set()
-    for node in ast.walk(tree):
+    for node in [] if typing_too else ast.walk(tree):
         if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
             skip.update(id(n) for b in node.body for n in ast.walk(b))
     package = path.name == "__init__.py"
@@ -113,13 +117,16 @@ def _package(module: str) -> str:
     return parts[1]
 
 
-def _graph() -> dict[str, set[str]]:
+def _graph(*, typing_too: bool = False) -> dict[str, set[str]]:
     modules = _modules()
-    return {m: _imports(m, p, modules) for m, p in modules.items()}
+    return {m: _imports(m, p, modules, typing_too=typing_too) for m, p in modules.items()}
 
 
-def test_no_module_imports_in_a_circle() -> None:
-    graph = _graph()
+@pytest.mark.parametrize("typing_too", [False], ids=["run time"])
+def test_no_module_imports_in_a_circle(typing_too: bool) -> None:
+    """No circle, also counting the imports under ``if TYPE_CHECKING:`` (a type that
+    only a circle can name lives in the wrong module)."""
+    graph = _graph(typing_too=typing_too)
     state: dict[str, int] = {}
     stack: list[str] = []
     cycles: list[list[str]] = []
@@ -159,3 +166,75 @@ def test_the_base_imports_nothing_above_it() -> None:
     for m, targets in _graph().items():
         if _package(m) in BASE:
             assert {_package(t) for t in targets} <= BASE | {_package(m)}, m
+
+
+#: The layers above the domain packages: they parse, run studies, draw and print.
+UPPER = ("cli", "study", "report", "workbench", "demo")
+
+#: Linear algebra and statistics that are the domain's or the engine's, never an upper
+#: layer's. ``numpy.linalg.norm`` is left out: a length, as a plot or a table measures it.
+_REFUSED = ("numpy.linalg", "scipy.linalg", "scipy.stats")
+
+
+def _dotted(node: ast.expr) -> list[str] | None:
+    """``["np", "linalg", "solve"]`` of ``np.linalg.solve``; None for anything but names."""
+    if isinstance(node, ast.Name):
+        return [node.id]
+    if isinstance(node, ast.Attribute):
+        head = _dotted(node.value)
+        return None if head is None else [*head, node.attr]
+    return None
+
+
+def _refused_uses(path: Path) -> list[str]:
+    """The uses of :data:`_REFUSED` in a module: imports and ``np.linalg.X`` attributes."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    alias = {"numpy": "numpy", "scipy": "scipy"}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                alias[a.asname or a.name] = a.name
+        elif isinstance(node, ast.ImportFrom) and node.module in ("numpy", "scipy"):
+            for a in node.names:
+                alias[a.asname or a.name] = f"{node.module}.{a.name}"
+    inner = {id(n.value) for n in ast.walk(tree) if isinstance(n, ast.Attribute)}
+    found = []
+    for node in ast.walk(tree):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names = [f"{node.module}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Attribute) and id(node) not in inner:
+            chain = _dotted(node)
+            if chain and chain[0] in alias:
+                names = [".".join([alias[chain[0]], *chain[1:]])]
+        for n in names:
+            if n == "numpy.linalg.norm":
+                continue
+            if any(n == r or n.startswith(r + ".") for r in _REFUSED):
+                where = path.relative_to(SRC) if path.is_relative_to(SRC) else path.name
+                found.append(f"{where}:{getattr(node, 'lineno', 0)}: {n}")
+    return found
+
+
+def test_upper_layers_leave_linear_algebra_and_statistics_below() -> None:
+    """cli, study, report and workbench call the library for a solve, a decomposition or
+    a distribution; they do not compute one."""
+    bad = []
+    for m, path in _modules().items():
+        if _package(m) in UPPER:
+            bad += _refused_uses(path)
+    assert not bad, "\n".join(sorted(set(bad)))
+
+
+def test_the_refusal_sees_each_way_of_writing_it(tmp_path: Path) -> None:
+    """The check of upper layers finds an import, a from-import and an attribute."""
+    f = tmp_path / "m.py"
+    f.write_text(
+        "import numpy as np\nfrom scipy import stats\nimport scipy.linalg\n"
+        "x = np.linalg.solve(a, b)\ny = np.linalg.norm(a)\nz = stats.t.ppf(0.9, 3)\n",
+        encoding="utf-8",
+    )
+    uses = {u.split(": ")[1] for u in _refused_uses(f)}
+    assert uses == {"numpy.linalg.solve", "scipy.stats", "scipy.linalg", "scipy.stats.t.ppf"}

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -180,3 +182,24 @@ def test_a_direction_place_is_a_unit_vector_with_or_without_u():
         r = run_graph(loads_graph(graph(u)), 100, seed=1)
         np.testing.assert_allclose(r.places["q"].estimate_vector, [1, 2, 8], atol=1e-7)
         np.testing.assert_allclose(r.places["d"].estimate_vector, [0, 0, 1], atol=1e-8)
+
+
+def test_accepts_prefix_is_being_the_start_of_an_accepted_list() -> None:
+    """Second method: every input list of up to 6 types that a variant accepts, written
+    out, and their prefixes; ``accepts_prefix`` says yes to exactly those (the rule the
+    workbench asks as an arc is drawn), and ``max_inputs`` is the longest list."""
+    import itertools
+
+    for op in ops.op_names():
+        for v in ops.variants(op):
+            # the variant's own types and one it never takes
+            alphabet = sorted({*v.inputs, *v.suffix, *([v.rest] if v.rest else []), "frame?"})
+            accepted = [
+                c for n in range(7) for c in itertools.product(alphabet, repeat=n) if v.accepts(c)
+            ]
+            prefixes = {c[:i] for c in accepted for i in range(len(c) + 1)}
+            for n in range(6):
+                for c in itertools.product(alphabet, repeat=n):
+                    assert v.accepts_prefix(c) == (c in prefixes), (v.signature, c)
+            longest = max(len(c) for c in accepted)
+            assert v.max_inputs == (math.inf if v.rest else longest)

@@ -222,3 +222,34 @@ def test_json_layout(runs):
         d["fr"]["rotation"]["estimate"], rot.estimate_vector.reshape(3, 3)
     )
     assert np.shape(d["fr"]["translation"]["u"]) == (3,)
+
+
+def test_normal_plane_parts_of_a_line_circle_and_direction() -> None:
+    """Closed form: in the plane normal to the mean axis, the point of a line keeps its
+    distance from the axis through the origin and the direction its sine of tilt,
+    whatever the axis (``|p|² − (p·d̄)²`` and ``|d|² − (d·d̄)²``; compared absolutely, to
+    a few roundings of ``|p|² ≈ 50`` and of ``|d|² = 1``, the differences cancelling)."""
+    from scipy.spatial.transform import Rotation
+
+    from mtmc.graph.values import normal_plane_parts
+
+    rng = np.random.default_rng(5)
+    m = 400
+    tilt = rng.normal(0.0, 1e-3, size=(m, 2))
+    d = np.column_stack([tilt, np.ones(m)])
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    p = np.column_stack([rng.normal(0.0, [2e-3, 5e-3], size=(m, 2)), rng.normal(7.0, 1.0, m)])
+    rot = Rotation.from_euler("xyz", [0.3, -1.1, 2.0]).as_matrix()
+    p, d = p @ rot.T, d @ rot.T
+    axis = d.mean(axis=0) / np.linalg.norm(d.mean(axis=0))
+    (n1, a), (n2, b) = normal_plane_parts("line", np.column_stack([p, d]))
+    assert (n1, n2) == ("point", "direction")
+    assert a.shape == b.shape == (m, 2)
+    np.testing.assert_allclose(np.sum(a**2, axis=1), np.sum(p**2, 1) - (p @ axis) ** 2, atol=1e-13)
+    np.testing.assert_allclose(np.sum(b**2, axis=1), 1.0 - (d @ axis) ** 2, atol=1e-15)
+    circle = np.column_stack([p, d, np.full(m, 3.0)])
+    assert [n for n, _ in normal_plane_parts("circle", circle)] == ["centre", "normal"]
+    ((n3, c),) = normal_plane_parts("direction", d)
+    np.testing.assert_array_equal(c, b)
+    assert n3 == "value"
+    assert normal_plane_parts("point", p) == ()

@@ -437,3 +437,16 @@ def test_options_are_keyword_only():
         validate(g, mc, 0.99)  # options are keyword-only
     v = validate(g, mc, p=0.99, ndig=1)
     assert (v.p, v.ndig, v.passed) == (0.99, 1, True)
+
+
+def test_output_pdf_is_the_normal_or_the_scaled_t() -> None:
+    """The GUM's PDF of the output: the normal density, and for ν = 1 the Cauchy density
+    ``1 / (π u (1 + z²))`` (both closed forms; 1e-15 relative, a few roundings)."""
+    from mtmc.uncertainty.gum import output_pdf
+
+    x = np.linspace(-3.0, 5.0, 17)
+    z = (x - 1.0) / 0.5
+    normal = np.exp(-0.5 * z**2) / (0.5 * np.sqrt(2.0 * np.pi))
+    np.testing.assert_allclose(output_pdf(x, 1.0, 0.5), normal, rtol=1e-14)
+    cauchy = 1.0 / (np.pi * 0.5 * (1.0 + z**2))
+    np.testing.assert_allclose(output_pdf(x, 1.0, 0.5, 1.0), cauchy, rtol=1e-14)

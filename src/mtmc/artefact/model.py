@@ -140,6 +140,22 @@ class Measurement:
     sensitivity: _F
     axis_map: _F
 
+    def in_axes(self, w: npt.ArrayLike) -> _F:
+        """Vectors in ``W`` at each ball, in linear-axis coordinates: ``A⁻¹ w`` per pose.
+
+        Parameters
+        ----------
+        w : array_like, shape (P, N, 3)
+            Vectors at each ball of each pose in ``W`` (the volumetric errors), mm.
+
+        Returns
+        -------
+        ndarray, shape (P, N, 3)
+            The axis movements that give them (Wang, Cheung and Kong 2022, Fig. 7).
+        """
+        v = np.asarray(w, dtype=np.float64)
+        return np.asarray(np.linalg.solve(self.axis_map[:, None], v[..., None])[..., 0])
+
 
 @dataclass(frozen=True, eq=False)
 class FiducialSetup:

@@ -44,7 +44,7 @@ def plot_error_vectors(
     meas = result.measurement
     pos = meas.commanded  # (P, N, 3) axis positions
     v = result.nominal.volumetric[0]  # (P, N, 3) in W
-    vec = np.linalg.solve(meas.axis_map[:, None], v[..., None])[..., 0] * magnification
+    vec = meas.in_axes(v) * magnification
     labels = result.pose_labels()
     fig = Figure(figsize=(13, 4.4))  # no pyplot: nothing of the process changes
     ax1 = fig.add_subplot(1, 3, 1)

@@ -20,6 +20,7 @@ a second variant with the same name and input types.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -106,6 +107,34 @@ class Variant:
         tail = tuple(types[len(types) - len(self.suffix) :]) if self.suffix else ()
         middle = types[len(self.inputs) : len(types) - len(self.suffix)]
         return head == self.inputs and tail == self.suffix and all(t == self.rest for t in middle)
+
+    def accepts_prefix(self, types: Sequence[str]) -> bool:
+        """Whether some input list this variant accepts starts with ``types``.
+
+        The test of an input added one at a time (an arc drawn in ``mtmc graph edit``):
+        ``types`` may still grow into a list that :meth:`accepts`.
+        """
+        types = list(types)
+        fixed = list(self.inputs)
+        if len(types) <= len(fixed):
+            return types == fixed[: len(types)]
+        if types[: len(fixed)] != fixed or self.rest is None:
+            return False
+        tail = types[len(fixed) :]
+        suffix = list(self.suffix)
+        # the rest inputs, then possibly the start of the suffix (after min_rest of them)
+        for cut in range(len(tail) + 1):
+            head, end = tail[:cut], tail[cut:]
+            if end and cut < self.min_rest:
+                continue
+            if all(t == self.rest for t in head) and end == suffix[: len(end)]:
+                return True
+        return False
+
+    @property
+    def max_inputs(self) -> float:
+        """The most inputs this variant takes (``inf`` with ``rest`` inputs)."""
+        return math.inf if self.rest is not None else len(self.inputs) + len(self.suffix)
 
     @property
     def signature(self) -> str:

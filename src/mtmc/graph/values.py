@@ -17,10 +17,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.errors import InputError
+from mtmc.geometry.constructions import normal_plane_basis
 from mtmc.geometry.primitives import Circle, Line, Plane, Sphere
 from mtmc.graph.places import SCALAR_TYPES, VECTOR_TYPES, Place
 
-__all__ = ["PARTS", "flatten", "marked_value", "place_factor", "unflatten"]
+__all__ = ["PARTS", "flatten", "marked_value", "normal_plane_parts", "place_factor", "unflatten"]
 
 #: Parts of each place type in the flat layout used for the running sums: (name, size).
 PARTS: dict[str, tuple[tuple[str, int], ...]] = {
@@ -164,3 +165,39 @@ def unflatten(type_: str, flat: NDArray[np.float64]) -> Any:
         t[:, 3, 3] = 1.0
         return t
     raise InputError(f"unknown place type {type_!r}", field="type")  # pragma: no cover
+
+
+def normal_plane_parts(
+    type_: str, flat: NDArray[np.float64]
+) -> tuple[tuple[str, NDArray[np.float64]], ...]:
+    """The parts of a direction, line or circle in the plane normal to its mean axis.
+
+    The coverage regions of such a place (JCGM 102 §7.7) are ellipses in the plane
+    normal to the mean of its direction ``d̄`` (its normal for a circle), with the basis
+    ``(e1, e2)`` of :func:`~mtmc.geometry.constructions.normal_plane_basis`: the point
+    (centre) of a line (circle) as ``(p·e1, p·e2)``, where it crosses that plane up to
+    its along-axis part, and the direction (normal) as ``(d·e1, d·e2)``, its tilt in rad
+    to first order. A direction has its tilt only.
+
+    Parameters
+    ----------
+    type_ : str
+        The place type; other types have no such parts.
+    flat : ndarray, shape (m, k)
+        Values in the layout of :data:`PARTS` (:func:`flatten`).
+
+    Returns
+    -------
+    tuple of (str, ndarray of shape (m, 2))
+        ``(part, values)``: ``("point", …), ("direction", …)`` of a line,
+        ``("centre", …), ("normal", …)`` of a circle, ``(("value", …),)`` of a
+        direction, ``()`` for any other type.
+    """
+    v = np.asarray(flat, dtype=np.float64)
+    if type_ == "direction":
+        return (("value", v[:, 0:3] @ normal_plane_basis(v[:, 0:3].mean(axis=0))),)
+    if type_ not in ("line", "circle"):
+        return ()
+    (first, _), (second, _) = PARTS[type_][:2]
+    basis = normal_plane_basis(v[:, 3:6].mean(axis=0))
+    return ((first, v[:, 0:3] @ basis), (second, v[:, 3:6] @ basis))

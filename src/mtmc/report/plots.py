@@ -115,15 +115,12 @@ def histogram_svg(q: dict[str, Any]) -> str:
     ax.plot([], [], color="C3", ls="--", label=f"{other} interval")
     g = q.get("gum")
     if g and g["u"] > 0:
-        from scipy import stats  # imported here: scipy.stats costs ~0.5 s at import
+        from mtmc.uncertainty.gum import output_pdf
 
         x = np.linspace(edges[0], edges[-1], 400)
-        loc, s = (g["estimate"] - ref) * scale, g["u"] * scale
         dof = g.get("dof")
-        if dof is None:  # ν_eff = ∞: the normal PDF of y ± k u (JCGM 100 §G.6)
-            pdf, name = stats.norm.pdf(x, loc, s), "normal PDF"
-        else:  # the scaled and shifted t of y ± t_p(ν_eff) u (JCGM 100 §G.6.4)
-            pdf, name = stats.t.pdf(x, dof, loc, s), f"t PDF, ν_eff = {dof:.3g}"
+        pdf = output_pdf(x, (g["estimate"] - ref) * scale, g["u"] * scale, dof)
+        name = "normal PDF" if dof is None else f"t PDF, ν_eff = {dof:.3g}"
         ax.plot(x, pdf, "k-", lw=1.1, label=f"GUM: {name}")
     unit = f" / {label}" if label not in ("", "1") else ""
     ax.set_xlabel(f"{q['name']} − estimate{unit}")

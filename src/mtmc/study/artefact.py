@@ -99,7 +99,7 @@ class ArtefactKindStudy(Study):
         meas = res.measurement
         pos = np.asarray(meas.commanded, dtype=np.float64)  # (P, N, 3) axis positions, mm
         vol = np.asarray(res.nominal.volumetric[0], dtype=np.float64)  # (P, N, 3), mm
-        vec = np.linalg.solve(meas.axis_map[:, None], vol[..., None])[..., 0]
+        vec = meas.in_axes(vol)
         labels = tuple(
             ", ".join(f"{k[0]} = {v:g}°" for k, v in lab.items()) + f", ball {n + 1}"
             for lab in res.pose_labels()

@@ -29,7 +29,7 @@ from mtmc.io import to_jsonable
 from mtmc.report.folder import RESULT_FORMAT  # the ``format`` of result.json: its reader's
 from mtmc.study.spec import RunSettings
 from mtmc.uncertainty.gum import GumResult, endpoint_std_error, one_value, validate
-from mtmc.uncertainty.results import MonteCarloResult
+from mtmc.uncertainty.results import IntervalKind, MonteCarloResult
 from mtmc.uncertainty.sampling import resolve_seed
 from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
 
@@ -632,13 +632,12 @@ def quantity(
     lo_s, hi_s = mc.coverage_interval(p, "shortest")
     lo_y, hi_y = mc.coverage_interval(p, "symmetric")
     u = mc.u
-    kind = settings.interval
-    big_u = 0.5 * (hi_s - lo_s) if kind == "shortest" else 0.5 * (hi_y - lo_y)
+    kind: IntervalKind = "shortest" if settings.interval == "shortest" else "symmetric"
     mc_s = MonteCarloSummary(
         estimate=float(mc.estimate),
         u=float(u),
-        U=float(big_u),
-        k=float(big_u / u) if u > 0 else None,
+        U=float(mc.expanded_uncertainty(p, kind)),
+        k=float(mc.coverage_factor(p, kind)) if u > 0 else None,
         p=float(p),
         interval=kind,
         shortest=(float(lo_s), float(hi_s)),
@@ -697,8 +696,8 @@ def quantity(
     hist = mc.histogram(bins=HISTOGRAM_BINS) if u > 0 else None  # no histogram of one value
     m, est, us = mc.convergence(CONVERGENCE_POINTS)
     late = m >= m[-1] / 2  # the curves over the last half of the trials
-    if big_u > 0:
-        y_txt, u_txt = round_to_uncertainty(mc.estimate, big_u, settings.ndig)
+    if mc_s.U > 0:
+        y_txt, u_txt = round_to_uncertainty(mc.estimate, mc_s.U, settings.ndig)
     else:
         y_txt, u_txt = f"{mc.estimate:.6g}", "0"
     return Quantity(

@@ -24,14 +24,13 @@ from numpy.typing import NDArray
 
 from mtmc.document import Fields, check_number
 from mtmc.errors import MtmcError
-from mtmc.geometry.constructions import normal_plane_basis
 from mtmc.graph import load_graph
 from mtmc.graph.model import Graph, Plan, check_graph
 from mtmc.graph.places import SCALAR_TYPES
 from mtmc.graph.run import graph_model, random_inputs, run_graph
 from mtmc.graph.sweep import Surrogate, apply_setting, sweep_graph
 from mtmc.graph.units import file_unit, place_dimension, unit_of
-from mtmc.graph.values import PARTS
+from mtmc.graph.values import PARTS, normal_plane_parts
 from mtmc.study.base import (
     ProgressFn,
     Quantity,
@@ -229,30 +228,17 @@ class GraphStudy(Study):
                 la, lb = "xyz"[a], "xyz"[b]
                 ab = factor * vals[:, [a, b]]
                 found.append(region(f"{out}: {la}, {lb}", (la, lb), unit, ab, p))
-        elif type_ in ("line", "circle"):
-            first, second = ("point", "direction") if type_ == "line" else ("centre", "normal")
-            d_mean = vals[:, 3:6].mean(axis=0)
-            basis = normal_plane_basis(d_mean)
-            factor, unit = _shown(plan, out, first)
-            loc = factor * (vals[:, 0:3] @ basis)
-            found.append(
-                region(
-                    f"{out}: {first} in the plane normal to the axis",
-                    ("e1", "e2"),
-                    unit,
-                    loc,
-                    p,
-                )
-            )
-            found.append(
-                region(
-                    f"{out}: {second} (its tilt in the plane normal to it)",
-                    ("e1", "e2"),
-                    "rad",
-                    vals[:, 3:6] @ basis,
-                    p,
-                )
-            )
+        else:
+            for part, xy in normal_plane_parts(type_, vals):
+                if part in ("point", "centre"):
+                    factor, unit = _shown(plan, out, part)
+                    label = f"{out}: {part} in the plane normal to the axis"
+                    found.append(region(label, ("e1", "e2"), unit, factor * xy, p))
+                else:  # the tilt of a direction, a line's direction or a circle's normal
+                    name = f"{out}: {part} (its tilt in the plane normal to it)"
+                    if part == "value":
+                        name = f"{out}: its tilt in the plane normal to it"
+                    found.append(region(name, ("e1", "e2"), "rad", xy, p))
         return [r for r in found if r is not None]
 
     def _sweep(

@@ -161,25 +161,19 @@ def _inputs(s: Any, tracker: Any, points: NDArray[np.float64]) -> tuple[dict[str
     n = int(points.shape[0])
     span = f"L from {L.min():.0f} to {L.max():.0f} mm"
     e = f" + {noise.transverse_a:g}/L" if noise.transverse_a else ""
+    u_L = float(np.mean(noise.u_spherical(L)[:, 0]))
+    # u_α = c + e/L is linear in 1/L: its mean over the points is its value at the
+    # harmonic mean of the ranges
+    _, u_a, u_b = (float(u) for u in noise.u_spherical(1.0 / np.mean(1.0 / L)))
     rows: list[tuple[str, str, float, str]] = [
         (
             "tracker range L",
             f"normal(0, {noise.radial_a:g} + {noise.radial_b:g}·L), {span}",
-            float(np.mean(noise.u_range(L))),
+            u_L,
             "mm",
         ),
-        (
-            "tracker azimuth α",
-            f"normal(0, {noise.azimuth:g}{e})",
-            noise.azimuth + noise.transverse_a * float(np.mean(1.0 / L)),
-            "rad",
-        ),
-        (
-            "tracker elevation β",
-            f"normal(0, {noise.elevation:g}{e})",
-            noise.elevation + noise.transverse_a * float(np.mean(1.0 / L)),
-            "rad",
-        ),
+        ("tracker azimuth α", f"normal(0, {noise.azimuth:g}{e})", u_a, "rad"),
+        ("tracker elevation β", f"normal(0, {noise.elevation:g}{e})", u_b, "rad"),
     ]
     if s.repeatability > 0:
         rows.append(

@@ -76,14 +76,14 @@ from mtmc.frozen import frozen_value
 from mtmc.uncertainty.distributions import Distribution, Normal, standard_normal
 from mtmc.uncertainty.results import Moments
 from mtmc.uncertainty.sampling import (
+    BlockSource,
     Sampling,
-    _BlockSource,
-    _check_int,
-    _check_sampling,
-    _check_seed,
-    _name_key,
-    _prepare,
+    check_int,
+    check_sampling,
+    check_seed,
     input_generator,
+    name_key,
+    prepare_inputs,
 )
 
 __all__ = [
@@ -589,7 +589,7 @@ def as_correlation(obj: Any) -> Correlation | None:
 
 def _copula_w_generator(seed: int, block: int) -> np.random.Generator:
     """The stream of the t copula's ``W`` in seed block ``block`` (three-word spawn key)."""
-    ss = np.random.SeedSequence(seed, spawn_key=(int(block), _name_key("copula"), 1))
+    ss = np.random.SeedSequence(seed, spawn_key=(int(block), name_key("copula"), 1))
     return np.random.Generator(np.random.PCG64(ss))
 
 
@@ -757,11 +757,11 @@ def realised_correlation(
     corr = as_correlation(correlation)
     if corr is None:
         raise InputError("expected a correlation", field="correlation")
-    seed = _check_seed(seed)
-    trials = _check_int(trials, "trials", 2)
-    dists, method = _prepare(inputs, "default")
-    source = _BlockSource(
-        dists, seed, method, _check_sampling(sampling, method), joint_sampler(corr, copula, dists)
+    seed = check_seed(seed)
+    trials = check_int(trials, "trials", 2)
+    dists, method = prepare_inputs(inputs, "default")
+    source = BlockSource(
+        dists, seed, method, check_sampling(sampling, method), joint_sampler(corr, copula, dists)
     )
     total: Moments | None = None
     step = source.block_trials

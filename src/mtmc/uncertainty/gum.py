@@ -56,6 +56,7 @@ __all__ = [
     "endpoint_std_error",
     "one_value",
     "gum",
+    "output_pdf",
     "validate",
     "welch_satterthwaite",
 ]
@@ -507,6 +508,36 @@ def coverage_factor(p: float, dof: float) -> float:
         return float(stats.norm.ppf(q))
     # as a float: the floor of a huge ν is an integer too large for SciPy's t
     return float(stats.t.ppf(q, max(1.0, float(math.floor(dof)))))
+
+
+def output_pdf(
+    x: npt.ArrayLike, estimate: float, u: float, dof: float | None = None
+) -> NDArray[np.float64]:
+    """The PDF the GUM gives the output, at the values ``x`` (JCGM 100 §G.6).
+
+    The normal PDF of ``y ± u`` for ``ν_eff = ∞`` (``dof`` None), else the t PDF of
+    ``ν_eff`` degrees of freedom scaled by ``u`` and shifted to ``y`` (JCGM 100 §G.6.4;
+    ``ν_eff`` as it is, not its floor: the curve drawn beside a Monte Carlo histogram).
+
+    Parameters
+    ----------
+    x : array_like
+        Values of the output.
+    estimate, u : float
+        ``y`` and ``u(y) > 0``.
+    dof : float or None
+        ``ν_eff``; None: infinite.
+
+    Returns
+    -------
+    ndarray
+        The density at ``x`` (per unit of ``x``).
+    """
+    from scipy import stats  # imported here: scipy.stats costs ~0.5 s at import
+
+    if dof is None:
+        return np.asarray(stats.norm.pdf(x, estimate, u), dtype=np.float64)
+    return np.asarray(stats.t.pdf(x, dof, estimate, u), dtype=np.float64)
 
 
 def welch_satterthwaite(variances: npt.ArrayLike, dofs: npt.ArrayLike) -> float:

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from mtmc.errors import ConvergenceError, InputError
 from mtmc.parallel import ExecutorKind, map_blocks, one_blas_thread, planned_workers
 from mtmc.uncertainty.checks import check_probability
-from mtmc.uncertainty.copula import _JointSampler, joint_sampler
+from mtmc.uncertainty.copula import joint_sampler
 from mtmc.uncertainty.distributions import Distribution, NormalMethod
 from mtmc.uncertainty.results import (
     MAX_COV_DIM,
@@ -48,12 +48,13 @@ from mtmc.uncertainty.results import (
 from mtmc.uncertainty.sampling import (
     DEFAULT_BLOCK_SIZE,
     SEED_BLOCK_SIZE,
+    BlockSource,
+    JointDraw,
     Sampling,
-    _BlockSource,
-    _check_int,
-    _check_sampling,
-    _prepare,
+    check_int,
+    check_sampling,
     evaluation_block_size,
+    prepare_inputs,
     resolve_seed,
 )
 from mtmc.uncertainty.shared_rows import SharedRows, SharedRowsRef
@@ -337,13 +338,13 @@ class _BlockJob:
     total: int
     sketch: frozenset[str]
     sampling: Sampling = "random"
-    joint: _JointSampler | None = None
+    joint: JointDraw | None = None
     #: the run's shared arrays of kept rows, which a worker writes into where it can
     shared: SharedRowsRef | None = None
 
     def __call__(self, span: tuple[int, int]) -> _Digest:
         a, b = span
-        source = _BlockSource(self.dists, self.seed, self.method, self.sampling, self.joint)
+        source = BlockSource(self.dists, self.seed, self.method, self.sampling, self.joint)
         samples = source.trials(a, b)
         outs = _evaluate(self.model, samples, a, b)
         return _digest(a, outs, self.keep, self.total, self.sketch)
@@ -362,7 +363,7 @@ class _TaskJob:
 
     def __call__(self, spans: tuple[tuple[int, int], ...]) -> list[_Digest]:
         j = self.job
-        source = _BlockSource(j.dists, j.seed, j.method, j.sampling, j.joint)
+        source = BlockSource(j.dists, j.seed, j.method, j.sampling, j.joint)
         out = []
         with j.shared.writer() if j.shared else contextlib.nullcontext() as rows:
             for a, b in spans:
@@ -721,14 +722,14 @@ class _Runner:
         executor: ExecutorKind | Any,
         scheduler: Any = None,
         sampling: Sampling = "random",
-        joint: _JointSampler | None = None,
+        joint: JointDraw | None = None,
     ) -> None:
         self.model, self.dists, self.seed, self.method = model, dists, seed, method
         self.block_size = evaluation_block_size(dists, block_size)
         self.workers, self.executor, self.scheduler = workers, executor, scheduler
         self.sampling = sampling
         self.joint = joint
-        self.source = _BlockSource(dists, seed, method, sampling, joint)
+        self.source = BlockSource(dists, seed, method, sampling, joint)
         #: trials per seed block (quasi-random points are scrambled block by block)
         self.seed_block = next(iter(self.source.sizes.values()), SEED_BLOCK_SIZE)
 
@@ -1139,10 +1140,10 @@ def monte_carlo(
     if not callable(model):
         raise InputError(f"expected a callable model, got {type(model).__name__}", field="model")
     seed_int = resolve_seed(seed)
-    dists, method = _prepare(inputs, normal_method)
-    sampling = _check_sampling(sampling, method)
-    block_size = _check_int(block_size, "block_size", 1)
-    workers = _check_int(workers, "workers", 1)
+    dists, method = prepare_inputs(inputs, normal_method)
+    sampling = check_sampling(sampling, method)
+    block_size = check_int(block_size, "block_size", 1)
+    workers = check_int(workers, "workers", 1)
     if nan_policy not in ("raise", "omit"):
         raise InputError(f"expected 'raise' or 'omit', got {nan_policy!r}", field="nan_policy")
     if kind not in ("shortest", "symmetric"):
@@ -1166,14 +1167,14 @@ def monte_carlo(
             seed_int,
             method,
             p=check_probability(p),
-            ndig=_check_int(ndig, "ndig", 1),
+            ndig=check_int(ndig, "ndig", 1),
             tolerance=tolerance,
             nan_policy=nan_policy,
             kind=kind,
-            max_trials=_check_int(max_trials, "max_trials", 1),
+            max_trials=check_int(max_trials, "max_trials", 1),
             progress=progress,
         )
-    m_total = _check_int(10**6 if trials is None else trials, "trials", 2)
+    m_total = check_int(10**6 if trials is None else trials, "trials", 2)
     collector = _Collector(m_total, keep_set, nan_policy, sketch_set)
     runner.run(0, m_total, collector, progress)
     collector.check()

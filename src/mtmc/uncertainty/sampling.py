@@ -65,7 +65,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterator, Mapping
-from typing import TYPE_CHECKING, Any, Literal, cast
+from typing import Any, Literal, Protocol, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -77,9 +77,6 @@ from mtmc.uncertainty.distributions import (
     NormalMethod,
     as_distribution,
 )
-
-if TYPE_CHECKING:
-    from mtmc.uncertainty.copula import _JointSampler
 
 __all__ = [
     "DEFAULT_BLOCK_SIZE",
@@ -209,7 +206,7 @@ def resolve_seed(seed: int | np.random.SeedSequence | None) -> int:
     return int(seed)
 
 
-def _name_key(name: str) -> int:
+def name_key(name: str) -> int:
     return int.from_bytes(hashlib.sha256(name.encode("utf-8")).digest()[:8], "little")
 
 
@@ -237,11 +234,11 @@ def input_generator(seed: int, block: int, name: str) -> np.random.Generator:
     >>> a == input_generator(1, 0, "x").random(), a != b
     (True, True)
     """
-    ss = np.random.SeedSequence(seed, spawn_key=(int(block), _name_key(name)))
+    ss = np.random.SeedSequence(seed, spawn_key=(int(block), name_key(name)))
     return np.random.Generator(np.random.PCG64(ss))
 
 
-def _check_seed(seed: Any) -> int:
+def check_seed(seed: Any) -> int:
     if seed is None:
         raise InputError(
             "expected the integer seed of the run (see resolve_seed), got None: numbers drawn "
@@ -300,7 +297,7 @@ def sobol_block_trials(dims: int) -> int:
 
 
 def _sobol_key() -> int:
-    return _name_key("sobol")
+    return name_key("sobol")
 
 
 def sobol_points(seed: int, block: int, dims: int, n: int) -> NDArray[np.float64]:
@@ -346,7 +343,7 @@ def sobol_points(seed: int, block: int, dims: int, n: int) -> NDArray[np.float64
     return u
 
 
-def _check_sampling(sampling: Any, method: str) -> Sampling:
+def check_sampling(sampling: Any, method: str) -> Sampling:
     if sampling not in _SAMPLINGS:
         raise InputError(
             f"expected one of {', '.join(map(repr, _SAMPLINGS))}, got {sampling!r}",
@@ -361,13 +358,13 @@ def _check_sampling(sampling: Any, method: str) -> Sampling:
     return cast(Sampling, sampling)
 
 
-def _check_int(value: Any, field: str, minimum: int) -> int:
+def check_int(value: Any, field: str, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise InputError(f"expected an integer >= {minimum}, got {value!r}", field=field)
     return int(value)
 
 
-def _prepare(
+def prepare_inputs(
     inputs: Mapping[str, Any], normal_method: str
 ) -> tuple[dict[str, Distribution], NormalMethod]:
     if not isinstance(inputs, Mapping):
@@ -388,7 +385,34 @@ def _prepare(
     return dists, normal_method  # type: ignore[return-value]
 
 
-class _BlockSource:
+class JointDraw(Protocol):
+    """What :class:`BlockSource` asks of a correlated group of inputs drawn together.
+
+    :func:`mtmc.uncertainty.copula.joint_sampler` gives one.
+    """
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The inputs of the group, sorted."""
+        ...  # pragma: no cover - a protocol's member
+
+    @property
+    def extra_dims(self) -> int:
+        """Quasi-random coordinates taken besides the inputs' own."""
+        ...  # pragma: no cover - a protocol's member
+
+    def draw(self, seed: int, block: int, n: int, method: Any) -> dict[str, NDArray[np.float64]]:
+        """Seed block ``block`` (``n`` trials) of every input of the group."""
+        ...  # pragma: no cover - a protocol's member
+
+    def from_points(
+        self, u: NDArray[np.float64], layout: Mapping[str, tuple[int, int]], w_column: int
+    ) -> dict[str, NDArray[np.float64]]:
+        """The group's values from quasi-random points ``u``."""
+        ...  # pragma: no cover - a protocol's member
+
+
+class BlockSource:
     """Draws the seed blocks of each input on demand and slices the trials asked for.
 
     The last seed block of each input is kept for the next evaluation block, unless
@@ -408,7 +432,7 @@ class _BlockSource:
         seed: int,
         method: NormalMethod,
         sampling: Sampling = "random",
-        joint: _JointSampler | None = None,
+        joint: JointDraw | None = None,
     ):
         self.dists, self.seed, self.method, self.sampling = dists, seed, method, sampling
         self.joint = joint
@@ -622,12 +646,12 @@ def iter_blocks(
     DistributionError
         For an input that is not a distribution.
     """
-    trials = _check_int(trials, "trials", 1)
-    block_size = _check_int(block_size, "block_size", 1)
-    start = _check_int(start, "start", 0)
-    seed = _check_seed(seed)
-    dists, method = _prepare(inputs, normal_method)
-    source = _BlockSource(dists, seed, method, _check_sampling(sampling, method))
+    trials = check_int(trials, "trials", 1)
+    block_size = check_int(block_size, "block_size", 1)
+    start = check_int(start, "start", 0)
+    seed = check_seed(seed)
+    dists, method = prepare_inputs(inputs, normal_method)
+    source = BlockSource(dists, seed, method, check_sampling(sampling, method))
     for a in range(start, trials, block_size):
         b = min(a + block_size, trials)
         yield a, b, source.trials(a, b)
@@ -676,12 +700,12 @@ def sample_inputs(
     >>> x.shape, bool(abs(x.mean() - 1) < 0.03)
     ((100000,), True)
     """
-    trials = _check_int(trials, "trials", 1)
-    _check_int(block_size, "block_size", 1)
-    seed = _check_seed(seed)
-    dists, method = _prepare(inputs, normal_method)
+    trials = check_int(trials, "trials", 1)
+    check_int(block_size, "block_size", 1)
+    seed = check_seed(seed)
+    dists, method = prepare_inputs(inputs, normal_method)
     out = {n: np.empty((trials, *((d.dim,) if d.dim else ()))) for n, d in dists.items()}
-    _BlockSource(dists, seed, method, _check_sampling(sampling, method)).fill(
+    BlockSource(dists, seed, method, check_sampling(sampling, method)).fill(
         out, 0, trials, offset=0
     )
     return out

@@ -308,7 +308,7 @@ def _regions(plan: Plan, type_: str, values: Any, name: str) -> list[dict[str, A
     draws them (:mod:`mtmc.study.graph`). Semi-axes in the file's unit (rad for a tilt),
     the factor ``k`` of the Monte Carlo region (JCGM 102 §7.7.2).
     """
-    from mtmc.geometry.constructions import normal_plane_basis
+    from mtmc.graph.values import normal_plane_parts
     from mtmc.uncertainty.results import MonteCarloResult
 
     v = np.asarray(values, dtype=np.float64)
@@ -319,14 +319,12 @@ def _regions(plan: Plan, type_: str, values: Any, name: str) -> list[dict[str, A
     sets: list[tuple[str, Any, str, float]] = []
     if type_ in ("point", "vector"):
         sets.append((f"{name} in space", v[:, 0:3], length, factor))
-    elif type_ == "direction":
-        basis = normal_plane_basis(v[:, 0:3].mean(axis=0))
-        sets.append((f"tilt of {name}", v[:, 0:3] @ basis, "rad", 1.0))
-    elif type_ in ("line", "circle"):
-        basis = normal_plane_basis(v[:, 3:6].mean(axis=0))
-        first, second = ("point", "direction") if type_ == "line" else ("centre", "normal")
-        sets.append((f"{first} of {name}, normal to it", v[:, 0:3] @ basis, length, factor))
-        sets.append((f"tilt of the {second} of {name}", v[:, 3:6] @ basis, "rad", 1.0))
+    for part, xy in normal_plane_parts(type_, v):
+        if part in ("point", "centre"):
+            sets.append((f"{part} of {name}, normal to it", xy, length, factor))
+        else:
+            of = name if part == "value" else f"the {part} of {name}"
+            sets.append((f"tilt of {of}", xy, "rad", 1.0))
     out = []
     for label, xs, unit, scale in sets:
         try:
@@ -373,25 +371,6 @@ def _types_of(view: dict[str, Any], types: dict[str, str]) -> dict[str, str]:
     return out
 
 
-def _accepts_prefix(v: Any, types: list[str]) -> bool:
-    """Whether some input list the variant accepts starts with ``types``."""
-    fixed = list(v.inputs)
-    if len(types) <= len(fixed):
-        return types == fixed[: len(types)]
-    if types[: len(fixed)] != fixed:
-        return False
-    if v.rest is None:
-        return False
-    tail = types[len(fixed) :]
-    suffix = list(v.suffix)
-    # the rest inputs, then possibly the start of the suffix
-    for cut in range(len(tail) + 1):
-        head, end = tail[:cut], tail[cut:]
-        if all(t == v.rest for t in head) and end == suffix[: len(end)]:
-            return True
-    return False
-
-
 def arc_refusal(
     view: dict[str, Any], source: str, target: str, types: dict[str, str]
 ) -> str | None:
@@ -406,7 +385,7 @@ def arc_refusal(
     Parameters
     ----------
     view : dict
-        The graph view (:func:`mtmc.workbench.document.graph_json`).
+        The graph view (:func:`mtmc.workbench.view.graph_json`).
     source, target : str
         Node names.
     types : dict
@@ -464,11 +443,11 @@ def _input_refusal(t: dict[str, Any], name: str, types: dict[str, str]) -> str |
     inputs = list(t.get("in", []))
     new = [*[types.get(i, "?") for i in inputs], types.get(name, "?")]
     if "?" in new:
-        most = max(float("inf") if v.rest else len(v.inputs) + len(v.suffix) for v in vs)
+        most = max(v.max_inputs for v in vs)
         if len(new) > most:
             return f"op {op} takes at most {int(most)} inputs"
         return None
-    if not any(_accepts_prefix(v, new) for v in vs):
+    if not any(v.accepts_prefix(new) for v in vs):
         sigs = "; ".join(sorted({v.signature for v in vs}))
         return f"op {op} accepts no inputs of types ({', '.join(new)}); it accepts {sigs}"
     return None
