@@ -63,9 +63,11 @@ __all__ = [
     "Ballbar",
     "CircularModel",
     "CircularUncertainty",
+    "RotaryModel",
     "circular_model",
     "evaluate_uncertainty",
     "evaluate_trace",
+    "rotary_model",
 ]
 
 _F = NDArray[np.float64]
@@ -301,7 +303,7 @@ class CircularUncertainty:
 
 
 def evaluate_uncertainty(
-    model: CircularModel,
+    model: CircularModel | RotaryModel,
     inputs: Mapping[str, Distribution],
     trials: int | None = 10_000,
     seed: int | None = None,
@@ -316,7 +318,9 @@ def evaluate_uncertainty(
     val = {
         name: validate(g.component(i), mc.component(i), p=p) for i, name in enumerate(model.outputs)
     }
-    notes = structural_notes(model.design.plane, len(model.design.directions))
+    notes: tuple[str, ...] = ()
+    if isinstance(model, CircularModel):
+        notes = structural_notes(model.design.plane, len(model.design.directions))
     return CircularUncertainty(model.outputs, mc, g, val, notes)
 
 
@@ -398,3 +402,95 @@ def evaluate_trace(
     out["rms"] = float(ident.rms[0])
     out["result"] = res
     return out
+
+
+class RotaryModel:
+    """The vectorised model of an R-test of a rotary axis: ``model(**inputs) -> (m, d)``.
+
+    The readings of each step ``k`` are the sensors' ``(1 + g) ⊙ (J_k β) + ε_k``: the
+    first-order displacement of the sphere (``J`` of
+    :func:`~mtmc.circular.simulate.rotary_design`, exact to second order in the errors),
+    each axis' sensor gain error ``g`` and the noise of each reading. The outputs are the
+    range over the steps of the displacement along x, y and z (``range_x``, ...) and the
+    errors identified by least squares.
+
+    Attributes
+    ----------
+    outputs : tuple of str
+    complex_safe : bool
+        False (ranges are extremes).
+    """
+
+    complex_safe = False
+
+    def __init__(self, jacobian: _F, names: tuple[str, ...], identify: tuple[str, ...]) -> None:
+        self.jacobian = jacobian
+        self.error_names = names
+        idx = [names.index(k) for k in identify]
+        flat = jacobian.reshape(-1, jacobian.shape[2])
+        self._truth_t = np.ascontiguousarray(flat.T)
+        self._pinv_t = np.ascontiguousarray(np.linalg.pinv(flat[:, idx]).T)
+        self.outputs = ("range_x", "range_y", "range_z", *identify)
+
+    def __call__(self, **x: Any) -> _F:
+        """The outputs ``(m, d)`` of the trials of ``x``, in the order of :attr:`outputs`."""
+        for v in x.values():
+            if np.iscomplexobj(v):
+                raise TypeError("the R-test model takes real inputs only")
+        beta = np.stack([np.asarray(x[k], dtype=np.float64) for k in self.error_names], axis=1)
+        m, n = beta.shape[0], self.jacobian.shape[0]
+        e = (beta @ self._truth_t).reshape(m, n, 3)
+        gain = np.stack([np.asarray(x[f"gain_{a}"], dtype=np.float64) for a in "xyz"], axis=1)
+        e = e * (1.0 + gain[:, None, :])
+        if "noise" in x:
+            e = e + np.asarray(x["noise"], dtype=np.float64).reshape(m, n, 3)
+        ranges = e.max(axis=1) - e.min(axis=1)
+        est = e.reshape(m, -1) @ self._pinv_t
+        return np.concatenate([ranges, est], axis=1)
+
+
+def rotary_model(
+    jacobian: npt.ArrayLike,
+    errors: Mapping[str, Any],
+    *,
+    identify: tuple[str, ...] | None = None,
+    gain: Any = 0.0,
+    noise: float = 0.0,
+) -> tuple[RotaryModel, dict[str, Distribution]]:
+    """The model of an R-test and its inputs.
+
+    Parameters
+    ----------
+    jacobian : array_like, shape (n, 3, p)
+        ``∂(displacement)/∂(error)`` at each step (:meth:`mtmc.kinematics.Machine.jacobian`
+        at the positions of :func:`~mtmc.circular.simulate.follow_positions`).
+    errors : mapping of str to Distribution or number
+        The ``p`` errors in the column order of ``jacobian``, by their ISO 230-7 names.
+    identify : tuple of str, optional
+        The errors identified (default all).
+    gain : Distribution or number
+        The relative gain error of each sensor (the same PDF for x, y, z, independent).
+    noise : float
+        Standard deviation of each reading, mm.
+
+    Returns
+    -------
+    model : RotaryModel
+    inputs : dict of str to Distribution
+    """
+    J = np.asarray(jacobian, dtype=np.float64)
+    names = tuple(errors)
+    if J.ndim != 3 or J.shape[1] != 3 or J.shape[2] != len(names):
+        raise InputError(
+            f"expected a Jacobian of shape (n, 3, {len(names)}), got {J.shape}", field="jacobian"
+        )
+    ident = names if identify is None else tuple(identify)
+    unknown = [k for k in ident if k not in names]
+    if unknown:
+        raise InputError(f"unknown error {unknown[0]!r} to identify", field="identify")
+    inputs = {k: as_distribution(v, field=f"errors.{k}") for k, v in errors.items()}
+    for a in "xyz":
+        inputs[f"gain_{a}"] = as_distribution(gain, field="gain")
+    if noise > 0:
+        inputs["noise"] = IID(Normal(0.0, float(noise)), 3 * J.shape[0])
+    return RotaryModel(J, names, ident), inputs
