@@ -126,3 +126,21 @@ def test_cli_evaluate_table(tmp_path: Path, capsys) -> None:  # type: ignore[no-
     assert "squareness" in out
     assert "urad" in out
     assert "note: radius" in out
+
+
+def test_reader_more_errors(tmp_path: Path) -> None:
+    ok = "angle,direction,deviation\n0,ccw,1\n90,ccw,2\n180,ccw,3\n270,ccw,4\n"
+    # the deviations of both paths, CCW first, in mm (µm in the file)
+    np.testing.assert_allclose(loads_circular_csv(ok).deviation, [0.001, 0.002, 0.003, 0.004])
+    with pytest.raises(InputError, match=r"directions\.left"):
+        loads_circular_csv(ok, directions={"left": "up"})
+    with pytest.raises(InputError, match="unknown column 'theta'"):
+        loads_circular_csv(ok, columns={"theta": "Angle"})
+    with pytest.raises(InputError, match="has none"):
+        loads_circular_csv("# only a comment\n")
+    with pytest.raises(InputError, match=r"f.csv:3: expected 3 fields, got 2"):
+        loads_circular_csv(ok.replace("90,ccw,2", "90,ccw"), "f.csv")
+    with pytest.raises(InputError, match="within one turn, the file has none"):
+        loads_circular_csv("angle,direction,deviation\n360,ccw,1\n-5,cw,2\n")
+    with pytest.raises(InputError, match="cannot read the file"):
+        load_circular_csv(tmp_path / "absent.csv")
