@@ -212,3 +212,31 @@ def test_the_line_the_report_prints_reruns_a_demo_folder(tmp_path):
     argv = ["run", str(moved / "study.toml"), *line.group(1).split(), "-q"]
     assert main([*argv, "-o", str(tmp_path / "again")]) == 0
     assert _numbers(tmp_path / "again") == _numbers(moved)
+
+
+def test_an_artefact_file_goes_with_its_study(tmp_path):
+    (tmp_path / "art").mkdir()
+    shipped = study_path("../artefacts/wang2022_five_ball.toml")
+    shutil.copyfile(shipped, tmp_path / "art" / "five.toml")
+    text = study_path("wang2022.toml").read_text(encoding="utf-8")
+    text = text.replace('shipped = "wang2022_five_ball"', 'file = "../art/five.toml"')
+    path = tmp_path / "s" / "wang.toml"
+    path.parent.mkdir()
+    path.write_text(text, encoding="utf-8")
+    study = load_study(path)
+    first = write_result(
+        study.run(trials=TRIALS, seed=SEED), tmp_path / "out", study_text=text, report=False
+    )
+    [f] = _check_provenance(first)
+    assert (f["field"], f["copy"], f["sha256"]) == (
+        "artefact.file",
+        "inputs/five.toml",
+        _sha(shipped),
+    )
+    again = _rerun(first, tmp_path / "elsewhere")
+    assert _numbers(again) == _numbers(first)
+    # the same artefact as the shipped one: the same numbers as the study that names it
+    shipped_run = load_study(study_path("wang2022.toml")).run(trials=TRIALS, seed=SEED)
+    assert (
+        json.loads(json.dumps(shipped_run.to_dict()["quantities"])) == _numbers(first)["quantities"]
+    )
