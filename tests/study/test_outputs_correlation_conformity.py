@@ -183,3 +183,15 @@ def test_unknown_names_are_refused_as_in_a_study_of_one_output():
     e = _error(STUDY.replace("[conformity.L2]  # one limit\nupper = 50.0003", "[conformity.L2]"))
     assert e.field == "conformity.L2"
     assert "expected a tolerance limit" in e.message
+
+
+def test_a_conformity_table_without_an_output_table_is_refused():
+    head = STUDY.split("[conformity.L1]")[0]
+    e = _error(head + "[conformity]\n\n[run]\ntrials = 10\n")
+    assert e.field == "conformity"
+    assert "a table of limits per output, e.g. [conformity.L1]" in e.message
+    e = _error(head + "[conformity]\nL1 = 3\n")
+    assert (e.field, e.message) == (
+        "conformity.L1",
+        "expected a table of limits for output L1, e.g. L1 = { upper = 1.0 }",
+    )

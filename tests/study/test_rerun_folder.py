@@ -240,3 +240,14 @@ def test_an_artefact_file_goes_with_its_study(tmp_path):
     assert (
         json.loads(json.dumps(shipped_run.to_dict()["quantities"])) == _numbers(first)["quantities"]
     )
+
+
+def test_a_provenance_whose_input_files_are_not_entries_is_named(tmp_path):
+    study = load_study(_csv_study(tmp_path))
+    out = write_result(study.run(), tmp_path / "out", study_text=study.source.text, report=False)
+    prov = json.loads((out / "provenance.json").read_text(encoding="utf-8"))
+    prov["input_files"] = [{"key": ["inputs", "x", "data"]}]
+    (out / "provenance.json").write_text(json.dumps(prov), encoding="utf-8")
+    with pytest.raises(InputError, match="expected input_files entries with key") as info:
+        load_result(out)
+    assert (info.value.file, info.value.field) == (str(out / "provenance.json"), "input_files")
