@@ -36,6 +36,7 @@ from mtmc.io import decode_utf8
 __all__ = [
     "MAX_DEPTH",
     "Fields",
+    "InputFile",
     "KeyPath",
     "Source",
     "MAX_DEG",
@@ -194,6 +195,39 @@ def _escaped(line: str, i: int) -> bool:
 
 
 @dataclass(frozen=True)
+class InputFile:
+    """A file that a study file names and a reader read (a graph, a CSV of readings, ...).
+
+    Attributes
+    ----------
+    key : tuple
+        The key path of the field that names it (``("inputs", "d", "data")``).
+    given : str
+        The path as the field gives it.
+    source : str
+        The file read, as an absolute path.
+    sha256 : str
+        SHA-256 of its bytes when it was read (hex).
+    copy : str or None
+        Its copy in a result folder, relative to the folder (``inputs/d.csv``); None
+        until a result folder holds one (:func:`mtmc.study.write_result`).
+    """
+
+    key: KeyPath
+    given: str
+    source: str
+    sha256: str
+    copy: str | None = None
+
+    @property
+    def field(self) -> str:
+        """The field as messages name it (``inputs.d.data``, ``pairs[1]``)."""
+        return ".".join(str(p) if isinstance(p, str) else f"[{p}]" for p in self.key).replace(
+            ".[", "["
+        )
+
+
+@dataclass(frozen=True)
 class Source:
     """The text of a study file, where it lies and the line of each of its keys.
 
@@ -209,6 +243,9 @@ class Source:
         SHA-256 of the text as UTF-8 (hex).
     lines : dict
         Key path to 1-based line (:func:`mtmc.graph.toml_format.key_lines`).
+    files : list of InputFile
+        The files named in it that :meth:`resolve` found, in the order they were read:
+        what a result folder copies so that it reruns by itself.
     """
 
     file: str
@@ -216,6 +253,7 @@ class Source:
     text: str
     sha256: str
     lines: dict[KeyPath, int] = field(repr=False)
+    files: list[InputFile] = field(default_factory=list, repr=False, compare=False)
 
     @classmethod
     def from_text(cls, text: str, file: str = "<study>", folder: Path | None = None) -> Source:
@@ -232,16 +270,26 @@ class Source:
 
     def error(self, message: str, path: KeyPath) -> InputError:
         """An :class:`~mtmc.errors.InputError` naming this file, the line of ``path`` and it."""
-        name = ".".join(str(p) if isinstance(p, str) else f"[{p}]" for p in path).replace(".[", "[")
+        name = InputFile(path, "", "", "").field
         return InputError(message, file=self.file, line=self.line(path), field=name or None)
 
     def resolve(self, relative: str, path: KeyPath) -> Path:
-        """A file named in the study, relative to the study's folder; it must exist."""
+        """A file named in the study, relative to the study's folder; it must exist.
+
+        The file is recorded in :attr:`files` with the SHA-256 of its bytes.
+        """
         p = Path(relative)
         if not p.is_absolute() and self.folder is not None:
             p = self.folder / p
         if not p.is_file():
             raise self.error(f"expected an existing file, {p} is not one", path)
+        try:
+            digest = hashlib.sha256(p.read_bytes()).hexdigest()
+        except OSError as exc:
+            raise self.error(f"cannot read {p}: {exc.strerror or exc}", path) from None
+        read = InputFile(path, relative, str(p.resolve()), digest)
+        if read not in self.files:
+            self.files.append(read)
         return p
 
 

@@ -208,13 +208,20 @@ def test_a_guard_band_wider_than_the_tolerance_is_named_at_run_time():
     assert err.line == text.splitlines().index("guard = 3") + 1
 
 
-def test_conformity_with_several_outputs_is_refused():
-    text = STUDY.replace('output = "dx"\n', "").replace(
-        "[conformity]", '[outputs]\ndx = {unit = "mm"}\n\n[conformity]'
+def test_conformity_with_several_outputs_is_given_per_output():
+    text = STUDY.replace('model = "L * e_scale + e_temp + e_probe"\noutput = "dx"\n', "").replace(
+        "[conformity]", '[outputs]\ndx = "L * e_scale + e_temp + e_probe"\n\n[conformity]'
     )
-    with pytest.raises(InputError) as info:
+    # the limits of one output at the top of [conformity]: refused, naming the first key
+    with pytest.raises(
+        InputError, match=r"a table of limits per output: \[conformity.dx\]"
+    ) as info:
         loads_study(text, file="positioning.toml")
-    assert info.value.field in {"conformity", "outputs", "outputs.dx"}
+    assert info.value.field == "conformity.lower"
+    # as a table of the output, the same decision as the study of one output, bit for bit
+    per_output = loads_study(text.replace("[conformity]", "[conformity.dx]")).run()
+    alone = loads_study(STUDY).run()
+    assert per_output.quantity("dx").conformity == alone.quantity("dx").conformity
 
 
 def test_mtmc_run_prints_the_decision_and_writes_a_folder_that_loads(tmp_path, capsys):

@@ -316,7 +316,10 @@ def check_result(doc: Mapping[str, Any], file: str) -> None:
     for i, x in enumerate(c.seq(doc.get("inputs", []), "inputs")):
         c.obj(x, f"inputs[{i}]", ("name",))
         c.text(x["name"], f"inputs[{i}].name")
-        if "u" in x:
+        if isinstance(x.get("u"), list):  # a vector input: u per component
+            for k, u in enumerate(x["u"]):
+                c.number(u, f"inputs[{i}].u[{k}]", low=0, null=True)
+        elif "u" in x:
             c.number(x["u"], f"inputs[{i}].u", low=0, null=True)
     run = doc.get("run")
     if run is not None:

@@ -23,7 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import Source
+from mtmc.document import InputFile, Source
 from mtmc.frozen import frozen_array, frozen_floats
 from mtmc.io import to_jsonable
 from mtmc.report.folder import RESULT_FORMAT  # the ``format`` of result.json: its reader's
@@ -892,6 +892,10 @@ class StudyResult:
         Kind-specific JSON-ready data (a sweep and its surrogate, the graph's text).
     samples : dict of str to ndarray
         The model values by output, when the study asked to keep them (not in JSON).
+    input_files : tuple of InputFile
+        The files the study file names and the run read (a graph, a CSV), each with its
+        SHA-256; a result folder holds a copy of each (``copy``), listed in
+        ``provenance.json`` (not in ``result.json``).
     """
 
     kind: str
@@ -908,6 +912,7 @@ class StudyResult:
     inputs: tuple[dict[str, Any], ...] = ()
     extra: Mapping[str, Any] = field(default_factory=dict)
     samples: Mapping[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
+    input_files: tuple[InputFile, ...] = ()
 
     def quantity(self, name: str) -> Quantity:
         """The quantity called ``name``."""
@@ -1152,5 +1157,6 @@ class Study:
             seed=settings.seed,
             trials=settings.trials if run is None else int(run["trials"]),
             p=settings.p,
+            input_files=tuple(self.source.files),
             **kw,
         )

@@ -14,20 +14,37 @@ A study whose output must lie within tolerance limits says so in a table::
 field); :func:`assess` applies it to the Monte Carlo result of the output (the decision)
 and the GUM result (its ``p_c`` beside), giving the ``conformity`` entry of the quantity
 in ``result.json``.
+
+A study of several outputs (``[outputs]``) gives a table per output that has limits,
+named as the output (:func:`read_output_conformity`)::
+
+    [conformity.L1]
+    lower = 149.9995
+    upper = 150.0005
+    [conformity.L2]
+    upper = 50.0004
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 from mtmc.document import Fields, KeyPath, Source
 from mtmc.errors import InputError
+from mtmc.study.base import Quantity
 from mtmc.uncertainty.conformity import conformance_probability, conformity
 from mtmc.uncertainty.gum import GumResult
 from mtmc.uncertainty.results import MonteCarloResult
 
-__all__ = ["ConformitySpec", "assess", "read_conformity"]
+__all__ = [
+    "ConformitySpec",
+    "assess",
+    "assess_quantity",
+    "read_conformity",
+    "read_output_conformity",
+]
 
 _KEYS = ("lower", "upper", "rule", "guard", "max_consumer_risk", "prior", "coverage_factor")
 
@@ -132,6 +149,54 @@ def read_conformity(top: Fields, key: str = "conformity") -> ConformitySpec | No
     )
 
 
+def read_output_conformity(top: Fields, outputs: Sequence[str]) -> dict[str, ConformitySpec]:
+    """Read the ``[conformity]`` table of a study of several outputs: a table per output.
+
+    Parameters
+    ----------
+    top : Fields
+        The study file.
+    outputs : sequence of str
+        The names of its outputs (the keys of ``[outputs]``).
+
+    Returns
+    -------
+    dict of str to ConformitySpec
+        By output, in the order of the file (empty where there is no ``[conformity]``).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the line and the field: a key that is not an output (the keys of
+        one output's table at the top of ``[conformity]`` are named as such), no table
+        for any output, and every error of :func:`read_conformity` in an output's table.
+    """
+    t = top.table("conformity", required=False)
+    if t is None:
+        return {}
+    if not t.data:
+        raise t.error(
+            f"expected a table of limits per output, e.g. [conformity.{outputs[0]}] with "
+            "lower, upper or both"
+        )
+    for key, value in t.data.items():
+        if key in _KEYS:
+            raise t.error(
+                f"with [outputs], [conformity] has a table of limits per output: "
+                f"[conformity.{outputs[0]}] {key} = ..., not {key} for all of them",
+                key,
+            )
+        if key not in outputs:
+            raise t.error(f"unknown output {key!r}; expected one of {', '.join(outputs)}", key)
+        if not isinstance(value, dict):
+            raise t.error(
+                f"expected a table of limits for output {key}, e.g. {key} = {{ upper = 1.0 }}",
+                key,
+            )
+    specs = {key: read_conformity(t, key) for key in t.data}
+    return {key: spec for key, spec in specs.items() if spec is not None}
+
+
 def assess(
     spec: ConformitySpec, mc: MonteCarloResult, gum_result: GumResult | None
 ) -> dict[str, Any]:
@@ -178,3 +243,12 @@ def assess(
         p_c, _, basis = conformance_probability(gum_result, spec.lower, spec.upper)
         out["gum_p_c"], out["gum_basis"] = p_c, basis
     return out
+
+
+def assess_quantity(
+    q: Quantity, spec: ConformitySpec | None, mc: MonteCarloResult, gum_result: GumResult | None
+) -> Quantity:
+    """The quantity with its ``conformity`` (:func:`assess`), or as it is without a spec."""
+    if spec is None:
+        return q
+    return replace(q, conformity=assess(spec, mc, gum_result))

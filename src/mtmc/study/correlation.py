@@ -23,7 +23,7 @@ and the field (``correlation.pairs[1]``).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -241,6 +241,7 @@ def correlation_record(
     seed: int,
     trials: int,
     gum_result: GumResult | None,
+    outputs: Sequence[str] = (),
 ) -> dict[str, Any]:
     """The ``correlation`` entry of ``result.json``.
 
@@ -253,7 +254,10 @@ def correlation_record(
     seed, trials : int
         The seed and the number of trials of the Monte Carlo run.
     gum_result : GumResult or None
-        The GUM of the same model, for the part of ``u²(y)`` that the cross terms give.
+        The GUM of the same model, for the part of ``u²(y)`` that the cross terms give;
+        for several outputs (a GUM of the stacked model) that part of each ``u²(y_i)``.
+    outputs : sequence of str
+        The names of the outputs of a GUM of several.
 
     Returns
     -------
@@ -264,7 +268,10 @@ def correlation_record(
         pair of names with ``r`` (given), ``realised``, ``kendall_tau`` (``(2/π) asin r``)
         and ``spearman_rho`` (``(6/π) asin(r/2)``, Gaussian copula only, else None); and
         ``gum_cross_variance``: ``Σ_{i≠j} c_i c_j u_i u_j r_ij`` of the GUM (None
-        without one), and ``gum_cross_share``, its part of ``u²(y)``.
+        without one or with several outputs), and ``gum_cross_share``, its part of
+        ``u²(y)``; with several outputs, ``outputs``: per output ``name``,
+        ``gum_cross_variance`` and ``gum_cross_share``. The correlation of the inputs is
+        the same whatever the number of outputs.
     """
     corr, cop = spec.correlation, spec.copula
     real = realised_correlation(inputs, trials, seed, corr, cop)
@@ -284,17 +291,25 @@ def correlation_record(
                 }
             )
     cross = share = None
-    if gum_result is not None and gum_result.scalar:
+    by_output = []
+    if gum_result is not None:
         by_name = {e.name: e for e in gum_result.budget}
-        total = 0.0
-        for a, b, r in corr.pairs():
-            ca, cb = by_name[a], by_name[b]
-            total += (
-                2.0 * r * float(ca.sensitivity[0, 0] * ca.u[0] * cb.sensitivity[0, 0] * cb.u[0])
-            )
-        cross = total
-        var = gum_result.u**2
-        share = total / var if var > 0 else None
+        variances = np.asarray(gum_result.u_vector, dtype=np.float64) ** 2
+        for i, var in enumerate(variances):
+            total = 0.0
+            for a, b, r in corr.pairs():
+                ca, cb = by_name[a], by_name[b]
+                total += (
+                    2.0 * r * float(ca.sensitivity[i, 0] * ca.u[0] * cb.sensitivity[i, 0] * cb.u[0])
+                )
+            part = total / float(var) if var > 0 else None
+            if gum_result.scalar:
+                cross, share = total, part
+            else:
+                name = outputs[i] if i < len(outputs) else f"y[{i}]"
+                by_output.append(
+                    {"name": name, "gum_cross_variance": total, "gum_cross_share": part}
+                )
     return {
         "copula": cop.to_dict(),
         "names": list(names),
@@ -303,4 +318,5 @@ def correlation_record(
         "pairs": pairs,
         "gum_cross_variance": cross,
         "gum_cross_share": share,
+        **({"outputs": by_output} if by_output else {}),
     }

@@ -21,6 +21,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from mtmc.document import InputFile
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
 from mtmc.report.folder import read_folder
@@ -62,6 +63,28 @@ def _dof(obj: Any) -> Any:
     if isinstance(obj, list):
         return [_dof(v) for v in obj]
     return obj
+
+
+def _input_files(provenance: Mapping[str, Any] | None, path: Path) -> tuple[InputFile, ...]:
+    """The files the study named, as ``provenance.json`` lists them (none without one)."""
+    listed = (provenance or {}).get("input_files", [])
+    try:
+        return tuple(
+            InputFile(
+                key=tuple(k if isinstance(k, int) else str(k) for k in f["key"]),
+                given=str(f["given"]),
+                source=str(f["source"]),
+                sha256=str(f["sha256"]),
+                copy=None if f["copy"] is None else str(f["copy"]),
+            )
+            for f in listed
+        )
+    except (KeyError, TypeError) as exc:
+        raise InputError(
+            f"expected input_files entries with key, given, source, copy and sha256 ({exc})",
+            file=str(path),
+            field="input_files",
+        ) from None
 
 
 def _quantity(d: Mapping[str, Any]) -> Quantity:
@@ -130,7 +153,8 @@ def load_result(folder: str | os.PathLike[str]) -> StudyResult:
     StudyResult
         Equal to the one written: ``load_result(write_result(r, d)).to_dict() ==
         r.to_dict()``, and the same numbers, bit for bit, in every field; the samples
-        from ``samples/NAME.npy`` where the run kept them. Infinite degrees of freedom
+        from ``samples/NAME.npy`` where the run kept them; ``input_files`` from
+        ``provenance.json`` (each with the ``copy`` in the folder). Infinite degrees of freedom
         (a ``dof`` of a quantity or an input), written as ``null``, are ``inf`` again;
         other non-finite numbers (written as ``null``) stay None.
 
@@ -154,7 +178,7 @@ def load_result(folder: str | os.PathLike[str]) -> StudyResult:
             "fields": tuple(_field(f) for f in doc.get("fields", [])),
             "inputs": tuple(_dof(x) for x in doc.get("inputs", [])),
         }
-        skip = {"extra", "samples", *_TOP}
+        skip = {"extra", "samples", "input_files", *_TOP}
         named = [f.name for f in dataclasses.fields(StudyResult) if f.name not in skip]
         for name in named:
             kw[name] = doc[name]
@@ -172,6 +196,7 @@ def load_result(folder: str | os.PathLike[str]) -> StudyResult:
     known = {"format", *_TOP, *named}
     kw["extra"] = {k: v for k, v in doc.items() if k not in known}
     kw["samples"] = read.samples
+    kw["input_files"] = _input_files(read.provenance, d / "provenance.json")
     return StudyResult(**kw)
 
 

@@ -25,7 +25,7 @@ that use against the ``[inputs]`` are here, for both forms of the study.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -34,6 +34,8 @@ from numpy.typing import NDArray
 from mtmc.document import MAX_NAMES, Fields, check_length
 from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import SCATTER_POINTS, ProgressFn, Study, StudyResult, quantity
+from mtmc.study.conformity import ConformitySpec, assess_quantity
+from mtmc.study.correlation import CorrelationSpec, correlation_record
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.spec import RunSettings
@@ -210,26 +212,41 @@ class OutputsStudy(Study):
         The output quantities, in the order of the file.
     inputs : dict of str to Distribution
         The input PDFs (JCGM 101 §6, JCGM 102 §6), in the order of first use.
+    conformity : dict of str to ConformitySpec
+        The ``[conformity.NAME]`` tables: tolerance limits and a decision rule per output
+        (JCGM 106), by output name.
+    correlation : CorrelationSpec or None
+        The ``[correlation]`` table of the inputs, as in a study of one output.
     """
 
     kind = "propagate"
     run_options = frozenset({ADAPTIVE, NAN_POLICY})
     outputs: tuple[ModelOutput, ...]
     inputs: dict[str, Distribution]
+    conformity: Mapping[str, ConformitySpec] = field(default_factory=dict)
+    correlation: CorrelationSpec | None = None
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Monte Carlo of the outputs on the same trials, the GUM of the stacked model."""
+        corr = self.correlation
         mc = monte_carlo(
             NamedOutputs(self.outputs),
             self.inputs,
             seed=settings.seed,
             progress=progress,
             **settings.engine,
+            **({} if corr is None else corr.engine),
         )
         assert isinstance(mc, MonteCarloResults)
-        g = gum(JointModel(self.outputs), self.inputs, p=settings.p)
+        r = None if corr is None else corr.correlation
+        g = gum(JointModel(self.outputs), self.inputs, p=settings.p, correlation=r)
         quantities = tuple(
-            quantity(o.name, o.unit, mc[o.name], g.component(i), settings)
+            assess_quantity(
+                quantity(o.name, o.unit, mc[o.name], g.component(i), settings),
+                self.conformity.get(o.name),
+                mc[o.name],
+                g.component(i),
+            )
             for i, o in enumerate(self.outputs)
         )
         inputs = tuple(input_record(n, d) for n, d in self.inputs.items())
@@ -239,6 +256,16 @@ class OutputsStudy(Study):
             "models": {o.name: o.model.text for o in self.outputs},
             "joint": joint,
         }
+        if corr is not None:
+            assert settings.seed is not None
+            extra["correlation"] = correlation_record(
+                corr,
+                self.inputs,
+                seed=settings.seed,
+                trials=mc.trials,
+                gum_result=g,
+                outputs=[o.name for o in self.outputs],
+            )
         warned = [x for x in inputs if x.get("type_a") and x["type_a"]["warning"]]
         if warned:  # serially correlated observations (JCGM 100 §4.2.7), on the summary
             extra["warnings"] = [f"input {x['name']}: {x['type_a']['warning']}" for x in warned]
@@ -370,7 +397,7 @@ def read_outputs_study(
                 "or [outputs]",
                 key,
             )
-    top.only(("kind", "title", "unit", "inputs", "outputs", "run"))
+    top.only(("kind", "title", "unit", "inputs", "outputs", "run", "conformity", "correlation"))
     table = top.table("outputs")
     assert table is not None
     if not table.data:

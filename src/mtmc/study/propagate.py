@@ -16,7 +16,12 @@ from typing import Any
 from mtmc.document import Fields
 from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import ProgressFn, Study, StudyResult, quantity
-from mtmc.study.conformity import ConformitySpec, assess, read_conformity
+from mtmc.study.conformity import (
+    ConformitySpec,
+    assess_quantity,
+    read_conformity,
+    read_output_conformity,
+)
 from mtmc.study.correlation import CorrelationSpec, correlation_record, read_correlation
 from mtmc.study.observations import input_record, read_input_table
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
@@ -135,9 +140,10 @@ class PropagateStudy(Study):
         )
         corr = None if self.correlation is None else self.correlation.correlation
         g = gum(self.model, self.inputs, p=settings.p, correlation=corr)
-        q = quantity(self.output, self.unit, mc, g, settings)
-        if self.conformity is not None:  # the JCGM 106 decision on the Monte Carlo PDF
-            q = dataclasses.replace(q, conformity=assess(self.conformity, mc, g))
+        # with the JCGM 106 decision on the Monte Carlo PDF where there are limits
+        q = assess_quantity(
+            quantity(self.output, self.unit, mc, g, settings), self.conformity, mc, g
+        )
         inputs = tuple(input_record(n, d) for n, d in self.inputs.items())
         extra: dict[str, Any] = {"model": self.model.text}
         if self.correlation is not None:
@@ -173,7 +179,9 @@ def read_propagate_study(top: Fields) -> Study:
     """Validate a ``propagate`` study file (see ``docs/study-format.md``).
 
     A file with an ``[outputs]`` table is a study of several outputs
-    (:func:`mtmc.study.outputs.read_outputs_study`).
+    (:func:`mtmc.study.outputs.read_outputs_study`), with ``[correlation]`` of its inputs
+    as in a study of one output and ``[conformity.NAME]`` limits per output
+    (:func:`mtmc.study.conformity.read_output_conformity`).
     """
     top.only(
         (
@@ -190,14 +198,6 @@ def read_propagate_study(top: Fields) -> Study:
             "correlation",
         )
     )
-    if top.has("outputs") and top.has("correlation"):
-        raise top.error(
-            "[correlation] applies to the one output of a study without [outputs]", "correlation"
-        )
-    if top.has("outputs") and top.has("conformity"):
-        raise top.error(
-            "[conformity] applies to the one output of a study without [outputs]", "conformity"
-        )
     if top.has("sensitivity") and (top.has("outputs") or top.has("correlation")):
         raise top.error(
             "[sensitivity] applies to the one output of a study without [outputs], and its "
@@ -207,7 +207,13 @@ def read_propagate_study(top: Fields) -> Study:
     if top.has("outputs"):
         outputs_inputs = top.table("inputs")
         assert outputs_inputs is not None
-        return read_outputs_study(top, outputs_inputs, read_inputs(outputs_inputs))
+        study = read_outputs_study(top, outputs_inputs, read_inputs(outputs_inputs))
+        # limits per output; the inputs' correlation is that of a study of one output
+        return dataclasses.replace(
+            study,
+            conformity=read_output_conformity(top, [o.name for o in study.outputs]),
+            correlation=read_correlation(top, study.inputs),
+        )
     text = top.text("model")
     try:
         model = expression(text)
