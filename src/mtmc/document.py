@@ -453,9 +453,9 @@ def check_number(
     """``v`` as a finite float in the range, or ``err(message)`` raised."""
     if isinstance(v, bool) or not isinstance(v, int | float):
         raise err(f"expected a number, got {_typename(v)} {_short(v)}")
-    f = float(v)
+    f = float(v) if isinstance(v, float) or abs(v) <= sys.float_info.max else math.inf
     if not math.isfinite(f):
-        raise err(f"expected a finite number, got {v!r}")
+        raise err(f"expected a finite number, got {_short(v)}")
     lo_ok = low is None or (f > low if open_low else f >= low)
     hi_ok = high is None or (f < high if open_high else f <= high)
     if not (lo_ok and hi_ok):
@@ -467,7 +467,7 @@ def check_number(
             rng = f"{'>' if open_low else '>='} {low:g}"
         else:
             rng = f"{'<' if open_high else '<='} {high:g}"
-        raise err(f"expected a number {rng}, got {v!r}")
+        raise err(f"expected a number {rng}, got {_short(v)}")
     return f
 
 

@@ -177,6 +177,87 @@ def mutate_toml(data: bytes, op: str, seed: int, scale: int = 1) -> bytes:
     return "\n".join(lines).encode()
 
 
+# hostile numbers: pathological distribution parameters, copula dof, numbers in odd scripts
+
+#: Numbers that Python's float() or parser reads but a file's number is not, and numbers at
+#: the ends of the doubles.
+ODD_NUMBERS = (
+    "1_0",
+    "\u0661\u0660",  # Arabic-Indic 10
+    "\uff11\uff10",  # fullwidth 10
+    "\u0967\u0966",  # Devanagari 10
+    "0x10",
+    "1e400",
+    "1" + "0" * 400,
+    "5e-324",
+    "-0",
+    "1e-320",
+    "Infinity",
+    "1.5e3.2",
+)
+#: Distributions whose parameters a reader must refuse or carry: sizes, widths at rounding
+#: level, degrees of freedom at the ends of the doubles, components beyond memory.
+PATHOLOGICAL_DISTS = (
+    "normal(0, 1e300)",
+    "normal(1e300, 1)",
+    "uniform(1, 1.00000000000001)",
+    "uniform(-1e308, 1e308)",
+    "normal(0, 5e-324)",
+    "normal(0, 1, u_rel_u=1e-200)",
+    "normal(0, 1, dof=1e-300)",
+    "t(1e-300)",
+    "t(1e300, 0, 1)",
+    "gamma(1e-300, 1)",
+    "gamma(1e300, 1e-300)",
+    "exponential(1e-320)",
+    "triangular(0, 1e-300, 1e-300)",
+    "arcsine(1, 1.0000000000000002)",
+    "iid(normal(0, 1), 1e9)",
+    "iid(normal(0, 1), 100000000)",
+    "type_a([5e-324, 5e-324, 5e-324])",
+    "type_a([5e-324, 1e-323, 5e-324])",
+    "type_a([1e308, -1e308, 1e308])",
+)
+#: Degrees of freedom of a t copula: below, at and above what the numerics carry.
+COPULA_DOFS = ("1e-300", "1e-3", "0.0999", "0.1", "1e308", "-1", "0", "nan", "inf", '"4"')
+NUMBER_OPS = ("odd_digits", "pathological_dist", "copula_dof")
+_DIST_TEXT = re.compile(r'"[a-z_]+\([^"\n]*\)"')
+
+
+def mutate_numbers(data: bytes, op: str, seed: int, _scale: int = 1) -> bytes:
+    """``data`` (a TOML or CSV file) with one hostile number ``op`` drawn with ``seed``.
+
+    ``odd_digits`` writes a number of :data:`ODD_NUMBERS` in place of one (bare, in a
+    distribution's text, a model or a CSV cell); ``pathological_dist`` puts one of
+    :data:`PATHOLOGICAL_DISTS` in place of a distribution's text; ``copula_dof`` gives a
+    ``[correlation]`` table a t copula of :data:`COPULA_DOFS` (adding the table over the
+    first two inputs where there is none). ``_scale`` is not used (a size of its own).
+    """
+    rnd = random.Random(seed)
+    text = data.decode("utf-8", "replace")
+    if op == "odd_digits":
+        hit: re.Match[str] | None = _pick(rnd, list(_NUMBER.finditer(text)))
+        if hit is not None:
+            text = text[: hit.start()] + rnd.choice(ODD_NUMBERS) + text[hit.end() :]
+    elif op == "pathological_dist":
+        spot: re.Match[str] | None = _pick(rnd, list(_DIST_TEXT.finditer(text)))
+        if spot is not None:
+            dist = rnd.choice(PATHOLOGICAL_DISTS)
+            text = f'{text[: spot.start()]}"{dist}"{text[spot.end() :]}'
+    elif op == "copula_dof":
+        copula = f'copula = {{kind = "t", dof = {rnd.choice(COPULA_DOFS)}}}'
+        if "[correlation]" in text:
+            lines = [ln for ln in text.split("\n") if not ln.startswith("copula")]
+            at = lines.index("[correlation]") + 1
+            text = "\n".join([*lines[:at], copula, *lines[at:]])
+        else:
+            names = re.findall(r"^(\w+) = \"", text.split("[inputs]", 1)[-1], re.M)[:2]
+            if len(names) == 2 and "[inputs]" in text:
+                pair = f'pairs = [["{names[0]}", "{names[1]}", 0.5]]'
+                text = f"{text.rstrip()}\n\n[correlation]\n{pair}\n{copula}\n"
+    return text.encode()
+
+
 CSV_OPS = (
     "bom",
     "separator",
@@ -535,13 +616,13 @@ def mutate(target: Target, data: bytes, ops: list[tuple[str, int]], scale: int =
     """``data`` with each mutation of ``ops`` in turn."""
     fn = mutate_toml if target.kind == "toml" else mutate_csv
     for op, seed in ops:
-        data = fn(data, op, seed, scale)
+        data = (mutate_numbers if op in NUMBER_OPS else fn)(data, op, seed, scale)
     return data
 
 
 def ops_for(target: Target) -> tuple[str, ...]:
     """The mutations that apply to the target's format."""
-    return TOML_OPS if target.kind == "toml" else CSV_OPS
+    return (*TOML_OPS, *NUMBER_OPS) if target.kind == "toml" else (*CSV_OPS, "odd_digits")
 
 
 # ---------------------------------------------------------------------------------------------

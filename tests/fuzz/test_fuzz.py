@@ -16,11 +16,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mtmc_fuzz import (
     CSV_OPS,
+    NUMBER_OPS,
     TOML_OPS,
     Target,
     make_tree,
     mutate,
     mutate_csv,
+    mutate_numbers,
     mutate_toml,
     ops_for,
     run_case,
@@ -162,3 +164,50 @@ def test_identification_numbers_out_of_range(
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert "huge.csv:3:4: field x_lt: expected a finite number" in err
+
+
+# hostile numbers: pathological distribution parameters, copula dof, numbers in odd scripts
+_CHEAP = [t for t in TARGETS if t.cost == 1]
+
+
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    derandomize=EXAMPLES <= 100,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    target=st.sampled_from(_CHEAP),
+    op=st.sampled_from(NUMBER_OPS),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_hostile_numbers_give_a_result_or_one_line(
+    tree: Path, target: Target, op: str, seed: int
+) -> None:
+    if op not in ops_for(target):
+        op = "odd_digits"
+    data = mutate(target, (tree / target.path).read_bytes(), [(op, seed)])
+    outcome = run_case(target, data, tree, timeout=120.0)
+    assert outcome.kind in ("ok", "error"), (target.name, op, seed, outcome)
+
+
+def test_every_number_op_changes_a_study() -> None:
+    study = b'model = "a + b"\n[inputs]\na = "normal(0, 1)"\nb = "uniform(-1, 1)"\n'
+    for op in NUMBER_OPS:
+        assert any(mutate_numbers(study, op, s) != study for s in range(8)), op
+    with_t = mutate_numbers(study, "copula_dof", 1).decode()
+    assert '[correlation]\npairs = [["a", "b", 0.5]]\ncopula = {kind = "t", dof = ' in with_t
+
+
+def test_numbers_the_new_strategies_broke_are_refused_with_their_place() -> None:
+    # a 401-digit TOML integer (OverflowError in check_number)
+    top = loads_toml("[run]\nx = 1" + "0" * 400, "s.toml")
+    with pytest.raises(InputError, match=r"s.toml:2: field run.x: expected a finite number"):
+        top.table("run").number("x")
+    # 1e400 in the assertion database (OverflowError: float infinity to integer)
+    from mtmc.graph.assertions import loads_assertions
+
+    with pytest.raises(ParseError) as info:
+        loads_assertions('p(1, 1e400, 0).\n', file="g.pl")
+    assert (info.value.file, info.value.line) == ("g.pl", 1)
+    assert "expected a finite number at most 1.8e+308 in size, got '1e400'" in str(info.value)

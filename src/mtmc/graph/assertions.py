@@ -53,6 +53,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from mtmc.document import read_number
 from mtmc.errors import GraphError, MtmcError, ParseError
 from mtmc.graph.model import Graph, check_graph
 from mtmc.graph.places import Place, ProbeDefaults, Transition
@@ -127,9 +128,11 @@ def _tokens(text: str, file: str | None) -> list[_Tok]:
     return out
 
 
-def _value(tok: _Tok) -> Any:
+def _value(tok: _Tok, file: str | None) -> Any:
     if tok.kind == "num":
-        v = float(tok.text)
+        v = read_number(
+            tok.text, lambda message: ParseError(message, file=file, line=tok.line, column=tok.col)
+        )
         return int(v) if re.fullmatch(r"[-+]?\d+", tok.text) else v
     if tok.kind == "str":
         return tok.text[1:-1]
@@ -172,7 +175,7 @@ def _facts(text: str, file: str | None) -> list[tuple[str, list[Any], int]]:
                 )
             t = toks[i]
             if t.kind in ("num", "ident", "str"):
-                args.append(_value(t))
+                args.append(_value(t, file))
                 i += 1
             else:
                 raise ParseError(

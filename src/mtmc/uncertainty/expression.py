@@ -303,7 +303,10 @@ class Expression:
                     field=name,
                 )
             values[name] = arr
-        return np.asarray(self._eval(self._tree.body, values))
+        # NaN and inf are the engine's to report, once (nan_policy), on any executor: a
+        # Dask or process worker has no errstate of the caller's to keep NumPy quiet
+        with np.errstate(all="ignore"):
+            return np.asarray(self._eval(self._tree.body, values))
 
     def _eval(self, node: ast.AST, values: dict[str, NDArray[Any]]) -> Any:
         if isinstance(node, ast.Constant):
