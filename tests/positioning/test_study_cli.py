@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import mtmc
 from mtmc.cli.main import main
 from mtmc.errors import InputError
 from mtmc.positioning import SYMBOLS, UncertaintyModel, evaluate_uncertainty, load_positioning_csv
@@ -66,8 +67,26 @@ def test_mtmc_run_writes_the_report_with_the_plot_and_the_notes(tmp_path):
     page = (out / "report.html").read_text(encoding="utf-8")
     assert 'data-plot="positioning"' in page
     assert "Where the GUM and the Monte Carlo disagree" in page
-    for name in ("parameters", "targets", "conformity", "compensation", "compensation_residual"):
+    for name in ("parameters", "targets", "compensation", "compensation_residual"):
         assert (out / f"{name}.csv").is_file()
+    # the decisions are the engine's (JCGM 106), on the quantities, as every kind gives them
+    got = mtmc.load_result(out)
+    decided = {q.name: q.conformity for q in got.quantities if q.conformity is not None}
+    assert set(decided) == {"A", "E", "M", "R", "B"}
+    for name, c in decided.items():
+        q = got.quantity(name)
+        assert c["rule"] == "guarded"
+        assert c["guard_band"] == q.mc.U  # guard_band = "U": each parameter's U
+        assert c["acceptance"] == [None, c["upper"] - q.mc.U]
+        assert c["estimate"] == next(r[3] for r in doc_rows(doc) if r[0] == name)
+        assert c["decision"] in ("conforms", "does not conform")
+        assert set(c) >= {"p_c", "gum_p_c", "gum_basis", "consumer_risk", "producer_risk"}
+    assert "Conformity (JCGM 106)" in page
+
+
+def doc_rows(doc):
+    """The rows of the parameters table of a result.json."""
+    return next(t["rows"] for t in doc["tables"] if t["name"] == "parameters")
 
 
 def test_report_says_when_the_monte_carlo_of_A_differs(tmp_path):
@@ -230,5 +249,7 @@ def test_parameters_of_the_readings_alone_are_one_value_not_validated(capsys):
         assert p["gum"]["u"] == 0.0
         assert p["u"] <= 16 * np.finfo(float).eps * p["estimate"]
         assert (p["verdict"], p["validated"]) == ("not applicable", None), name
+        # its U covers nothing: said so, with the reason, never a bare 0
+        assert p["covers"].startswith(f"not evaluated: {name} is a function of the standard")
     assert params["R_up"]["u"] > 0  # the rounding: the case the rule is for
     assert (params["A"]["verdict"], params["A"]["validated"]) == ("not validated", False)
