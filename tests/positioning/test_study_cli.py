@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -253,3 +254,83 @@ def test_parameters_of_the_readings_alone_are_one_value_not_validated(capsys):
         assert p["covers"].startswith(f"not evaluated: {name} is a function of the standard")
     assert params["R_up"]["u"] > 0  # the rounding: the case the rule is for
     assert (params["A"]["verdict"], params["A"]["validated"]) == ("not validated", False)
+
+
+def test_terminal_json_and_report_give_one_estimate_and_say_what_U_covers(tmp_path, capsys):
+    from mtmc.uncertainty.tolerance import round_to_uncertainty
+
+    out_dir = tmp_path / "res"
+    argv = ["positioning", "evaluate", str(DATA), "--study", str(STUDY), "-n", "4000", "-s", "3"]
+    assert main([*argv, "-o", str(out_dir)]) == 0
+    text = capsys.readouterr().out
+    assert main([*argv, "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    page = (out_dir / "report.html").read_text(encoding="utf-8")
+    readings = evaluate_uncertainty(load_positioning_csv(DATA), UncertaintyModel(), 10)
+    for sym in SYMBOLS:
+        p = js["parameters"][sym]
+        rep = p["reported"]
+        # the headline is the definition on the readings (the shipped model corrects
+        # nothing on average: the readings' value to the rounding of the corrections)
+        assert p["estimate"] == pytest.approx(p["readings"], abs=1e-9)
+        assert p["estimate"] == pytest.approx(readings.estimate(sym), abs=1e-9)
+        assert p["mc_mean"] != p["estimate"]
+        # rounded to the digits of its U (JCGM 100 §7.2.6), the same text everywhere
+        assert (rep["estimate"], rep["U"]) == round_to_uncertainty(p["estimate"], p["U"])
+        assert re.search(rf"^\s+{sym}\s+{re.escape(rep['estimate'])}\s", text, re.M), sym
+        assert f"{sym} = {rep['estimate']} µm, U = {rep['U']} µm" in page
+        assert p["covers"] == "instrument and environment + scatter of the means" or (
+            sym in ("R_up", "R_down") and p["covers"] == "instrument and environment"
+        )
+    line = js["covers"]
+    assert line.startswith("U covers: instrument and environment (air_temperature")
+    assert "scatter of s not evaluated (type_a = 'means')" in line
+    assert line in text
+    assert line.replace("'", "&#39;") in page
+    # the decisions (JCGM 106, the engine's rule) in the terminal as in the JSON
+    for sym, c in js["conformity"].items():
+        assert f"conformity of {sym} (JCGM 106): {c['text']}" in text
+        assert c["estimate"] == js["parameters"][sym]["estimate"]
+
+
+def test_estimates_in_mm_are_printed_to_the_digits_of_their_U(tmp_path, capsys):
+    # the shipped readings in mm: U is a few 1e-4 mm, so the estimate carries as many
+    # decimals (not a fixed 3, which printed A = 0.008 beside U = 0.00054)
+    rows = DATA.read_text(encoding="utf-8").splitlines()
+    head = next(i for i, r in enumerate(rows) if r.startswith("target"))
+    mm = rows[: head + 1]
+    for r in rows[head + 1 :]:
+        t, run, d, x = r.split(",")
+        mm.append(f"{t},{run},{d},{float(x) / 1000.0!r}")
+    data = tmp_path / "mm.csv"
+    data.write_text("\n".join(mm) + "\n", encoding="utf-8")
+    argv = ["positioning", "evaluate", str(data), "--units", "mm,mm", "-n", "3000", "-s", "1"]
+    assert main([*argv, "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    a = js["parameters"]["A"]
+    assert a["U"] < 1e-3
+    decimals = len(a["reported"]["U"].partition(".")[2])
+    assert decimals >= 4
+    assert len(a["reported"]["estimate"].partition(".")[2]) == decimals
+    assert main(argv) == 0
+    assert re.search(rf"A\s+{re.escape(a['reported']['estimate'])}\s", capsys.readouterr().out)
+
+
+def test_direction_words_from_the_study_and_the_command_line(tmp_path, capsys):
+    text = DATA.read_text(encoding="utf-8").replace(",+,", ",Hin,").replace(",-,", ",Rueck,")
+    data = tmp_path / "positioning_x.csv"
+    data.write_text(text, encoding="utf-8")
+    argv = ["positioning", "evaluate", str(data), "-n", "500", "-s", "1", "--json"]
+    assert main(argv) == 2
+    assert "expected a direction, got 'Hin'" in capsys.readouterr().err
+    assert main([*argv, "--directions", "Hin=up,Rueck=down"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert main(["positioning", "evaluate", str(DATA), "-n", "500", "-s", "1", "--json"]) == 0
+    assert got["parameters"] == json.loads(capsys.readouterr().out)["parameters"]
+    study = _edit(tmp_path, "[run]", '[directions]\nHin = "up"\nRueck = "down"\n\n[run]')
+    data.write_text(text, encoding="utf-8")  # _edit copied the shipped CSV over it
+    assert load_study(study).test.deviations.tolist() == load_study(STUDY).test.deviations.tolist()
+    bad = _edit(tmp_path, "[run]", '[directions]\nHin = "sideways"\n\n[run]')
+    with pytest.raises(InputError, match="sideways") as exc:
+        load_study(bad)
+    assert exc.value.field == "directions.Hin"

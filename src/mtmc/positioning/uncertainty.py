@@ -725,8 +725,10 @@ def _index(symbol: str) -> int:
 
 
 def block_trials(test: PositioningTest) -> int:
-    """Trials per evaluation block: 8192, or the largest power of two within
-    :data:`BLOCK_READINGS` readings of the test (``2 m n`` a trial).
+    """Trials per evaluation block: 8192, or fewer for a large test.
+
+    The largest power of two of trials within :data:`BLOCK_READINGS` readings of the
+    test (``2 m n`` a trial), where that is fewer than 8192.
 
     Examples
     --------

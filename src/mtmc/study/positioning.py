@@ -215,6 +215,7 @@ class PositioningStudy(Study):
                 "type_a": self.model.type_a,
                 "notes": notes,
                 "covers": covers_line,
+                "covers_by": covers,
                 "warnings": [o.text(unit_label(test.target_unit), unit) for o in outliers(test)],
             }
         }
