@@ -192,7 +192,7 @@ def _print(result: Any, out: dict[str, Any]) -> None:
         box=box.SIMPLE_HEAD,
     )
     for col in ("", "estimate", "U", "MC interval", "MC mean", "GUM U", "GUM §8"):
-        table.add_column(col, justify="right" if col else "left", no_wrap=True)
+        table.add_column(col, justify="right" if col else "left", no_wrap=col != "MC interval")
     for name, p in out["parameters"].items():
         rep = p["reported"]
         lo, hi = p["interval"]

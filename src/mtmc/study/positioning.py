@@ -6,11 +6,13 @@ material in ``[environment]``, the laser in ``[instrument]``, the Type A evaluat
 ``[uncertainty]``, tolerances in ``[tolerances]`` (``docs/positioning.md``). The run is
 :func:`mtmc.positioning.evaluate_uncertainty`: each of the twelve parameters of the axis
 (``A`` … ``B_mean``) becomes a quantity with its Monte Carlo values, the GUM beside them
-and its budget; the tables give the parameters (from the readings, the GUM, the Monte
-Carlo), the statistics at each target, the decision against each tolerance with its
-conformance probability, and the pitch-error compensation table with the residual it
-leaves; ``positioning`` in ``result.json`` holds the readings for the report's plot and
-the notes on where the GUM and the Monte Carlo disagree and why.
+and its budget, headed by its estimate from the readings (ISO 230-2's definition) and, where
+``[tolerances]`` gives a limit, the decision by the engine's JCGM 106 rule
+(:mod:`mtmc.uncertainty.conformity`); the tables give the parameters (the estimate, the Monte
+Carlo's U, interval and mean, the GUM's U, what U covers), the statistics at each target, and
+the pitch-error compensation table with the residual it leaves; ``positioning`` in
+``result.json`` holds the readings for the report's plot, what U covers, the runs Grubbs'
+test flags (kept), and the notes on where the GUM and the Monte Carlo disagree and why.
 """
 
 from __future__ import annotations
