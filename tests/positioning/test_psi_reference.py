@@ -122,3 +122,24 @@ def test_the_warning_reaches_the_terminal_and_the_json(capsys):
     out = json.loads(capsys.readouterr().out)
     assert len(out["warnings"]) == 2
     assert "Grubbs' test" in out["warnings"][0]
+
+
+def test_the_report_and_the_notes_of_the_psi_test(tmp_path, capsys):
+    out = tmp_path / "psi"
+    argv = ["positioning", "evaluate", str(DATA), "-n", "4000", "-s", "2", "-o", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    page = (out / "report.html").read_text(encoding="utf-8")
+    assert "Runs far from the others (kept)" in page
+    assert "run 1 at P = 15 mm ↑ reads 100.347 µm" in page
+    assert "U covers: instrument and environment not evaluated" in page
+    # R↑ on the readings alone: "not evaluated" with its reason, never a bare U = 0
+    assert "R_up = 230.364 µm, U not evaluated: R_up is a function of" in page
+    assert "R_up = 230.364 µm, U = 0" not in page
+    # one symbol for the micrometre in every note (the near-tie note of E↑ names a gap)
+    doc = json.loads((out / "result.json").read_text(encoding="utf-8"))
+    notes = doc["positioning"]["notes"]
+    assert any("comes within" in n for n in notes)
+    for n in notes:
+        assert " um" not in n, n
+    assert " um " not in text
