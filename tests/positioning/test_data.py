@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from mtmc.errors import InputError
-from mtmc.positioning import load_positioning_csv, loads_positioning_csv, parse_units, reading_times
+from mtmc.positioning import (
+    load_positioning_csv,
+    loads_positioning_csv,
+    parse_directions,
+    parse_units,
+    reading_times,
+)
 
 GOOD = """# a comment
 target,run,direction,deviation,temperature
@@ -92,3 +98,63 @@ def test_reading_times_follow_the_standard_cycle():
     np.testing.assert_allclose(order, np.arange(12) / 11)  # each reading once
     assert tau[0, 0, 0] == 0.0
     assert tau[2, 0, 0] < tau[2, 0, 1] < tau[0, 0, 1] < tau[0, 1, 0]
+
+
+@pytest.mark.parametrize(
+    ("up", "down"),
+    [("Forward", "Reverse"), ("fwd", "bwd"), ("up", "down"), ("+", "−"), ("1", "-1"), ("↑", "↓")],
+)
+def test_the_common_direction_words_read_without_a_mapping(up, down):
+    text = GOOD.replace(",+,", f",{up},").replace(",up,", f",{up},")
+    text = text.replace(",-,", f",{down},").replace(",down,", f",{down},")
+    t = loads_positioning_csv(text, "g.csv")
+    np.testing.assert_array_equal(t.deviations, loads_positioning_csv(GOOD).deviations)
+
+
+def test_a_mapping_names_other_words():
+    text = GOOD.replace(",+,", ",Hin,").replace(",up,", ",Hin,")
+    text = text.replace(",-,", ",Rück,").replace(",down,", ",Rück,")
+    with pytest.raises(InputError, match="expected a direction, got 'Hin'") as exc:
+        loads_positioning_csv(text, "g.csv")
+    assert (exc.value.line, exc.value.field) == (3, "direction")
+    good = loads_positioning_csv(GOOD).deviations
+    for mapping in ("Hin=up,Rück=down", {"hin": "up", "RÜCK": "-"}):
+        t = loads_positioning_csv(text, "g.csv", directions=mapping)
+        np.testing.assert_array_equal(t.deviations, good)
+    # a word of the defaults can be turned round
+    flipped = loads_positioning_csv(GOOD, directions="+=down,-=up,up=down,down=up")
+    np.testing.assert_array_equal(flipped.deviations, good[:, :, ::-1])
+    for bad in ("Hin", "Hin=sideways", "=up"):
+        with pytest.raises(InputError, match="WORD=up") as exc:
+            parse_directions(bad)
+        assert exc.value.field == "directions"
+
+
+def test_completeness_is_checked_from_the_rows_in_bounded_memory():
+    # 100 000 rows, each a new target and a new run: the product of the labels would be an
+    # array of 10¹⁰ readings (149 GiB); the check needs memory of the order of the rows
+    import tracemalloc
+
+    rows = ["target,run,direction,deviation"]
+    rows += [f"{k},{k + 1},+,0.5" for k in range(100_000)]
+    text = "\n".join(rows) + "\n"
+    tracemalloc.start()
+    try:
+        with pytest.raises(InputError, match="no reading at target 0 mm, run 1, direction down"):
+            loads_positioning_csv(text, "big.csv")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    # the lines of the text and an array of each column (32 MB measured); the product of
+    # the labels would be 150 GB
+    assert peak < 100e6
+    # a complete test of 200 targets × 50 runs (20 000 rows) reads, laid out by label
+    rng = np.random.default_rng(5)
+    x = rng.standard_normal((200, 50, 2))
+    rows = ["target,run,direction,deviation"]
+    order = rng.permutation(x.size)
+    for flat in order:
+        i, j, d = np.unravel_index(flat, x.shape)
+        rows.append(f"{i},{j + 1},{'+-'[d]},{float(x[i, j, d])!r}")
+    t = loads_positioning_csv("\n".join(rows), "ok.csv")
+    np.testing.assert_array_equal(t.deviations, x)  # bit for bit: repr round-trips

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+import mtmc
 from mtmc.cli.main import main
 from mtmc.errors import InputError
 from mtmc.positioning import SYMBOLS, UncertaintyModel, evaluate_uncertainty, load_positioning_csv
@@ -66,8 +68,26 @@ def test_mtmc_run_writes_the_report_with_the_plot_and_the_notes(tmp_path):
     page = (out / "report.html").read_text(encoding="utf-8")
     assert 'data-plot="positioning"' in page
     assert "Where the GUM and the Monte Carlo disagree" in page
-    for name in ("parameters", "targets", "conformity", "compensation", "compensation_residual"):
+    for name in ("parameters", "targets", "compensation", "compensation_residual"):
         assert (out / f"{name}.csv").is_file()
+    # the decisions are the engine's (JCGM 106), on the quantities, as every kind gives them
+    got = mtmc.load_result(out)
+    decided = {q.name: q.conformity for q in got.quantities if q.conformity is not None}
+    assert set(decided) == {"A", "E", "M", "R", "B"}
+    for name, c in decided.items():
+        q = got.quantity(name)
+        assert c["rule"] == "guarded"
+        assert c["guard_band"] == q.mc.U  # guard_band = "U": each parameter's U
+        assert c["acceptance"] == [None, c["upper"] - q.mc.U]
+        assert c["estimate"] == next(r[3] for r in doc_rows(doc) if r[0] == name)
+        assert c["decision"] in ("conforms", "does not conform")
+        assert set(c) >= {"p_c", "gum_p_c", "gum_basis", "consumer_risk", "producer_risk"}
+    assert "Conformity (JCGM 106)" in page
+
+
+def doc_rows(doc):
+    """The rows of the parameters table of a result.json."""
+    return next(t["rows"] for t in doc["tables"] if t["name"] == "parameters")
 
 
 def test_report_says_when_the_monte_carlo_of_A_differs(tmp_path):
@@ -230,5 +250,87 @@ def test_parameters_of_the_readings_alone_are_one_value_not_validated(capsys):
         assert p["gum"]["u"] == 0.0
         assert p["u"] <= 16 * np.finfo(float).eps * p["estimate"]
         assert (p["verdict"], p["validated"]) == ("not applicable", None), name
+        # its U covers nothing: said so, with the reason, never a bare 0
+        assert p["covers"].startswith(f"not evaluated: {name} is a function of the standard")
     assert params["R_up"]["u"] > 0  # the rounding: the case the rule is for
     assert (params["A"]["verdict"], params["A"]["validated"]) == ("not validated", False)
+
+
+def test_terminal_json_and_report_give_one_estimate_and_say_what_U_covers(tmp_path, capsys):
+    from mtmc.uncertainty.tolerance import round_to_uncertainty
+
+    out_dir = tmp_path / "res"
+    argv = ["positioning", "evaluate", str(DATA), "--study", str(STUDY), "-n", "4000", "-s", "3"]
+    assert main([*argv, "-o", str(out_dir)]) == 0
+    text = capsys.readouterr().out
+    assert main([*argv, "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    page = (out_dir / "report.html").read_text(encoding="utf-8")
+    readings = evaluate_uncertainty(load_positioning_csv(DATA), UncertaintyModel(), 10)
+    for sym in SYMBOLS:
+        p = js["parameters"][sym]
+        rep = p["reported"]
+        # the headline is the definition on the readings (the shipped model corrects
+        # nothing on average: the readings' value to the rounding of the corrections)
+        assert p["estimate"] == pytest.approx(p["readings"], abs=1e-9)
+        assert p["estimate"] == pytest.approx(readings.estimate(sym), abs=1e-9)
+        assert p["mc_mean"] != p["estimate"]
+        # rounded to the digits of its U (JCGM 100 §7.2.6), the same text everywhere
+        assert (rep["estimate"], rep["U"]) == round_to_uncertainty(p["estimate"], p["U"])
+        assert re.search(rf"^\s+{sym}\s+{re.escape(rep['estimate'])}\s", text, re.M), sym
+        assert f"{sym} = {rep['estimate']} µm, U = {rep['U']} µm" in page
+        assert p["covers"] == "instrument and environment + scatter of the means" or (
+            sym in ("R_up", "R_down") and p["covers"] == "instrument and environment"
+        )
+    line = js["covers"]
+    assert line.startswith("U covers: instrument and environment (air_temperature")
+    assert "scatter of s not evaluated (type_a = 'means')" in line
+    assert line in text
+    assert line.replace("'", "&#39;") in page
+    # the decisions (JCGM 106, the engine's rule) in the terminal as in the JSON
+    for sym, c in js["conformity"].items():
+        assert f"conformity of {sym} (JCGM 106): {c['text']}" in text
+        assert c["estimate"] == js["parameters"][sym]["estimate"]
+
+
+def test_estimates_in_mm_are_printed_to_the_digits_of_their_U(tmp_path, capsys):
+    # the shipped readings in mm: U is a few 1e-4 mm, so the estimate carries as many
+    # decimals (not a fixed 3, which printed A = 0.008 beside U = 0.00054)
+    rows = DATA.read_text(encoding="utf-8").splitlines()
+    head = next(i for i, r in enumerate(rows) if r.startswith("target"))
+    mm = rows[: head + 1]
+    for r in rows[head + 1 :]:
+        t, run, d, x = r.split(",")
+        mm.append(f"{t},{run},{d},{float(x) / 1000.0!r}")
+    data = tmp_path / "mm.csv"
+    data.write_text("\n".join(mm) + "\n", encoding="utf-8")
+    argv = ["positioning", "evaluate", str(data), "--units", "mm,mm", "-n", "3000", "-s", "1"]
+    assert main([*argv, "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    a = js["parameters"]["A"]
+    assert a["U"] < 1e-3
+    decimals = len(a["reported"]["U"].partition(".")[2])
+    assert decimals >= 4
+    assert len(a["reported"]["estimate"].partition(".")[2]) == decimals
+    assert main(argv) == 0
+    assert re.search(rf"A\s+{re.escape(a['reported']['estimate'])}\s", capsys.readouterr().out)
+
+
+def test_direction_words_from_the_study_and_the_command_line(tmp_path, capsys):
+    text = DATA.read_text(encoding="utf-8").replace(",+,", ",Hin,").replace(",-,", ",Rueck,")
+    data = tmp_path / "positioning_x.csv"
+    data.write_text(text, encoding="utf-8")
+    argv = ["positioning", "evaluate", str(data), "-n", "500", "-s", "1", "--json"]
+    assert main(argv) == 2
+    assert "expected a direction, got 'Hin'" in capsys.readouterr().err
+    assert main([*argv, "--directions", "Hin=up,Rueck=down"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert main(["positioning", "evaluate", str(DATA), "-n", "500", "-s", "1", "--json"]) == 0
+    assert got["parameters"] == json.loads(capsys.readouterr().out)["parameters"]
+    study = _edit(tmp_path, "[run]", '[directions]\nHin = "up"\nRueck = "down"\n\n[run]')
+    data.write_text(text, encoding="utf-8")  # _edit copied the shipped CSV over it
+    assert load_study(study).test.deviations.tolist() == load_study(STUDY).test.deviations.tolist()
+    bad = _edit(tmp_path, "[run]", '[directions]\nHin = "sideways"\n\n[run]')
+    with pytest.raises(InputError, match="sideways") as exc:
+        load_study(bad)
+    assert exc.value.field == "directions.Hin"

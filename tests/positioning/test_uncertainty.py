@@ -12,12 +12,12 @@ from mtmc.positioning import (
     SYMBOLS,
     PositioningTest,
     UncertaintyModel,
-    conformity,
+    coverage,
     disagreement_notes,
     evaluate_uncertainty,
     positioning_model,
 )
-from mtmc.uncertainty import MonteCarloResult, endpoint_std_error, validate
+from mtmc.uncertainty import endpoint_std_error, validate
 
 P = np.linspace(0.0, 1000.0, 6)
 
@@ -158,14 +158,51 @@ def test_the_full_model_runs_and_notes_the_cosine_error():
         res.monte_carlo("Q")
 
 
-def test_conformity():
-    mc = MonteCarloResult.from_samples(np.linspace(0.0, 10.0, 1001), seed=None)
-    c = conformity(mc, None, 5.0)
-    assert c["probability"] == 501 / 1001
-    assert c["passed"] is True  # mean 5.0 at the limit
-    assert conformity(mc, None, 5.0, 0.5)["passed"] is False
-    with pytest.raises(InputError, match="guard band"):
-        conformity(mc, None, 5.0, -1.0)
+def test_what_U_covers_and_what_is_not_evaluated():
+    test = _scale_test()
+    # readings alone, means only: R↑ and R↓ are functions of s alone, which nothing moves
+    res = evaluate_uncertainty(test, UncertaintyModel(), 2000, seed=1)
+    line, per = coverage(res)
+    assert line.startswith("U covers: instrument and environment not evaluated")
+    assert "+ scatter of the means (Type A, t with ν = 4)" in line
+    assert "scatter of s not evaluated (type_a = 'means')" in line
+    for sym in ("R_up", "R_down"):
+        assert per[sym].startswith("not evaluated: R")
+        assert "type_a = 'means-and-s'" in per[sym]
+        assert np.ptp(res.monte_carlo(sym).samples) == 0  # the reason is the numbers'
+    assert per["E"] == per["M"] == "scatter of the means"
+    assert per["A"] == "scatter of the means"
+    # with the scatter of s and an instrument input, every parameter is evaluated
+    model = UncertaintyModel(type_a="means-and-s", **MATERIAL)
+    res = evaluate_uncertainty(test, model, 2000, seed=1)
+    line, per = coverage(res)
+    assert "instrument and environment (material_temperature, expansion)" in line
+    assert "+ scatter of s (Type A, χ² with ν = 4)" in line
+    assert per["R_up"] == "instrument and environment + scatter of s"
+    assert per["A"] == "instrument and environment + scatter of the means + scatter of s"
+    assert not any(v.startswith("not evaluated") for v in per.values())
+    # no scatter at all: the means' parameters are not evaluated either
+    res = evaluate_uncertainty(
+        test, UncertaintyModel(type_a="none", drift="normal(0, 0.5)"), 500, seed=1
+    )
+    line, per = coverage(res)
+    assert "scatter of the means not evaluated (type_a = 'none')" in line
+    assert per["E"] == "instrument and environment"
+
+
+def test_the_estimate_is_the_definition_applied_to_the_readings():
+    test = _scale_test()
+    res = evaluate_uncertainty(test, UncertaintyModel(**MATERIAL), 2000, seed=1)
+    from mtmc.positioning import evaluate
+
+    readings = evaluate(test)
+    for sym in SYMBOLS:
+        # the model corrects nothing on average (material compensated at its
+        # expectations): the estimate is the readings' value to rounding of the
+        # corrections (a few 1e-15 of values of size 10)
+        assert res.estimate(sym) == pytest.approx(float(getattr(readings, sym)), abs=1e-12)
+    # the Monte Carlo mean of a maximum lies above it
+    assert res.monte_carlo("E").estimate != res.estimate("E")
 
 
 def test_model_errors():
@@ -198,3 +235,16 @@ def test_rotary_axis():
     assert exc.value.field == "material_temperature"
     res = evaluate_uncertainty(test, UncertaintyModel(drift="uniform(-0.5, 0.5)"), 2000, seed=1)
     assert res.mc.samples.shape == (2000, 12)
+
+
+def test_a_large_test_runs_in_smaller_blocks_with_the_same_numbers():
+    from mtmc.positioning.uncertainty import BLOCK_READINGS, block_trials
+
+    x = np.random.default_rng(2).normal(0.0, 1.0, (64, 40, 2))
+    test = PositioningTest(np.arange(64.0), x)
+    assert block_trials(test) == 512  # 2**22 // 5120 = 819 readings → 512
+    assert 512 * 2 * 64 * 40 <= BLOCK_READINGS
+    small = evaluate_uncertainty(test, UncertaintyModel(), 1200, seed=3)
+    big = evaluate_uncertainty(test, UncertaintyModel(), 1200, seed=3, block_size=8192)
+    # the engine's draws do not depend on the evaluation blocks: bit for bit
+    np.testing.assert_array_equal(small.mc.samples, big.mc.samples)

@@ -372,3 +372,23 @@ def test_bad_arguments_name_their_field(kwargs, field, match):
     with pytest.raises(InputError, match=match) as info:
         conformity(gum_result(1.0, 0.1), **kwargs)
     assert info.value.field == field
+
+
+def test_a_guard_band_given_as_a_width_and_a_decision_on_another_estimate():
+    # w given in the unit of the result: A_U = T_U - w exactly, whatever u; the rule
+    # decides on the estimate given, p_c stays that of the PDF (the values)
+    mc = MonteCarloResult.from_samples(np.linspace(0.0, 10.0, 1001), seed=None)
+    c = conformity(mc, upper=8.0, rule="guarded", guard_band=1.5)
+    assert (c.acceptance_upper, c.guard_upper, c.guard_band) == (6.5, 1.5, 1.5)
+    assert c.conforms  # the mean 5.0 is below 6.5
+    assert c.p_c == 801 / 1001  # the values at or below 8
+    assert c.text.endswith("rule: guarded acceptance, w = 1.5")
+    assert c.to_dict()["guard_band"] == 1.5
+    assert c.guard == pytest.approx(1.5 / (2 * float(mc.u)), rel=1e-15)
+    d = conformity(mc, upper=8.0, rule="guarded", guard_band=1.5, estimate=7.0)
+    assert (d.conforms, d.estimate, d.p_c) == (False, 7.0, c.p_c)
+    assert conformity(mc, upper=8.0, estimate=7.9).conforms  # simple acceptance
+    with pytest.raises(InputError, match="guard_band"):
+        conformity(mc, upper=8.0, rule="guarded", guard=1.0, guard_band=1.5)
+    with pytest.raises(InputError, match="simple acceptance has none"):
+        conformity(mc, upper=8.0, guard_band=1.5)

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import typer
+from rich import box
 from rich.console import Console
 from rich.table import Table
 
@@ -71,15 +72,23 @@ def _study(
     columns: dict[str, str] | None,
     axis: str | None,
     type_a: str | None,
+    directions: str | None = None,
 ) -> Any:
     from mtmc.positioning import UncertaintyModel, load_positioning_csv
     from mtmc.study.positioning import positioning_study
 
     if study_file is None:
         model = {} if type_a is None else {"type_a": type_a}
-        return positioning_study(data, units=units, columns=columns, axis=axis or "X", model=model)
+        return positioning_study(
+            data,
+            units=units,
+            columns=columns,
+            directions=directions,
+            axis=axis or "X",
+            model=model,
+        )
     s = load_study_of_kind(study_file, "positioning")
-    test = load_positioning_csv(data, columns=columns, units=units)
+    test = load_positioning_csv(data, columns=columns, units=units, directions=directions)
     model = s.model if type_a is None else dataclasses.replace(s.model, type_a=type_a)
     if not isinstance(model, UncertaintyModel):  # pragma: no cover - the study's own type
         raise InputError("not an uncertainty model", field="model")
@@ -101,6 +110,12 @@ def evaluate_cmd(
     ),
     columns: str | None = typer.Option(
         None, "--columns", help="The file's column names: target=Position,deviation=Error,..."
+    ),
+    directions: str | None = typer.Option(
+        None,
+        "--directions",
+        help="The file's words of the two directions beyond +/-, up/down, Forward/Reverse, "
+        "fwd/bwd, 1/-1: Hin=up,Rueck=down.",
     ),
     axis: str | None = typer.Option(
         None, "--axis", help="Axis letter (default X, or the study's)."
@@ -133,7 +148,7 @@ def evaluate_cmd(
     from mtmc.verification.compensation import dump_compensation
 
     try:
-        s = _study(data, study_file, units, parse_columns(columns), axis, type_a)
+        s = _study(data, study_file, units, parse_columns(columns), axis, type_a, directions)
         with progress_bar(f"{data.name}: Monte Carlo", progress) as bar:
             result = s.run(
                 trials=trials,
@@ -154,33 +169,65 @@ def evaluate_cmd(
     if as_json:
         print_json(out)
         return
-    unit = out["unit"]
-    table = Table(
-        title=f"{result.title} ({result.trials} trials, seed {result.seed})",
-        caption=f"U: expanded uncertainty in {unit} at the coverage probability p",
-    )
-    pct = f"p = {100 * result.p:g} %"
-    cols = ("parameter", "estimate", f"U (MC, {pct})", "MC interval", f"U (GUM, {pct})")
-    for col in (*cols, "GUM §8"):
-        table.add_column(col, justify="left" if col == "parameter" else "right")
-    for q in result.quantities:
-        p = out["parameters"][q.name]
-        lo, hi = p["interval"]
-        table.add_row(
-            q.name,
-            f"{p['estimate']:.3f} {unit}",
-            q.reported.U,
-            f"[{lo:.3f}, {hi:.3f}]",
-            "" if p["gum"]["U"] is None else f"{p['gum']['U']:.3g}",
-            "" if q.validation is None else q.validation.verdict,
-        )
-    console = Console()
-    console.print(table)
-    for line in run_lines(result.extra.get("run")):
-        typer.echo(line)
-    for note in out["notes"]:
-        typer.echo(f"note: {note}")
+    _print(result, out)
     if compensation is not None:
         typer.echo(f"compensation table: {compensation}")
     if outdir is not None:
         typer.echo(f"report: {outdir / 'report.html'}")
+
+
+def _decimals(text: str) -> int:
+    """The decimal places of a number printed as text (``"0.0054"`` → 4)."""
+    return len(text.partition(".")[2])
+
+
+def _print(result: Any, out: dict[str, Any]) -> None:
+    """The table of the parameters, what U covers, the decisions, the notes and warnings."""
+    unit = out["unit"]
+    table = Table(
+        title=f"{result.title} ({result.trials} trials, seed {result.seed})",
+        caption=f"estimate: ISO 230-2's definition applied to the readings; U, interval "
+        f"and mean: Monte Carlo, at p = {100 * result.p:g} %; in {unit}; GUM §8: the GUM "
+        "validated by the Monte Carlo (JCGM 101 §8)",
+        box=box.SIMPLE_HEAD,
+    )
+    for col in ("", "estimate", "U", "MC interval", "MC mean", "GUM U", "GUM §8"):
+        table.add_column(col, justify="right" if col else "left", no_wrap=col != "MC interval")
+    for name, p in out["parameters"].items():
+        rep = p["reported"]
+        lo, hi = p["interval"]
+        if p["covers"].startswith("not evaluated"):
+            cells = ("—", "not evaluated", "")
+        elif p["U"] > 0:
+            dec = _decimals(rep["U"])
+            cells = (rep["U"], f"[{lo:.{dec}f}, {hi:.{dec}f}]", f"{p['mc_mean']:.{dec}f}")
+        else:  # evaluated, but the interval at p is one value (said below the table)
+            cells = ("0", "one value", f"{p['mc_mean']:.6g}")
+        table.add_row(
+            name,
+            rep["estimate"],
+            *cells,
+            "" if p["gum"]["U"] is None else f"{p['gum']['U']:.2g}",
+            {True: "yes", False: "no", None: "n/a"}[p["validated"]],
+        )
+    Console().print(table)
+    typer.echo(out["covers"])
+    for name, p in out["parameters"].items():
+        if p["covers"].startswith("not evaluated") or p["U"] == 0:
+            typer.echo(f"{name}: {p['covers']}")
+    for name, c in out.get("conformity", {}).items():
+        typer.echo(
+            f"conformity of {name} (JCGM 106): {c['text']}; {name} = {c['estimate']:.6g} "
+            f"{unit} against T = {c['upper']:g} {unit}"
+            + (
+                f", acceptance limit {c['acceptance'][1]:.6g} {unit}"
+                if c["rule"] == "guarded" and c["acceptance"][1] is not None
+                else ""
+            )
+        )
+    for line in run_lines(result.extra.get("run")):
+        typer.echo(line)
+    for note in out["notes"]:
+        typer.echo(f"note: {note}")
+    for warning in out["warnings"]:
+        typer.echo(f"warning: {warning}")

@@ -12,8 +12,10 @@ stated in it; targets are in mm (deg for a rotary axis).
 
 The CSV file (:func:`load_positioning_csv`) has one row per reading under the header
 ``target,run,direction,deviation`` (``columns`` maps other names, a vendor's export);
-``direction`` is ``+``/``up``/``↑`` or ``-``/``down``/``↓``; other columns are ignored;
-lines starting with ``#`` are comments; the separator is a comma, a semicolon or a tab.
+``direction`` is one of the words of :data:`DIRECTION_WORDS` (``+``/``-``, ``up``/``down``,
+``Forward``/``Reverse``, ``fwd``/``bwd``, ``1``/``-1``, …; case-insensitive), or of the
+``directions`` mapping given; other columns are ignored; lines starting with ``#`` are
+comments; the separator is a comma, a semicolon or a tab.
 """
 
 from __future__ import annotations
@@ -33,9 +35,11 @@ from mtmc.errors import InputError
 __all__ = [
     "COLUMNS",
     "DEVIATION_UNITS",
+    "DIRECTION_WORDS",
     "PositioningTest",
     "load_positioning_csv",
     "loads_positioning_csv",
+    "parse_directions",
     "parse_units",
     "reading_times",
 ]
@@ -47,7 +51,91 @@ DEVIATION_UNITS: Mapping[str, tuple[str, ...]] = {
     "mm": ("um", "mm"),
     "deg": ("arcsec", "urad"),
 }
-_DIRECTIONS = {"+": 0, "up": 0, "↑": 0, "-": 1, "down": 1, "↓": 1, "−": 1}
+#: The words of the positive (``up``) and negative (``down``) direction that a file may use
+#: without a ``directions`` mapping (compared case-insensitively): the signs, arrows and
+#: numbers, and the words of the common laser and controller exports.
+DIRECTION_WORDS: Mapping[str, tuple[str, ...]] = {
+    "up": ("+", "+1", "1", "↑", "up", "pos", "positive", "forward", "fwd", "fw", "f"),
+    "down": (
+        "-",
+        "−",
+        "-1",
+        "−1",
+        "↓",
+        "down",
+        "neg",
+        "negative",
+        "reverse",
+        "rev",
+        "backward",
+        "bwd",
+        "bw",
+        "back",
+        "b",
+        "r",
+    ),
+}
+_SIDES = {"up": 0, "down": 1, "+": 0, "-": 1, "↑": 0, "↓": 1}
+_DIRECTIONS = {w: _SIDES[side] for side, words in DIRECTION_WORDS.items() for w in words}
+
+
+def parse_directions(
+    mapping: str | Mapping[str, str] | None, field: str = "directions"
+) -> dict[str, int]:
+    """The direction of each word a file may use: the defaults and ``mapping`` over them.
+
+    Parameters
+    ----------
+    mapping : str, mapping or None
+        The file's words: ``{"Hin": "up", "Rück": "down"}`` or the text
+        ``"Hin=up,Rück=down"``; each side ``up`` (or ``+``, ``↑``) or ``down`` (``-``,
+        ``↓``). A word given here takes the place of the same word of
+        :data:`DIRECTION_WORDS`.
+    field : str
+        The field named in an error.
+
+    Returns
+    -------
+    dict of str to int
+        Lower-case word to 0 (↑) or 1 (↓).
+
+    Examples
+    --------
+    >>> d = parse_directions("Hin=up,Rück=down")
+    >>> d["hin"], d["rück"], d["forward"], d["-1"]
+    (0, 1, 0, 1)
+
+    Raises
+    ------
+    InputError
+        On a pair that is not ``WORD=up`` or ``WORD=down``.
+    """
+    out = dict(_DIRECTIONS)
+    if mapping is None:
+        return out
+    pairs: list[tuple[str, str]]
+    if isinstance(mapping, str):
+        pairs = []
+        for part in mapping.split(","):
+            word, sep, side = part.partition("=")
+            if not sep:
+                raise InputError(
+                    f"expected WORD=up or WORD=down pairs, e.g. Forward=up, got {part!r}",
+                    field=field,
+                )
+            pairs.append((word, side))
+    else:
+        pairs = [(str(k), str(v)) for k, v in mapping.items()]
+    for word, side in pairs:
+        w, sd = word.strip().lower(), side.strip().lower()
+        if not w or sd not in _SIDES:
+            raise InputError(
+                f"expected WORD=up or WORD=down (the positive or the negative direction), "
+                f"got {word.strip()!r} = {side.strip()!r}",
+                field=field,
+            )
+        out[w] = _SIDES[sd]
+    return out
 
 
 def parse_units(text: str) -> tuple[str, str]:
@@ -251,6 +339,7 @@ def _reading(
     file: str,
     k: int,
     units: tuple[str, str] = ("mm", "um"),
+    directions: Mapping[str, int] = _DIRECTIONS,
 ) -> tuple[tuple[float, int, int], float]:
     """``((target, run, direction), deviation)`` of one row; errors name line ``k``."""
     limits = {"target": _LIMITS[units[0]], "deviation": _LIMITS[units[1]]}
@@ -279,14 +368,43 @@ def _reading(
             f"expected a whole run number, got {run_text!r}", file=file, line=k, field="run"
         ) from None
     d_text = cells[where["direction"]]
-    if d_text.lower() not in _DIRECTIONS:
+    d = directions.get(d_text.lower())
+    if d is None:
+        ups = ", ".join(w for w, v in directions.items() if v == 0)
+        downs = ", ".join(w for w, v in directions.items() if v == 1)
         raise InputError(
-            f"expected a direction +, -, up or down, got {d_text!r}",
+            f"expected a direction, got {d_text!r}: positive {ups}; negative {downs} "
+            "(a mapping such as --directions Hin=up,Rück=down names others)",
             file=file,
             line=k,
             field="direction",
         )
-    return (target, run, _DIRECTIONS[d_text.lower()]), deviation
+    return (target, run, d), deviation
+
+
+def _side(d: int) -> str:
+    return "up" if d == 0 else "down"
+
+
+def _missing(
+    t_idx: NDArray[np.intp],
+    r_idx: NDArray[np.intp],
+    d_arr: NDArray[np.intp],
+    targets: NDArray[np.float64],
+    runs: NDArray[np.int64],
+) -> tuple[float, int, int]:
+    """The first missing ``(target, run, direction)`` of readings known to be incomplete.
+
+    Found from the rows alone (a count per target, then the runs of that one target), so
+    that the work and memory are those of the file, not of the product of its labels.
+    """
+    per_target = np.bincount(t_idx, minlength=targets.size)
+    i = int(np.flatnonzero(per_target < 2 * runs.size)[0])
+    here = t_idx == i
+    have = np.zeros((runs.size, 2), dtype=bool)
+    have[r_idx[here], d_arr[here]] = True
+    j, d = (int(v) for v in np.argwhere(~have)[0])
+    return float(targets[i]), int(runs[j]), d
 
 
 def loads_positioning_csv(
@@ -295,46 +413,58 @@ def loads_positioning_csv(
     *,
     columns: Mapping[str, str] | None = None,
     units: str | tuple[str, str] = ("mm", "um"),
+    directions: str | Mapping[str, str] | None = None,
 ) -> PositioningTest:
     """Read a positioning test from CSV text (see :func:`load_positioning_csv`)."""
     t_unit, d_unit = parse_units(units if isinstance(units, str) else ",".join(units))
+    words = parse_directions(directions)
     lines = [(k, raw.strip()) for k, raw in enumerate(text.splitlines(), start=1)]
     lines = [(k, s) for k, s in lines if s and not s.startswith("#")]
     if not lines:
         raise InputError("expected a header line and readings, the file has none", file=file)
     delim = _delimiter(lines[0][1])
     where, width = _header(lines[0], delim, file, columns)
-    seen: dict[tuple[float, int, int], tuple[float, int]] = {}
-    for k, line in lines[1:]:
-        key3, deviation = _reading(_cells(line, delim), where, width, file, k, (t_unit, d_unit))
-        if key3 in seen:
-            raise InputError(
-                f"a second reading at target {key3[0]:g}, run {key3[1]}, direction "
-                f"{'up' if key3[2] == 0 else 'down'} (the first is on line {seen[key3][1]})",
-                file=file,
-                line=k,
-            )
-        seen[key3] = (deviation, k)
-    targets = sorted({t for t, _, _ in seen})
-    runs = sorted({r for _, r, _ in seen})
-    x = np.empty((len(targets), len(runs), 2))
-    for i, t in enumerate(targets):
-        for j, r in enumerate(runs):
-            for d in (0, 1):
-                if (t, r, d) not in seen:
-                    raise InputError(
-                        f"no reading at target {t:g} {t_unit}, run {r}, direction "
-                        f"{'up' if d == 0 else 'down'}: every target needs every run in both "
-                        "directions",
-                        file=file,
-                    )
-                x[i, j, d] = seen[(t, r, d)][0]
+    rows = len(lines) - 1
+    tgt = np.empty(rows)
+    run = np.empty(rows, dtype=np.int64)
+    drc = np.empty(rows, dtype=np.intp)
+    dev = np.empty(rows)
+    for r, (k, line) in enumerate(lines[1:]):
+        (tgt[r], run[r], drc[r]), dev[r] = _reading(
+            _cells(line, delim), where, width, file, k, (t_unit, d_unit), words
+        )
+    targets, t_idx = np.unique(tgt, return_inverse=True)
+    runs, r_idx = np.unique(run, return_inverse=True)
+    flat = (t_idx.astype(np.int64) * runs.size + r_idx) * 2 + drc
+    keys, first_of = np.unique(flat, return_index=True)
+    if keys.size < rows:  # the first line that repeats a reading, and the line it repeats
+        repeat = np.ones(rows, dtype=bool)
+        repeat[first_of] = False
+        second = int(np.flatnonzero(repeat)[0])
+        first = int(first_of[np.searchsorted(keys, flat[second])])
+        raise InputError(
+            f"a second reading at target {tgt[second]:g}, run {run[second]}, direction "
+            f"{_side(int(drc[second]))} (the first is on line {lines[1 + first][0]})",
+            file=file,
+            line=lines[1 + second][0],
+        )
+    if rows != targets.size * runs.size * 2:
+        t, rr, d = _missing(t_idx, r_idx, drc, targets, runs)
+        raise InputError(
+            f"no reading at target {t:g} {t_unit}, run {rr}, direction {_side(d)}: every "
+            f"target needs every run in both directions ({targets.size} targets and "
+            f"{runs.size} runs need {2 * targets.size * runs.size} readings, the file has "
+            f"{rows})",
+            file=file,
+        )
+    x = np.empty((targets.size, runs.size, 2))
+    x[t_idx, r_idx, drc] = dev
     return PositioningTest(
-        targets=np.asarray(targets),
+        targets=targets,
         deviations=x,
         unit=d_unit,
         target_unit=t_unit,
-        runs=tuple(runs),
+        runs=tuple(int(v) for v in runs),
         source=file,
     )
 
@@ -344,6 +474,7 @@ def load_positioning_csv(
     *,
     columns: Mapping[str, str] | None = None,
     units: str | tuple[str, str] = ("mm", "um"),
+    directions: str | Mapping[str, str] | None = None,
 ) -> PositioningTest:
     """Read a positioning test from a CSV file: one reading per row.
 
@@ -358,6 +489,9 @@ def load_positioning_csv(
     units : str or (str, str), default ("mm", "um")
         Units of the targets and the deviations (:func:`parse_units`): ``"mm,um"``,
         ``"mm,mm"``, ``"deg,arcsec"``, ``"deg,urad"``.
+    directions : str or mapping, optional
+        The file's words for the two directions beyond :data:`DIRECTION_WORDS`
+        (:func:`parse_directions`): ``{"Hin": "up", "Rück": "down"}``.
 
     Returns
     -------
@@ -372,4 +506,6 @@ def load_positioning_csv(
         in both directions, an unreadable file.
     """
     text = read_text(path, "positioning file")
-    return loads_positioning_csv(text, str(path), columns=columns, units=units)
+    return loads_positioning_csv(
+        text, str(path), columns=columns, units=units, directions=directions
+    )

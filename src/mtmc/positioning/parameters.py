@@ -43,6 +43,7 @@ that of the target where it is reached.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -53,10 +54,14 @@ from mtmc.errors import InputError
 from mtmc.positioning.data import PositioningTest
 
 __all__ = [
+    "OUTLIER_LEVEL",
     "SYMBOLS",
+    "Outlier",
     "PositioningParameters",
     "axis_parameters",
     "evaluate",
+    "grubbs_critical",
+    "outliers",
     "statistics",
 ]
 
@@ -235,3 +240,107 @@ def evaluate(test: PositioningTest) -> PositioningParameters:
     """
     mean, s = statistics(test.deviations)
     return axis_parameters(mean, s)
+
+
+#: The significance level of the outlier test of :func:`outliers` (two-sided).
+OUTLIER_LEVEL = 0.05
+
+
+@dataclass(frozen=True)
+class Outlier:
+    """A reading that Grubbs' test finds far from the other runs at its target.
+
+    Attributes
+    ----------
+    target : float
+        The target position ``P_i``.
+    direction : int
+        0 (↑) or 1 (↓).
+    run : int
+        The run's label.
+    deviation : float
+        The reading ``x_ij``.
+    G : float
+        Grubbs' statistic ``max_j |x_ij - x̄_i| / s_i`` at this target and direction.
+    critical : float
+        Its critical value at :data:`OUTLIER_LEVEL` for ``n`` runs.
+    """
+
+    target: float
+    direction: int
+    run: int
+    deviation: float
+    G: float
+    critical: float
+
+    def text(self, target_unit: str, unit: str) -> str:
+        """One sentence that names the reading, the test and its level."""
+        arrow = "↑" if self.direction == 0 else "↓"
+        return (
+            f"run {self.run} at P = {self.target:g} {target_unit} {arrow} reads "
+            f"{self.deviation:.6g} {unit}, far from the other runs: Grubbs' test, G = "
+            f"{self.G:.4g} > {self.critical:.4g} (two-sided, α = {OUTLIER_LEVEL:g}). "
+            "ISO 230-2 keeps every run: it stays in every parameter; check the test's record"
+        )
+
+
+def grubbs_critical(n: int, alpha: float = OUTLIER_LEVEL) -> float:
+    """The critical value of Grubbs' two-sided test for one outlier among ``n`` values.
+
+    ``G_crit = (n - 1)/√n · √(t² / (n - 2 + t²))`` with ``t`` the upper ``α/(2n)``
+    quantile of Student's t with ``n - 2`` degrees of freedom (Grubbs 1969; ASTM E178).
+
+    Examples
+    --------
+    >>> round(grubbs_critical(5), 3)   # ASTM E178, n = 5, two-sided 5 % (one-sided 2.5 %)
+    1.715
+    """
+    from scipy.stats import t as student_t
+
+    if n < 3:
+        raise InputError(f"Grubbs' test needs at least 3 values, got {n}", field="runs")
+    q = float(student_t.isf(alpha / (2 * n), n - 2))
+    return (n - 1) / math.sqrt(n) * math.sqrt(q * q / (n - 2 + q * q))
+
+
+def outliers(test: PositioningTest, alpha: float = OUTLIER_LEVEL) -> list[Outlier]:
+    """Readings far from the other runs at their target and direction (Grubbs' test).
+
+    At each target and direction, the run farthest from the mean is tested by Grubbs'
+    two-sided test (:func:`grubbs_critical`) at level ``alpha``. A reading found is only
+    reported: ISO 230-2 keeps every run in every parameter.
+
+    Parameters
+    ----------
+    test : PositioningTest
+    alpha : float, default :data:`OUTLIER_LEVEL`
+
+    Returns
+    -------
+    list of Outlier
+        In the order of the targets, ↑ before ↓; empty with fewer than 3 runs.
+    """
+    if test.n < 3:
+        return []
+    x = test.deviations  # (m, n, 2)
+    mean, s = statistics(x)
+    dist = np.abs(x - mean[:, None, :])
+    j = np.argmax(dist, axis=1)  # (m, 2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        g = np.take_along_axis(dist, j[:, None, :], axis=1)[:, 0, :] / s
+    crit = grubbs_critical(test.n, alpha)
+    found: list[Outlier] = []
+    for i in range(test.m):
+        for d in (0, 1):
+            if s[i, d] > 0 and g[i, d] > crit:
+                found.append(
+                    Outlier(
+                        target=float(test.targets[i]),
+                        direction=d,
+                        run=test.runs[int(j[i, d])],
+                        deviation=float(x[i, j[i, d], d]),
+                        G=float(g[i, d]),
+                        critical=crit,
+                    )
+                )
+    return found

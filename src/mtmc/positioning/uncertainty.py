@@ -78,12 +78,13 @@ from mtmc.uncertainty.montecarlo import monte_carlo
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = [
+    "DEPENDS",
     "OUTSIDE",
     "TYPE_A",
     "PositioningUncertainty",
     "UncertaintyModel",
     "check_deviation_ranges",
-    "conformity",
+    "coverage",
     "disagreement_notes",
     "evaluate_uncertainty",
     "physical_ranges",
@@ -93,6 +94,10 @@ __all__ = [
 #: How the axis' scatter enters: as Type A uncertainty of the means, of the means and
 #: the standard deviations, or not at all (the parameters of the test's readings).
 TYPE_A = ("means", "means-and-s", "none")
+
+#: The readings one array of a block of trials holds at most (``trials × 2 m n``): about
+#: 32 MiB an array, whatever the size of the test.
+BLOCK_READINGS = 1 << 22
 
 #: Millimetres to the unit of the deviations of a linear axis.
 _PER_MM = {"um": 1e3, "mm": 1.0}
@@ -698,6 +703,18 @@ class PositioningUncertainty:
         """The scalar GUM result of one parameter, with its budget."""
         return self.gum.component(_index(symbol))
 
+    def estimate(self, symbol: str) -> float:
+        """The estimate of a parameter: its definition applied to the readings.
+
+        The readings are those of the test corrected by the expected corrections of the
+        model (the model at the expectations of its inputs, the GUM's point of
+        expansion): the readings as they are wherever the model corrects nothing on
+        average (every influence centred on the recorded value, the material already
+        compensated). The Monte Carlo mean is another number: for a maximum or a range
+        over the targets it lies above this one (:func:`disagreement_notes`).
+        """
+        return float(np.real(self.gum.estimate_vector[_index(symbol)]))
+
 
 def _index(symbol: str) -> int:
     if symbol not in SYMBOLS:
@@ -705,6 +722,23 @@ def _index(symbol: str) -> int:
             f"unknown parameter {symbol!r}; expected one of {', '.join(SYMBOLS)}", field="symbol"
         )
     return SYMBOLS.index(symbol)
+
+
+def block_trials(test: PositioningTest) -> int:
+    """Trials per evaluation block: 8192, or fewer for a large test.
+
+    The largest power of two of trials within :data:`BLOCK_READINGS` readings of the
+    test (``2 m n`` a trial), where that is fewer than 8192.
+
+    Examples
+    --------
+    >>> block_trials(PositioningTest(np.arange(11.0), np.zeros((11, 5, 2))))
+    8192
+    >>> block_trials(PositioningTest(np.arange(1000.0), np.zeros((1000, 500, 2))))
+    4
+    """
+    fit = BLOCK_READINGS // (2 * test.m * test.n)
+    return 8192 if fit >= 8192 else 1 << max(0, fit.bit_length() - 1)
 
 
 def evaluate_uncertainty(
@@ -715,7 +749,7 @@ def evaluate_uncertainty(
     *,
     p: float = 0.95,
     progress: Any = None,
-    block_size: int = 8192,
+    block_size: int | None = None,
     **parallel: Any,
 ) -> PositioningUncertainty:
     """Monte Carlo and GUM of the parameters of a positioning test (module docstring).
@@ -732,9 +766,10 @@ def evaluate_uncertainty(
         Coverage probability of the GUM's interval.
     progress : callable, optional, keyword-only
         ``progress(done, total)`` after each block.
-    block_size : int, default 8192, keyword-only
+    block_size : int, optional, keyword-only
         Trials per evaluation (memory: about ``2 m n`` × 8 bytes × a few arrays per
-        trial); it does not change a number.
+        trial); it does not change a number. Default: 8192, fewer for a large test, so
+        that one array of a block holds at most :data:`BLOCK_READINGS` readings.
     **parallel
         ``workers``, ``executor``, ``scheduler`` of :func:`mtmc.uncertainty.monte_carlo`,
         and its ``nan_policy``, ``adaptive``, ``ndig`` and ``kind`` (JCGM 101 §7.9).
@@ -744,6 +779,8 @@ def evaluate_uncertainty(
     PositioningUncertainty
     """
     fn, inputs = positioning_model(test, model)
+    if block_size is None:
+        block_size = block_trials(test)
     mc = monte_carlo(
         fn,
         inputs,
@@ -767,79 +804,6 @@ def evaluate_uncertainty(
     )
 
 
-def conformity(
-    mc: MonteCarloResult,
-    gum_result: GumResult | None,
-    tolerance: float,
-    guard_band: float = 0.0,
-    *,
-    p: float = 0.95,
-) -> dict[str, Any]:
-    """A decision on ``Y ≤ T`` (a parameter against its tolerance), with guard band (JCGM 106).
-
-    The acceptance limit is ``T - w`` (``w`` the guard band); the test passes when the
-    estimate (the Monte Carlo mean) is at or below it. The conformance probability is
-    ``Pr(Y ≤ T)``: the fraction of the Monte Carlo values at or below ``T``, and, by the
-    GUM, ``F((T - y)/u)`` with ``F`` the t distribution of ``ν_eff`` degrees of freedom
-    (normal for ``ν_eff = ∞``).
-
-    Parameters
-    ----------
-    mc : MonteCarloResult
-        Scalar Monte Carlo values of the parameter (samples kept).
-    gum_result : GumResult or None
-        Its GUM result.
-    tolerance : float
-        The upper tolerance limit ``T``.
-    guard_band : float, default 0
-        ``w`` (>= 0), in the unit of the parameter.
-    p : float, default 0.95, keyword-only
-        Coverage probability (for ``U`` in the result).
-
-    Returns
-    -------
-    dict
-        ``tolerance``, ``guard_band``, ``acceptance_limit``, ``estimate``, ``U`` (Monte
-        Carlo, symmetric interval), ``passed`` (bool), ``probability`` (Monte Carlo),
-        ``probability_gum`` (or None).
-
-    Examples
-    --------
-    >>> mc = MonteCarloResult.from_samples(np.linspace(0.0, 10.0, 1001), seed=None)
-    >>> c = conformity(mc, None, 8.0, 1.0)
-    >>> c["acceptance_limit"], c["passed"], round(c["probability"], 3)
-    (7.0, True, 0.8)
-    """
-    from scipy.special import ndtr, stdtr
-
-    t, w = float(tolerance), float(guard_band)
-    if not (math.isfinite(t) and math.isfinite(w) and w >= 0):
-        raise InputError(
-            f"expected a finite tolerance and a guard band >= 0, got {tolerance!r} and "
-            f"{guard_band!r}",
-            field="tolerance",
-        )
-    samples = np.asarray(mc.samples, dtype=np.float64)
-    lo, hi = mc.coverage_interval(p)
-    y = float(mc.estimate)
-    pg = None
-    if gum_result is not None:
-        gu = float(gum_result.u)
-        z = (t - float(gum_result.estimate)) / gu if gu > 0 else math.copysign(math.inf, t - y)
-        nu = float(gum_result.dof)
-        pg = float(ndtr(z)) if not math.isfinite(nu) else float(stdtr(nu, z))
-    return {
-        "tolerance": t,
-        "guard_band": w,
-        "acceptance_limit": t - w,
-        "estimate": y,
-        "U": 0.5 * (hi - lo),
-        "passed": bool(y <= t - w),
-        "probability": float(np.mean(samples <= t)),
-        "probability_gum": pg,
-    }
-
-
 def _extrema(params: PositioningParameters, symbol: str) -> tuple[Any, Any]:
     """The candidates over the targets of a maximum and of a minimum, with labels."""
     up, down = params.mean_up, params.mean_down
@@ -861,7 +825,9 @@ def _extrema(params: PositioningParameters, symbol: str) -> tuple[Any, Any]:
     return both[symbol]
 
 
-def _near_tie(test: PositioningTest, cands: Any, sign: float, width: float) -> str | None:
+def _near_tie(
+    test: PositioningTest, cands: Any, sign: float, width: float, unit: str
+) -> str | None:
     """A text naming the runner-up within ``width`` of the extremum, or None."""
     vals: list[tuple[float, str]] = []
     for d, arr in enumerate(cands):
@@ -876,7 +842,7 @@ def _near_tie(test: PositioningTest, cands: Any, sign: float, width: float) -> s
         return None
     return (
         f"the {'maximum' if sign > 0 else 'minimum'} is reached at {vals[0][1]} and "
-        f"{vals[1][1]} comes within {gap:.3g} {test.unit} of it"
+        f"{vals[1][1]} comes within {gap:.3g} {unit} of it"
     )
 
 
@@ -925,9 +891,9 @@ def disagreement_notes(result: PositioningUncertainty, validated: Mapping[str, b
             continue
         width = 2.0 * float(g.u)
         upper, lower = _extrema(params, sym)
-        ties = [t for t in (_near_tie(test, upper, 1.0, width),) if t]
+        ties = [t for t in (_near_tie(test, upper, 1.0, width, unit),) if t]
         if lower is not None:
-            ties += [t for t in (_near_tie(test, lower, -1.0, width),) if t]
+            ties += [t for t in (_near_tie(test, lower, -1.0, width, unit),) if t]
         why = (
             f". {sym} is a maximum (or a range) over the targets: the GUM linearises it at "
             "the targets where the extremes are reached at the estimates, while the Monte "
@@ -943,6 +909,113 @@ def disagreement_notes(result: PositioningUncertainty, validated: Mapping[str, b
             "the Monte Carlo carries its mean L⟨θ²⟩/2 and spread."
         )
     return notes
+
+
+#: What each parameter is a function of: the means ``x̄_i`` (``"means"``), the standard
+#: deviations ``s_i`` (``"s"``) or both (module :mod:`mtmc.positioning.parameters`).
+DEPENDS: Mapping[str, tuple[str, ...]] = {
+    "A": ("means", "s"),
+    "A_up": ("means", "s"),
+    "A_down": ("means", "s"),
+    "E": ("means",),
+    "E_up": ("means",),
+    "E_down": ("means",),
+    "M": ("means",),
+    "R": ("means", "s"),
+    "R_up": ("s",),
+    "R_down": ("s",),
+    "B": ("means",),
+    "B_mean": ("means",),
+}
+
+
+def _is_type_a(name: str) -> bool:
+    return name.startswith(("typeA_", "chi2_"))
+
+
+def coverage(result: PositioningUncertainty) -> tuple[str, dict[str, str]]:
+    """What the U of each parameter covers: one line for the test, one phrase per parameter.
+
+    Three contributions can enter: the instrument and environment (every input of the
+    model that is not a Type A input), the scatter of the means (``type_a = "means"`` or
+    ``"means-and-s"``) and the scatter of the standard deviations (``"means-and-s"``).
+    A parameter covers those it is a function of (:data:`DEPENDS`); one whose Monte
+    Carlo values do not move at all has no U: it is "not evaluated", with the reason.
+
+    Parameters
+    ----------
+    result : PositioningUncertainty
+
+    Returns
+    -------
+    line : str
+        ``"U covers: …"``, the contributions in the model and those left out.
+    parameters : dict of str to str
+        By symbol: the contributions its U covers (``"instrument and environment +
+        scatter of the means"``), or ``"not evaluated: <reason>"``.
+    """
+    ta = result.model.type_a
+    inst = [k for k in result.inputs if not _is_type_a(k)]
+    nu = result.test.n - 1
+    parts = [
+        f"instrument and environment ({', '.join(inst)})"
+        if inst
+        else "instrument and environment not evaluated (no input of the instrument or the "
+        "environment given)",
+        f"+ scatter of the means (Type A, t with ν = {nu})"
+        if ta != "none"
+        else "scatter of the means not evaluated (type_a = 'none')",
+        f"+ scatter of s (Type A, χ² with ν = {nu})"
+        if ta == "means-and-s"
+        else f"scatter of s not evaluated (type_a = '{ta}')",
+    ]
+    line = "U covers: " + "; ".join(parts)
+    present = {"means": ta != "none", "s": ta == "means-and-s"}
+    samples = result.mc.samples
+    assert samples is not None
+    # a spread within the rounding of the arithmetic (a few ulp of the values) is none
+    spread = np.ptp(samples, axis=0)
+    spread[spread <= 64 * np.finfo(float).eps * np.max(np.abs(samples), axis=0)] = 0.0
+    per: dict[str, str] = {}
+    for sym in SYMBOLS:
+        deps = DEPENDS[sym]
+        covered = (["instrument and environment"] if inst else []) + [
+            {"means": "scatter of the means", "s": "scatter of s"}[d] for d in deps if present[d]
+        ]
+        if spread[_index(sym)] > 0:
+            per[sym] = " + ".join(covered)
+            lo, hi = result.monte_carlo(sym).coverage_interval(result.p)
+            if hi - lo == 0:  # moved in too few trials to widen the interval at p
+                col = samples[:, _index(sym)]
+                moved = float(np.mean(col != np.median(col)))
+                per[sym] += (
+                    f" (U = 0: they move {sym} in {100 * moved:.2g} % of the trials only, "
+                    f"fewer than 1 - p, so its interval at p = {result.p:g} is one value)"
+                )
+            continue
+        missing = [d for d in deps if not present[d]]
+        what = {"means": "the means x̄_i", "s": "the standard deviations s_i"}
+        if missing == ["s"] and deps == ("s",):
+            why = (
+                f"{sym} is a function of the standard deviations s_i alone, whose scatter "
+                "enters with type_a = 'means-and-s'"
+            )
+        elif missing == ["s"]:
+            why = (
+                f"in every trial {sym} is reached where it is a function of the standard "
+                "deviations s_i alone, whose scatter enters with type_a = 'means-and-s'"
+            )
+        elif missing:
+            why = (
+                f"{sym} is a function of {' and '.join(what[d] for d in deps)}, whose "
+                "scatter the model leaves out (type_a = 'none')"
+            )
+        else:
+            why = f"no input of the model moves {sym}: every trial gives one value"
+        if not inst:
+            why += ", and no instrument or environment input is given"
+        per[sym] = f"not evaluated: {why}"
+    return line, per
 
 
 def _gum_statistics(result: PositioningUncertainty) -> PositioningParameters:

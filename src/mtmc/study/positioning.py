@@ -6,18 +6,20 @@ material in ``[environment]``, the laser in ``[instrument]``, the Type A evaluat
 ``[uncertainty]``, tolerances in ``[tolerances]`` (``docs/positioning.md``). The run is
 :func:`mtmc.positioning.evaluate_uncertainty`: each of the twelve parameters of the axis
 (``A`` … ``B_mean``) becomes a quantity with its Monte Carlo values, the GUM beside them
-and its budget; the tables give the parameters (from the readings, the GUM, the Monte
-Carlo), the statistics at each target, the decision against each tolerance with its
-conformance probability, and the pitch-error compensation table with the residual it
-leaves; ``positioning`` in ``result.json`` holds the readings for the report's plot and
-the notes on where the GUM and the Monte Carlo disagree and why.
+and its budget, headed by its estimate from the readings (ISO 230-2's definition) and, where
+``[tolerances]`` gives a limit, the decision by the engine's JCGM 106 rule
+(:mod:`mtmc.uncertainty.conformity`); the tables give the parameters (the estimate, the Monte
+Carlo's U, interval and mean, the GUM's U, what U covers), the statistics at each target, and
+the pitch-error compensation table with the residual it leaves; ``positioning`` in
+``result.json`` holds the readings for the report's plot, what U covers, the runs Grubbs'
+test flags (kept), and the notes on where the GUM and the Monte Carlo disagree and why.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -25,9 +27,18 @@ import numpy as np
 
 from mtmc.document import Fields, Source
 from mtmc.errors import InputError, MtmcError
-from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
+from mtmc.study.base import (
+    ProgressFn,
+    Quantity,
+    Reported,
+    Study,
+    StudyResult,
+    Table,
+    quantity,
+)
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.spec import RunSettings, register_kind
+from mtmc.uncertainty.tolerance import round_to_uncertainty
 
 __all__ = ["PositioningStudy", "positioning_study", "summary", "unit_label"]
 
@@ -88,10 +99,11 @@ class PositioningStudy(Study):
         from mtmc.positioning import (
             SYMBOLS,
             apply_compensation,
-            conformity,
+            coverage,
             disagreement_notes,
             evaluate,
             evaluate_uncertainty,
+            outliers,
             pitch_compensation,
         )
         from mtmc.positioning.parameters import NAMES
@@ -113,7 +125,15 @@ class PositioningStudy(Study):
         samples: dict[str, Any] = {}
         for sym in SYMBOLS:
             mc = res.monte_carlo(sym)
-            quantities.append(quantity(sym, unit, mc, res.gum_result(sym), settings))
+            g = res.gum_result(sym)
+            q = quantity(sym, unit, mc, g, settings)
+            # the headline is the parameter as ISO 230-2 defines it, from the readings,
+            # rounded to the digits its Monte Carlo U supports (JCGM 100 §7.2.6)
+            y = res.estimate(sym)
+            q = replace(q, reported=Reported(*_rounded(y, q.mc.U, settings.ndig)))
+            if sym in self.tolerances:
+                q = replace(q, conformity=self._decide(sym, y, q, mc, g))
+            quantities.append(q)
             if settings.samples:
                 samples[sym] = mc.samples
         # a constant parameter (passed None, "not applicable") is no disagreement
@@ -122,46 +142,48 @@ class PositioningStudy(Study):
         }
         notes = disagreement_notes(res, validated)
         readings = res.readings
+        covers_line, covers = coverage(res)
         param_rows = tuple(
             (
                 q.name,
                 NAMES[q.name],
                 unit,
-                float(getattr(readings, q.name)),
-                q.gum.estimate if q.gum else "",
-                q.gum.U if q.gum else "",
-                q.mc.estimate,
+                res.estimate(q.name),
                 q.mc.U,
                 q.mc.coverage_interval[0],
                 q.mc.coverage_interval[1],
+                q.mc.estimate,
+                q.gum.U if q.gum else "",
                 "" if q.validation is None else q.validation.verdict,
+                covers[q.name],
+                float(getattr(readings, q.name)),
             )
             for q in quantities
         )
         tables = [
             Table(
                 "parameters",
-                f"Parameters of ISO 230-2 ({unit}): from the readings, GUM, Monte Carlo",
+                f"Parameters of ISO 230-2 ({unit}): the estimate is the definition applied to "
+                "the readings; U and the interval are the Monte Carlo's, the MC mean beside. "
+                + covers_line,
                 (
                     "symbol",
                     "parameter",
                     "unit",
-                    "from the readings",
-                    "GUM y",
-                    "GUM U",
-                    "MC y",
-                    "MC U",
+                    "estimate",
+                    "U (MC)",
                     "MC interval low",
                     "MC interval high",
+                    "MC mean",
+                    "GUM U",
                     "GUM by JCGM 101 §8",
+                    "U covers",
+                    "readings as recorded",
                 ),
                 param_rows,
             ),
             _targets_table(test, readings, unit),
         ]
-        conform = self._conformity(res, quantities, settings, conformity)
-        if conform:
-            tables.append(conform)
         tables.extend(
             _compensation_tables(test, self.axis, unit, pitch_compensation, apply_compensation)
         )
@@ -194,6 +216,9 @@ class PositioningStudy(Study):
                 "runs": list(test.runs),
                 "type_a": self.model.type_a,
                 "notes": notes,
+                "covers": covers_line,
+                "covers_by": covers,
+                "warnings": [o.text(unit_label(test.target_unit), unit) for o in outliers(test)],
             }
         }
         mc_all = res.mc
@@ -213,50 +238,38 @@ class PositioningStudy(Study):
             samples=samples,
         )
 
-    def _conformity(
-        self, res: Any, quantities: list[Quantity], settings: RunSettings, conformity: Any
-    ) -> Table | None:
-        if not self.tolerances:
-            return None
-        rows = []
-        by_name = {q.name: q for q in quantities}
-        for sym, tol in self.tolerances.items():
-            q = by_name[sym]
-            w = q.mc.U if self.guard_band == "U" else float(self.guard_band)
-            c = conformity(res.monte_carlo(sym), res.gum_result(sym), tol, w, p=settings.p)
-            rows.append(
-                (
-                    sym,
-                    unit_label(self.test.unit),
-                    c["tolerance"],
-                    c["guard_band"],
-                    c["acceptance_limit"],
-                    c["estimate"],
-                    c["U"],
-                    "pass" if c["passed"] else "fail",
-                    c["probability"],
-                    c["probability_gum"] if c["probability_gum"] is not None else "",
-                )
-            )
-        return Table(
-            "conformity",
-            "Conformity with the tolerances (JCGM 106): accepted when the Monte Carlo estimate "
-            "is at or below the acceptance limit T - w; the conformance probability is "
-            "Pr(Y <= T)",
-            (
-                "parameter",
-                "unit",
-                "tolerance T",
-                "guard band w",
-                "acceptance limit",
-                "MC y",
-                "MC U",
-                "decision",
-                "conformance probability (MC)",
-                "conformance probability (GUM)",
-            ),
-            tuple(rows),
+    def _decide(self, sym: str, y: float, q: Quantity, mc: Any, g: Any) -> dict[str, Any]:
+        """The conformity entry of a parameter: ``Y ≤ T`` by the engine's rule (JCGM 106).
+
+        The rule decides on the estimate of the parameter from the readings (the value
+        ISO 230-2 defines, :meth:`PositioningUncertainty.estimate`); ``p_c = Pr(Y ≤ T)``
+        is that of the Monte Carlo values, the GUM's beside it. A guard band makes the
+        rule guarded acceptance with ``w`` the band (``"U"``: the parameter's Monte
+        Carlo U).
+        """
+        from mtmc.uncertainty.conformity import conformance_probability, conformity
+
+        tol = self.tolerances[sym]
+        w = q.mc.U if self.guard_band == "U" else float(self.guard_band)
+        guarded = self.guard_band == "U" or w != 0.0
+        c = conformity(
+            mc,
+            None,
+            tol,
+            rule="guarded" if guarded else "simple",
+            guard_band=w if guarded else None,
+            estimate=y,
         )
+        out = c.to_dict()
+        out["gum_p_c"], _, out["gum_basis"] = conformance_probability(g, None, tol)
+        return out
+
+
+def _rounded(y: float, big_u: float, ndig: int) -> tuple[str, str]:
+    """``y`` and ``U`` to the digits ``U`` supports (JCGM 100 §7.2.6); ``U = 0``: 6 digits."""
+    if big_u > 0:
+        return round_to_uncertainty(y, big_u, ndig)
+    return f"{y:.6g}", "0"
 
 
 def _targets_table(test: Any, p: Any, unit: str) -> Table:
@@ -420,6 +433,17 @@ def _read_tolerances(top: Fields) -> tuple[dict[str, float], float | str]:
     return out, guard
 
 
+def _read_directions(top: Fields) -> dict[str, str] | None:
+    """``[directions]``: the file's word of each direction, ``Hin = "up"``, ``Rück = "down"``."""
+    t = top.table("directions", required=False)
+    if t is None:
+        return None
+    out = {}
+    for key in t.data:
+        out[str(key)] = t.text(key, choices=("up", "down", "+", "-"))
+    return out
+
+
 def _model_error(top: Fields, exc: InputError) -> InputError:
     """An error of :class:`UncertaintyModel` at the study key that gave the field."""
     name = exc.field or ""
@@ -440,6 +464,7 @@ def positioning_study(
     model: Mapping[str, Any] | None = None,
     units: str = "mm,um",
     columns: Mapping[str, str] | None = None,
+    directions: str | Mapping[str, str] | None = None,
     axis: str = "X",
     title: str | None = None,
     tolerances: Mapping[str, float] | None = None,
@@ -461,7 +486,7 @@ def positioning_study(
     model : mapping, optional
         Keywords of :class:`~mtmc.positioning.UncertaintyModel` (default: the Type A
         inputs alone).
-    units, columns, axis, title, tolerances, guard_band
+    units, columns, directions, axis, title, tolerances, guard_band
         As the study file's keys.
 
     Returns
@@ -471,7 +496,7 @@ def positioning_study(
     from mtmc.positioning import UncertaintyModel, load_positioning_csv
     from mtmc.positioning.uncertainty import check_deviation_ranges
 
-    test = load_positioning_csv(data, columns=columns, units=units)
+    test = load_positioning_csv(data, columns=columns, units=units, directions=directions)
     if source is None:
         text = f'kind = "positioning"\ndata = {Path(data).as_posix()!r}\n'
         source = Source.from_text(text, str(data), None)
@@ -499,6 +524,7 @@ def read_positioning_study(top: Fields) -> PositioningStudy:
             "data",
             "units",
             "columns",
+            "directions",
             "axis",
             "environment",
             "instrument",
@@ -522,6 +548,7 @@ def read_positioning_study(top: Fields) -> PositioningStudy:
 
         cols.only(COLUMNS)
         columns = {k: cols.text(k) for k in COLUMNS if cols.has(k)}
+    directions = _read_directions(top)
     axis = top.text("axis", "X", choices=tuple("XYZUVWABC"))
     tolerances, guard = _read_tolerances(top)
     settings = RunSettings.read(top)
@@ -533,6 +560,7 @@ def read_positioning_study(top: Fields) -> PositioningStudy:
             model=kw,
             units=units,
             columns=columns,
+            directions=directions,
             axis=axis,
             title=top.text("title", None),
             tolerances=tolerances,
@@ -556,28 +584,36 @@ def summary(result: StudyResult) -> dict[str, Any]:
     -------
     dict
         ``unit``, ``target_unit``, ``axis``, ``data``, ``trials``, ``seed``, ``p``,
-        ``type_a``, ``notes``, and ``parameters``: by symbol (``A``, ``A_up``, …,
-        ``B_mean``), ``estimate`` (the GUM's: the definitions applied to the readings
-        corrected by the expected corrections), ``U`` (Monte Carlo: half the length of
-        its coverage interval), ``u``, ``interval``, ``mc_estimate``, ``readings`` (the
-        definitions applied to the readings as they are), ``gum`` (``u``, ``U``, ``k``),
+        ``type_a``, ``covers`` (one line: what the U covers), ``notes``, ``warnings``
+        (runs far from the others, kept), and ``parameters``: by symbol (``A``,
+        ``A_up``, …, ``B_mean``), ``estimate`` (the definition of ISO 230-2 applied to
+        the readings, corrected by the model's expected corrections where it has any),
+        ``reported`` (estimate and U as text, to the digits U supports), ``U`` (Monte
+        Carlo: half the length of its coverage interval), ``u``, ``interval``,
+        ``mc_mean`` (the Monte Carlo mean, another number than the estimate), ``covers``
+        (what its U covers, or ``"not evaluated: <reason>"``), ``readings`` (the
+        definition applied to the readings as recorded), ``gum`` (``u``, ``U``, ``k``),
         ``validated`` (JCGM 101 §8; null where both methods give one value) and its
-        ``verdict``, all in the deviation unit; ``conformity`` by symbol
-        where the study gives tolerances.
+        ``verdict``, all in the deviation unit; ``conformity`` by symbol where the study
+        gives tolerances (the entry of the quantity, the shape of every kind).
     """
     pos = result.extra["positioning"]
     tables = {t.name: t for t in result.tables}
-    readings = {row[0]: row[3] for row in tables["parameters"].rows}
+    t = tables["parameters"]
+    rows = {row[0]: dict(zip(t.columns, row, strict=True)) for row in t.rows}
     params: dict[str, Any] = {}
+    conform: dict[str, Any] = {}
     for q in result.quantities:
-        mc, g = q.mc, q.gum
+        mc, g, row = q.mc, q.gum, rows[q.name]
         params[q.name] = {
-            "estimate": mc.estimate if g is None else g.estimate,
+            "estimate": row["estimate"],
+            "reported": q.reported.to_dict(),
             "U": mc.U,
             "u": mc.u,
             "interval": list(mc.coverage_interval),
-            "mc_estimate": mc.estimate,
-            "readings": readings[q.name],
+            "mc_mean": mc.estimate,
+            "covers": row["U covers"],
+            "readings": row["readings as recorded"],
             "gum": {
                 "u": None if g is None else g.u,
                 "U": None if g is None else g.U,
@@ -588,6 +624,8 @@ def summary(result: StudyResult) -> dict[str, Any]:
             "validated": None if q.validation is None else q.validation.passed,
             "verdict": None if q.validation is None else q.validation.verdict,
         }
+        if q.conformity is not None:
+            conform[q.name] = q.conformity
     out: dict[str, Any] = {
         "data": pos["data"],
         "axis": pos["axis"],
@@ -597,12 +635,11 @@ def summary(result: StudyResult) -> dict[str, Any]:
         "trials": result.trials,
         "seed": result.seed,
         "p": result.p,
+        "covers": pos.get("covers"),
         "parameters": params,
         "notes": list(pos["notes"]),
+        "warnings": list(pos.get("warnings", [])),
     }
-    if "conformity" in tables:
-        t = tables["conformity"]
-        out["conformity"] = {
-            row[0]: dict(zip(t.columns[1:], row[1:], strict=True)) for row in t.rows
-        }
+    if conform:
+        out["conformity"] = conform
     return out

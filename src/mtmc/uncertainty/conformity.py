@@ -570,6 +570,9 @@ class Conformity:
         Specific producer's risk ``R*_P = p_c`` of a rejected item (§9.3).
     global_risks : GlobalRisks or None
         ``R_C`` and ``R_P`` of the rule for the process (§9.5), where a prior was given.
+    guard_band : float or None
+        The guard band ``w`` where it was given as a width (in the unit of the result)
+        rather than as ``r`` of ``w = r U``.
     """
 
     lower: float | None
@@ -591,6 +594,7 @@ class Conformity:
     consumer_risk: float | None
     producer_risk: float | None
     global_risks: GlobalRisks | None = None
+    guard_band: float | None = None
 
     @property
     def decision(self) -> str:
@@ -608,6 +612,8 @@ class Conformity:
         head = f"{self.decision}, p_c = {_format_p(self.p_c)}"
         if self.rule == "simple":
             return f"{head}, rule: simple acceptance"
+        if self.guard_band is not None:
+            return f"{head}, rule: guarded acceptance, w = {_g(self.guard_band)}"
         if self.max_consumer_risk is None:
             return f"{head}, rule: guarded acceptance, w = {_g(self.guard or 0.0)}·U"
         bound = f"R*_C ≤ {_g(self.max_consumer_risk)}"
@@ -643,6 +649,7 @@ class Conformity:
             "consumer_risk": self.consumer_risk,
             "producer_risk": self.producer_risk,
             "global_risks": None if self.global_risks is None else self.global_risks.to_dict(),
+            "guard_band": self.guard_band,
         }
 
 
@@ -656,6 +663,8 @@ def conformity(
     max_consumer_risk: float | None = None,
     prior: Prior | None = None,
     coverage_factor: float = GUARD_COVERAGE_FACTOR,
+    guard_band: float | None = None,
+    estimate: float | None = None,
 ) -> Conformity:
     """Decide whether a measured quantity conforms to its tolerance (JCGM 106 §7–§9).
 
@@ -682,6 +691,15 @@ def conformity(
         ``u_m = u(y)`` (§9), whatever the basis of ``p_c``.
     coverage_factor : float, default 2
         ``k`` of ``U = k u`` (JCGM 106 §8.3).
+    guard_band : float, optional
+        The guard band ``w`` itself, in the unit of the result (a test's own width, or
+        the ``U`` of a coverage interval), instead of ``guard``; negative for guarded
+        rejection.
+    estimate : float, optional
+        The measured value that the rule compares with the acceptance interval, where
+        it is not the result's own estimate (the value a standard defines from the
+        readings, beside a Monte Carlo PDF whose mean lies elsewhere); ``p_c`` is always
+        that of the result's PDF.
 
     Returns
     -------
@@ -703,19 +721,28 @@ def conformity(
         )
     r: float | None = None
     alpha: float | None = None
+    w_given: float | None = None
     if rule == "simple":
-        for name, value in (("guard", guard), ("max_consumer_risk", max_consumer_risk)):
+        for name, value in (
+            ("guard", guard),
+            ("guard_band", guard_band),
+            ("max_consumer_risk", max_consumer_risk),
+        ):
             if value is not None:
                 raise InputError(
                     f"{name} needs rule = 'guarded'; simple acceptance has none", field=name
                 )
     else:
-        if (guard is None) == (max_consumer_risk is None):
+        given = [g for g in (guard, guard_band, max_consumer_risk) if g is not None]
+        if len(given) != 1:
             raise InputError(
-                "guarded acceptance needs one of guard (r of w = r·U) or max_consumer_risk",
+                "guarded acceptance needs one of guard (r of w = r·U), guard_band (w) or "
+                "max_consumer_risk",
                 field="guard",
             )
-        if guard is not None:
+        if guard_band is not None:
+            w_given = _number(guard_band, "guard_band")
+        elif guard is not None:
             r = _number(guard, "guard")
         else:
             alpha = _number(max_consumer_risk, "max_consumer_risk")
@@ -725,13 +752,14 @@ def conformity(
                     field="max_consumer_risk",
                 )
     pr = _probability(result, tl, tu)
-    y, u = pr.estimate, pr.u
+    y = pr.estimate if estimate is None else _number(estimate, "estimate")
+    u = pr.u
     big_u = k * u
     if alpha is not None:
         al, au = _acceptance_for_risk(pr, tl, tu, alpha)
         conforms = pr.p_c >= 1.0 - alpha
     else:
-        w = 0.0 if r is None else r * big_u
+        w = w_given if w_given is not None else (0.0 if r is None else r * big_u)
         al, au = tl + w, tu - w
         if not al <= au:
             raise InputError(
@@ -742,7 +770,7 @@ def conformity(
         conforms = al <= y <= au
     w_l = al - tl if math.isfinite(tl) and math.isfinite(al) else None
     w_u = tu - au if math.isfinite(tu) and math.isfinite(au) else None
-    if alpha is not None and big_u > 0:
+    if (alpha is not None or w_given is not None) and big_u > 0:
         w_main = w_u if w_u is not None else w_l
         r = None if w_main is None else w_main / big_u
     risks = None
@@ -771,4 +799,5 @@ def conformity(
         consumer_risk=1.0 - pr.p_c if conforms else None,
         producer_risk=pr.p_c if not conforms else None,
         global_risks=risks,
+        guard_band=w_given,
     )
