@@ -212,3 +212,16 @@ def test_loads_json_limits() -> None:
     with pytest.raises(InputError, match="nested deeper than 3"):
         loads_json("[[[[1]]]]", "f", max_depth=3)
     assert loads_json("[[[1]]]", "f", max_depth=3) == [[[1]]]
+
+
+def test_a_report_of_many_quantities_draws_the_first_few_and_says_so(written: Path) -> None:
+    from mtmc.report import MAX_PLOTTED, html
+
+    doc = _doc(written)
+    q = doc["quantities"][0]
+    doc["quantities"] = [dict(q, name=f"pose{i}.x") for i in range(MAX_PLOTTED + 3)]
+    page = html(doc)
+    assert page.count('data-plot="histogram:') == MAX_PLOTTED
+    assert page.count('data-plot="convergence:') == MAX_PLOTTED
+    assert page.count('class="unplotted"') == 3
+    assert f"the first {MAX_PLOTTED}" in page
