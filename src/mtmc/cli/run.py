@@ -43,6 +43,8 @@ __all__ = [
     "default_outdir",
     "report_cmd",
     "run_cmd",
+    "command_line",
+    "run_study",
     "run_study_file",
     "run_summary",
     "summary_table",
@@ -135,6 +137,62 @@ def run_summary(result: Any, outdir: Path) -> dict[str, Any]:
     }
 
 
+def run_study(
+    study: Any,
+    outdir: Path | None,
+    *,
+    label: str,
+    trials: int | None = None,
+    seed: int | None = None,
+    samples: bool | None = None,
+    progress: bool | None = None,
+    argv: list[str] | None = None,
+    parallel: dict[str, Any] | None = None,
+    adaptive: bool | None = None,
+    nan_policy: str | None = None,
+) -> Any:
+    """Run a loaded study and, with ``outdir``, write its result folder: every command's route.
+
+    Parameters
+    ----------
+    study : Study
+        The study (:func:`mtmc.study.load_study` or :func:`mtmc.study.loads_study`).
+    outdir : Path or None
+        The result folder to write (created with its parents), with the study's text as
+        ``study.toml`` and ``report.html`` (:func:`mtmc.study.write_result`); None: none.
+    label : str
+        The text before the progress bar.
+    trials, seed, samples, adaptive, nan_policy, parallel
+        As :meth:`mtmc.study.Study.run` (None: as the study says); ``parallel`` holds
+        its ``workers``, ``executor`` and ``scheduler``.
+    progress : bool or None
+        ``--progress/--no-progress`` (None: when stderr is a terminal).
+    argv : list of str, optional
+        The command line, for ``provenance.json``.
+
+    Returns
+    -------
+    StudyResult
+    """
+    from mtmc.study import write_result
+    from mtmc.study.write import now
+
+    started = now()
+    with progress_bar(f"{label}: Monte Carlo", progress) as bar:
+        result = study.run(
+            trials=trials,
+            seed=seed,
+            samples=samples,
+            progress=bar,
+            adaptive=adaptive,
+            nan_policy=nan_policy,
+            **(parallel or {}),
+        )
+    if outdir is not None:
+        write_result(result, outdir, study_text=study.source.text, started=started, argv=argv)
+    return result
+
+
 def run_study_file(
     study: Path,
     outdir: Path,
@@ -154,23 +212,26 @@ def run_study_file(
     :meth:`mtmc.study.Study.run`; ``adaptive`` and ``nan_policy`` override ``[run]``
     (None: as the file says).
     """
-    from mtmc.study import load_study, write_result
-    from mtmc.study.write import now
+    from mtmc.study import load_study
 
-    s = load_study(study)
-    started = now()
-    with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
-        result = s.run(
-            trials=trials,
-            seed=seed,
-            samples=samples,
-            progress=bar,
-            adaptive=adaptive,
-            nan_policy=nan_policy,
-            **(parallel or {}),
-        )
-    write_result(result, outdir, study_text=s.source.text, started=started, argv=argv)
-    return result
+    return run_study(
+        load_study(study),
+        outdir,
+        label=study.name,
+        trials=trials,
+        seed=seed,
+        samples=samples,
+        progress=progress,
+        argv=argv,
+        parallel=parallel,
+        adaptive=adaptive,
+        nan_policy=nan_policy,
+    )
+
+
+def command_line(ctx: typer.Context) -> list[str]:
+    """The command line of ``ctx`` as :func:`mtmc.cli.main.main` received it."""
+    return list((ctx.find_root().obj or {}).get("argv", ["mtmc", *sys.argv[1:]]))
 
 
 def run_cmd(
@@ -209,7 +270,7 @@ def run_cmd(
             seed=seed,
             samples=True if samples else None,
             progress=False if quiet else None,
-            argv=(ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]]),
+            argv=command_line(ctx),
             parallel=parallel_options(workers, executor, scheduler),
             adaptive=True if adaptive else None,
             nan_policy=None if nan is None else nan_policy(nan),
