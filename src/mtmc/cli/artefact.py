@@ -39,6 +39,7 @@ from mtmc.cli.run_options import (
 from mtmc.errors import InputError, MtmcError
 
 app = typer.Typer(
+    rich_markup_mode=None,
     help="Fiducial artefacts (Wang, Cheung and Kong 2022): simulate a study, fit probed balls.",
     no_args_is_help=True,
 )

@@ -19,6 +19,8 @@ from rich.table import Table
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
+    PROGRESS_OPTION,
+    QUIET_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     check_trials,
@@ -28,6 +30,7 @@ from mtmc.cli.common import (
     print_json,
     print_trials_seed,
     progress_bar,
+    progress_flag,
     seed_option,
     warn,
 )
@@ -234,6 +237,30 @@ def command_line(ctx: typer.Context) -> list[str]:
     return list((ctx.find_root().obj or {}).get("argv", ["mtmc", *sys.argv[1:]]))
 
 
+def _reader_of(path: Path, exc: BaseException) -> str:
+    """Where a file without ``kind`` is not a study: the command that reads it, else ``""``.
+
+    A measurement graph (``[[place]]``, ``[[transition]]``) is run by ``mtmc graph run``;
+    an artefact definition (``[[ball]]``) is named by an artefact study's ``artefact`` key.
+    """
+    import tomllib
+
+    if not (isinstance(exc, MtmcError) and exc.field == "kind" and "missing kind" in exc.message):
+        return ""
+    try:
+        keys = set(tomllib.loads(path.read_text(encoding="utf-8")))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return ""
+    if keys & {"place", "transition"}:
+        return f"; {path} is a measurement graph: run it with mtmc graph run {path}"
+    if "ball" in keys:
+        return (
+            f"; {path} defines an artefact's balls: an artefact study names it "
+            '(kind = "artefact", artefact = "FILE"), run by mtmc artefact simulate or mtmc run'
+        )
+    return ""
+
+
 def run_cmd(
     ctx: typer.Context,
     study: Path = typer.Argument(..., help="The study file (TOML)."),
@@ -245,9 +272,8 @@ def run_cmd(
     ),
     seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     samples: bool = typer.Option(False, "--samples", help="Also write the samples as .npy."),
-    quiet: bool = typer.Option(
-        False, "--quiet", "-q", help="No progress bar, no table (the seed is still printed)."
-    ),
+    quiet: bool = QUIET_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
     as_json: bool = JSON_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
@@ -269,14 +295,14 @@ def run_cmd(
             trials=trials,
             seed=seed,
             samples=True if samples else None,
-            progress=False if quiet else None,
+            progress=progress_flag(progress, quiet),
             argv=command_line(ctx),
             parallel=parallel_options(workers, executor, scheduler),
             adaptive=True if adaptive else None,
             nan_policy=None if nan is None else nan_policy(nan),
         )
     except (MtmcError, OSError) as exc:
-        fail(run_message(exc))
+        fail(run_message(exc) + _reader_of(study, exc))
     warn(result.extra.get("warnings", ()))
     if as_json:
         print_json(run_summary(result, out))
@@ -310,7 +336,8 @@ def demo_cmd(
     out: Path = typer.Option(Path("mtmc-demo"), "-o", "--output", help="Output folder."),
     trials: int | None = typer.Option(None, "--trials", "-n", help="Trials of every study."),
     seed: int | None = seed_option("each study's run.seed"),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    quiet: bool = QUIET_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
     as_json: bool = JSON_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
@@ -328,7 +355,7 @@ def demo_cmd(
     check_trials(trials)
 
     def bar(label: str) -> Any:
-        return progress_bar(f"{label}: Monte Carlo", False if quiet else None)
+        return progress_bar(f"{label}: Monte Carlo", progress_flag(progress, quiet))
 
     summaries: list[dict[str, Any]] = []
     try:

@@ -30,6 +30,7 @@ from mtmc.cli.common import (
 from mtmc.errors import MtmcError
 
 app = typer.Typer(
+    rich_markup_mode=None,
     help="Laser-tracker volumetric verification: plan, simulate, identify, place.",
     no_args_is_help=True,
 )
