@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -41,3 +42,23 @@ def test_run_on_a_file_that_is_no_study_names_its_reader(
     assert len(err.splitlines()) == 1
     assert "missing kind" in err
     assert pointer in err
+
+
+def test_an_unknown_point_set_names_the_study_file_and_the_option(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    study = ROOT / "examples" / "studies" / "aguado2017.toml"
+    assert main(["verify", "simulate", str(study), "--points", "nope", "-n", "2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"mtmc: error: {study}: field --points: no point set 'nope'; the study has mesh")
+
+
+def test_verify_plan_creates_its_output_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = ROOT / "examples" / "studies" / "aguado2016.toml"
+    out = tmp_path / "a" / "b"  # neither exists, as run -o creates its folder
+    assert main(["verify", "plan", str(study), "-o", str(out), "--json"]) == 0
+    files = json.loads(capsys.readouterr().out)["files"]
+    assert files
+    assert all(Path(f).parent == out and Path(f).is_file() for f in files.values())
