@@ -314,3 +314,36 @@ def test_help_fits_80_columns_without_truncation(
         assert "…" not in line, (path, line)  # a cell cut short
         assert "``" not in line, (path, line)  # reStructuredText of a docstring
         assert "\\[" not in line, (path, line)  # an escape of Rich markup
+
+
+def _doc_rows() -> Iterator[tuple[str, str]]:
+    """(first long option, where) of each row of docs/cli.md's table of shared options."""
+    text = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    table = text.split("## Options shared by several commands", 1)[1].split("\n## ", 1)[0]
+    for line in table.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 4 or cells[0] in ("option", "---"):
+            continue
+        names = re.findall(r"--[a-z-]+", cells[0])
+        yield names[0], cells[3]
+
+
+def test_the_table_of_shared_options_says_which_commands_have_each() -> None:
+    # docs/cli.md's table against the commands themselves: an option added to or taken
+    # from a command without the table changing fails here
+    having: dict[str, set[str]] = defaultdict(set)
+    for path, cmd in COMMANDS.items():
+        for opt in _options(cmd):
+            having[_longs(opt)[0]].add(path)
+    rows = dict(_doc_rows())
+    assert len(rows) >= 15, rows
+    monte_carlo = set(_monte_carlo_commands())
+    for option, where in rows.items():
+        listed = set(re.findall(r"`([a-z]+(?: [a-z]+)?)`", where)) & set(COMMANDS)
+        if where.startswith("every command that runs a Monte Carlo"):
+            expected = monte_carlo
+        elif where.startswith("all but"):
+            expected = set(COMMANDS) - listed
+        else:
+            expected = listed
+        assert having[option] == expected, (option, sorted(having[option] ^ expected))
