@@ -35,17 +35,28 @@ def test_json_equals_library_result(capsys):
     g = gum(expr, inputs)
     v = validate(g, mc)
     assert set(got) == {
+        "unit",
         "estimate",
+        "U",
+        "k",
         "u",
         "p",
+        "interval_kind",
         "shortest",
         "symmetric",
+        "reported",
         "trials",
         "omitted",
         "seed",
+        "run",
+        "output",
         "gum",
         "validation",
     }
+    assert got["unit"] == "1"
+    assert got["interval_kind"] == "symmetric"
+    lo, hi = mc.coverage_interval(0.95, kind="symmetric")
+    assert got["U"] == 0.5 * (hi - lo)  # the same two floats, the same operation
     assert got["estimate"] == mc.estimate
     assert got["u"] == mc.u
     assert got["p"] == 0.95
@@ -56,8 +67,9 @@ def test_json_equals_library_result(capsys):
     assert got["omitted"] == mc.omitted == 0
     assert got["gum"] == {
         "estimate": g.estimate,
-        "u": g.u,
+        "U": g.coverage_factor() * g.u,
         "k": g.coverage_factor(),
+        "u": g.u,
         "interval": list(g.coverage_interval()),
     }
     assert got["validation"] == {
@@ -65,6 +77,7 @@ def test_json_equals_library_result(capsys):
         "d_high": v.d_high,
         "delta": v.delta,
         "passed": v.passed,
+        "verdict": got["validation"]["verdict"],
     }
 
 
@@ -174,7 +187,9 @@ def test_errors_exit_non_zero_with_one_line(argv, fragments, capsys):
 
 @pytest.mark.parametrize("adaptive", [False, True])
 def test_progress_bar_on_stderr_only(adaptive, capsys):
-    argv = [*ARGS, "--json"] + (["--adaptive"] if adaptive else [])
+    argv = [*ARGS, "--json"]
+    if adaptive:  # --adaptive chooses the trials: not with --trials
+        argv = [a for a in argv if a not in ("--trials", "50000")] + ["--adaptive"]
     code, quiet, quiet_err = _run(argv, capsys)
     assert code == 0
     assert quiet_err == ""
@@ -184,3 +199,66 @@ def test_progress_bar_on_stderr_only(adaptive, capsys):
     n = json.loads(loud)["trials"]
     assert f"{n}/{n} trials" in loud_err
     assert loud_err.count("\n") == 1
+
+
+def test_adaptive_with_trials_is_refused(capsys):
+    """--adaptive chooses the trials itself: -n beside it is refused, not ignored."""
+    code, out, err = _run(
+        ["propagate", "a", "-i", "a=normal(0,1)", "--adaptive", "-n", "5000"], capsys
+    )
+    assert code == 2
+    assert out == ""
+    assert err.strip() == (
+        "mtmc: error: --adaptive chooses the number of trials itself (JCGM 101 §7.9); "
+        "not with --trials"
+    )
+
+
+def test_output_named_as_its_input_is_refused(capsys):
+    """An output named as an input is refused, as a study file's [outputs] is."""
+    code, out, err = _run(["propagate", "a = a * 2", "-i", "a=normal(0,1)"], capsys)
+    assert code == 2
+    assert out == ""
+    assert err.strip() == (
+        "mtmc: error: field EXPR: output a has the name of an input; expected another name"
+    )
+
+
+@pytest.mark.parametrize(
+    "expr", ["a * b + c", "y1 = a * b; y2 = b + c"], ids=["one output", "two outputs"]
+)
+def test_one_route_the_study_the_folder_and_mtmc_run(expr, tmp_path, capsys):
+    """The command builds a propagate study and runs it through the study layer: its JSON,
+    the study run by the library and `mtmc run` on the folder's study.toml agree to the bit
+    (the same seeded draws and reductions)."""
+    from mtmc.study import load_study
+
+    argv = ["propagate", expr, *ARGS[2:], "--json", "-o", str(tmp_path / "a" / "b")]
+    code, out, err = _run(argv, capsys)
+    assert code == 0, err
+    got = json.loads(out)
+    folder = tmp_path / "a" / "b"  # created with its parent
+    assert got["output"] == str(folder)
+    assert (folder / "report.html").is_file()
+    written = json.loads((folder / "result.json").read_text())
+    library = load_study(folder / "study.toml").run()
+    rows = got["outputs"].values() if "outputs" in got else [got]
+    assert len(library.quantities) == len(written["quantities"]) == len(rows)
+    for row, q, w in zip(rows, library.quantities, written["quantities"], strict=True):
+        assert (row["estimate"], row["u"], row["U"]) == (q.mc.estimate, q.mc.u, q.mc.U)
+        assert (w["monte_carlo"]["estimate"], w["monte_carlo"]["u"]) == (q.mc.estimate, q.mc.u)
+        assert row["symmetric"] == list(q.mc.symmetric)
+    assert library.seed == got["seed"] == 17
+    code, out, err = _run(
+        ["run", str(folder / "study.toml"), "-o", str(tmp_path / "r"), "--json"], capsys
+    )
+    assert code == 0, err
+    again = json.loads(out)["quantities"]
+    assert [(q["estimate"], q["u"]) for q in again] == [(r["estimate"], r["u"]) for r in rows]
+
+
+def test_quiet_prints_trials_and_seed_only(capsys):
+    code, out, err = _run([*ARGS, "-q"], capsys)
+    assert code == 0, err
+    assert out == "trials 50000  seed 17\n"
+    assert err == ""

@@ -63,7 +63,13 @@ def test_several_outputs_print_each_output_and_their_correlation(capsys):
     for row, want in zip(cov, expected, strict=True):
         for a, b in zip(row, want, strict=True):
             assert abs(a - b) <= 1e-16  # sums of products of exact sensitivities (±1)
-    assert set(got["outputs"]["y2"]["validation"]) == {"d_low", "d_high", "delta", "passed"}
+    assert set(got["outputs"]["y2"]["validation"]) == {
+        "d_low",
+        "d_high",
+        "delta",
+        "passed",
+        "verdict",
+    }
     assert got["joint"]["region"]["gum"]["k"] ** 2 == pytest.approx(-2 * math.log(0.05), rel=1e-12)
 
 

@@ -19,6 +19,7 @@ from rich.table import Table
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     PROGRESS_OPTION,
+    RESULT_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
@@ -26,10 +27,10 @@ from mtmc.cli.common import (
     nan_policy,
     parallel_options,
     print_json,
-    progress_bar,
     seed_option,
     with_u,
 )
+from mtmc.cli.run import command_line, run_study
 from mtmc.cli.run_options import (
     ADAPTIVE_OPTION,
     RUN_NAN_POLICY_OPTION,
@@ -39,6 +40,7 @@ from mtmc.cli.run_options import (
 from mtmc.errors import InputError, MtmcError
 
 app = typer.Typer(
+    rich_markup_mode=None,
     help="Fiducial artefacts (Wang, Cheung and Kong 2022): simulate a study, fit probed balls.",
     no_args_is_help=True,
 )
@@ -46,8 +48,26 @@ app = typer.Typer(
 FIG_SUFFIXES = (".svg", ".png", ".pdf")
 
 
+def _check_options(
+    figure: Path | None, adaptive_and_trials: bool, noise: str, outdir: Path | None, no_gum: bool
+) -> None:
+    """Refuse the options of ``artefact simulate`` that do not go together (one line)."""
+    if figure is not None and figure.suffix.lower() not in FIG_SUFFIXES:
+        fail(f"{figure}: expected a file ending in {', '.join(FIG_SUFFIXES)}")
+    if adaptive_and_trials:
+        fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
+    if noise not in ("points", "centres"):
+        fail(f"--noise: expected points or centres, got {noise!r}")
+    if outdir is not None and (no_gum or noise != "points"):
+        fail(
+            "-o writes the study as its file gives it, which runs the GUM and draws every "
+            "probed point's noise: not with --no-gum or --noise centres"
+        )
+
+
 @app.command("simulate")
 def simulate_cmd(
+    ctx: typer.Context,
     study: Path = typer.Argument(..., help="Artefact study file (.toml)."),
     trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
     seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
@@ -64,7 +84,10 @@ def simulate_cmd(
         help="points: draw every probed coordinate's noise; centres: each fit's centre "
         "noise from its covariance (same Gaussian law, 30 times fewer draws).",
     ),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object (µm)."),
+    outdir: Path | None = RESULT_OPTION,
+    as_json: bool = typer.Option(
+        False, "--json", help="Print one JSON object (lengths in µm, as its unit says)."
+    ),
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
@@ -72,35 +95,28 @@ def simulate_cmd(
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
-    """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties."""
-    from mtmc.artefact.study import simulate_artefact
-    from mtmc.uncertainty.montecarlo import adaptive_block_size
+    """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties.
 
-    if figure is not None and figure.suffix.lower() not in FIG_SUFFIXES:
-        fail(f"{figure}: expected a file ending in {', '.join(FIG_SUFFIXES)}")
-    if adaptive and trials is not None:
-        fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
+    The study runs as mtmc run runs it; with -o its result folder and report are written.
+    """
+    _check_options(figure, adaptive and trials is not None, noise, outdir, no_gum)
+    simulated: list[Any] = []
     try:
         kind = load_study_of_kind(study, "artefact")  # the study as ``mtmc run`` reads it
-        st = kind.study
-        # [run] trials = "adaptive" unless --trials, and --adaptive, as mtmc run
-        settings = dataclasses.replace(
-            kind.settings,
-            adaptive=adaptive or (kind.settings.adaptive and trials is None),
-            nan_policy=kind.settings.nan_policy if nan is None else nan_policy(nan),
-            trials=kind.settings.trials if trials is None else trials,
+        kind = dataclasses.replace(kind, noise=noise, gum=not no_gum, on_simulated=simulated.append)
+        result = run_study(
+            kind,
+            outdir,
+            label=study.name,
+            trials=trials,
+            seed=seed,
+            progress=progress,
+            argv=command_line(ctx),
+            parallel=parallel_options(workers, executor, scheduler),
+            adaptive=True if adaptive else None,
+            nan_policy=None if nan is None else nan_policy(nan),
         )
-        engine = settings.engine | parallel_options(workers, executor, scheduler)
-        with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
-            res = simulate_artefact(
-                st,
-                engine.pop("trials"),
-                kind.settings.seed if seed is None else seed,
-                gum_too=not no_gum,
-                noise=noise,
-                progress=bar,
-                **engine,
-            )
+        res = simulated[0]
         if figure is not None:
             from mtmc.artefact.plot import plot_error_vectors
 
@@ -110,10 +126,23 @@ def simulate_cmd(
                 fail(f"{figure}: cannot write: {exc}")
     except MtmcError as exc:
         fail(run_message(exc))
+    except OSError as exc:
+        fail(f"{outdir}: cannot write: {exc.strerror or exc}")
+    st = kind.study
+    run = result.extra["run"]
     out = res.to_json()
-    omitted = res.trials - len(res.samples["setup"])  # the engine keeps finite trials only
     if as_json:
-        print_json(out | {"omitted": omitted, "adaptive": settings.adaptive})
+        output = None if outdir is None else str(outdir)
+        print_json(
+            out
+            | {
+                "unit": "µm",
+                "omitted": run["omitted"],
+                "adaptive": run["adaptive"],
+                "run": run,
+                "output": output,
+            }
+        )
         return
     con = Console()
     t = Table(
@@ -154,10 +183,10 @@ def simulate_cmd(
         f"mean volumetric error {out['volumetric_mean_um']:.2f} µm; "
         f"trials {out['trials']}  seed {out['seed']}"
     )
-    blocks = res.trials // adaptive_block_size(settings.p) if settings.adaptive else None
-    run = {"adaptive": settings.adaptive, "trials": res.trials, "omitted": omitted}
-    for line in run_lines(run | {"blocks": blocks, "ndig": settings.ndig}):
+    for line in run_lines(run):
         typer.echo(line)
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")
 
 
 @app.command("fit")

@@ -35,6 +35,31 @@ PROGRESS_OPTION: Any = typer.Option(
 )
 
 
+#: ``-q/--quiet`` of the commands that run a Monte Carlo.
+QUIET_OPTION: Any = typer.Option(
+    False,
+    "--quiet",
+    "-q",
+    help="No progress bar and no table: the line 'trials M  seed S' (and the report's "
+    "path, with -o) only.",
+)
+
+#: ``-o/--output`` of the commands that run a Monte Carlo and may keep it.
+RESULT_OPTION: Any = typer.Option(
+    None,
+    "-o",
+    "--output",
+    help="Also write the result folder (result.json, the study file, report.html) here; "
+    "created with its parents.",
+    show_default=False,
+)
+
+
+def progress_flag(progress: bool | None, quiet: bool) -> bool | None:
+    """``--progress/--no-progress`` as ``-q`` leaves it: ``-q`` turns the bar off."""
+    return False if quiet else progress
+
+
 #: ``--nan-policy``: what a run does with trials whose model value is NaN or infinite.
 NAN_POLICY_OPTION: Any = typer.Option(
     "raise",
@@ -225,6 +250,28 @@ def fail(exc: BaseException | str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
+def input_texts(specs: list[str]) -> dict[str, str]:
+    """The ``-i NAME=DISTRIBUTION`` options, split: each name's distribution text, in order.
+
+    Raises
+    ------
+    InputError
+        On a text without ``=`` or a name, or a name given twice.
+    """
+    texts: dict[str, str] = {}
+    for spec in specs:
+        name, sep, text = spec.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise InputError(
+                f"expected NAME=DISTRIBUTION, e.g. x=normal(0, 1), got {spec!r}", field="-i"
+            )
+        if name in texts:
+            raise InputError(f"input {name} given more than once", field=name)
+        texts[name] = text.strip()
+    return texts
+
+
 def input_specs(specs: list[str]) -> dict[str, Distribution]:
     """The ``-i NAME=DISTRIBUTION`` options of ``mtmc propagate``, parsed, in their order.
 
@@ -237,47 +284,13 @@ def input_specs(specs: list[str]) -> dict[str, Distribution]:
     from mtmc.uncertainty.distributions import parse_distribution
 
     dists: dict[str, Distribution] = {}
-    for spec in specs:
-        name, sep, text = spec.partition("=")
-        name = name.strip()
-        if not sep or not name:
-            raise InputError(
-                f"expected NAME=DISTRIBUTION, e.g. x=normal(0, 1), got {spec!r}", field="-i"
-            )
-        if name in dists:
-            raise InputError(f"input {name} given more than once", field=name)
+    for name, text in input_texts(specs).items():
         try:
-            dists[name] = parse_distribution(text.strip(), field=name)
+            dists[name] = parse_distribution(text, field=name)
         except MtmcError as exc:  # "line 1" would point at no file: name the option instead
             where = f" (column {exc.column})" if exc.column is not None else ""
             raise type(exc)(exc.message + where, field=f"-i {name}") from None
     return dists
-
-
-def gum_lines(g: Any, mc: Any, p: float) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The ``gum`` and ``validation`` entries of a command's JSON for one scalar output.
-
-    ``g`` is the GUM result, ``mc`` the Monte Carlo result of the same output; the
-    comparison is :func:`mtmc.validate` (JCGM 101 §8). Where both give ``u = 0`` (one
-    value) δ is 0 and the comparison is not applicable: ``passed`` is None.
-    """
-    from mtmc.uncertainty.gum import validate
-
-    v = validate(g, mc, p=p)
-    return (
-        {
-            "estimate": g.estimate,
-            "u": g.u,
-            "k": g.coverage_factor(),
-            "interval": list(g.coverage_interval()),
-        },
-        {
-            "d_low": v.d_low,
-            "d_high": v.d_high,
-            "delta": v.delta,
-            "passed": None if not (mc.u > 0 or g.u > 0) else v.passed,
-        },
-    )
 
 
 def validated_text(passed: bool | None) -> str:
@@ -463,8 +476,11 @@ __all__ = [
     "JSON_OPTION",
     "NAN_POLICY_OPTION",
     "PROGRESS_OPTION",
+    "QUIET_OPTION",
+    "RESULT_OPTION",
+    "input_texts",
+    "progress_flag",
     "check_trials",
-    "gum_lines",
     "validated_text",
     "input_specs",
     "duration_text",

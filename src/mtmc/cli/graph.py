@@ -44,7 +44,9 @@ if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
     from mtmc.graph.model import Graph
 
 app = typer.Typer(
-    help="Measurement graphs (Stryczek): check, draw, run, sweep.", no_args_is_help=True
+    rich_markup_mode=None,
+    help="Measurement graphs (Stryczek): check, draw, run, sweep.",
+    no_args_is_help=True,
 )
 
 #: Suffixes ``graph draw`` writes: Matplotlib formats, and Graphviz DOT text.
@@ -165,8 +167,8 @@ def run_cmd(
 ) -> None:
     """Run FILE by Monte Carlo and print each place's estimate and standard uncertainty.
 
-    The table gives lengths in the graph's units (``units`` of the file), angles in rad;
-    ``--json`` gives the library's result as it is, in mm and rad (its ``units``).
+    The table gives lengths in the graph's units (the file's units), angles in rad;
+    --json gives the library's result as it is, in mm and rad (its "units").
     """
     from mtmc.graph.model import check_graph
     from mtmc.graph.run import run_graph
@@ -335,7 +337,7 @@ def edit_cmd(
     port: int = typer.Option(0, "--port", help="Port on 127.0.0.1 (default: a free one)."),
     no_browser: bool = typer.Option(False, "--no-browser", help="Print the URL; open nothing."),
 ) -> None:
-    """Edit FILE in the browser and see its uncertainties live (the extra ``editor``).
+    """Edit FILE in the browser and see its uncertainties live (the extra "editor").
 
     The first line printed is the page's URL (127.0.0.1 only, with a random token).
     Ctrl-C stops the server; over an unsaved edit, press it twice.

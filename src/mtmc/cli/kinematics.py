@@ -20,6 +20,7 @@ if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
     from mtmc.kinematics.machine import Machine
 
 app = typer.Typer(
+    rich_markup_mode=None,
     help="Machine kinematics with ISO 230 errors: library, chains, equations of motion.",
     no_args_is_help=True,
 )

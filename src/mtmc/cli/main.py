@@ -22,6 +22,7 @@ from mtmc import __version__
 from mtmc.cli import artefact, circle, graph, kinematics, positioning, propagate, run, verify
 
 app = typer.Typer(
+    rich_markup_mode=None,
     name="mtmc",
     help="Machine-tool Monte Carlo: measurement uncertainty by JCGM 101 with the GUM beside it.",
     no_args_is_help=True,

@@ -1,38 +1,30 @@
 """``mtmc propagate "y1 = ...; y2 = ..."``: several outputs of the same inputs (JCGM 102).
 
 An expression of the form ``NAME = MODEL; NAME = MODEL`` names several outputs. They are
-evaluated on the same Monte Carlo trials and propagated by the GUM as one vector model
-(:mod:`mtmc.study.outputs`, as a study with ``[outputs]``); this module parses the text
-and the ``-i`` options and prints each output and their correlation and coverage region,
-or one JSON object. No maths here.
+evaluated on the same Monte Carlo trials and propagated by the GUM as one vector model:
+``mtmc propagate`` builds a study with ``[outputs]`` and runs it (:mod:`mtmc.study.outputs`);
+this module parses the text and checks the ``-i`` options, and prints each output and
+their correlation and coverage region, or one JSON object. No maths here.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import (
-    engine_message,
-    fail,
-    gum_lines,
-    input_specs,
-    nan_policy,
-    parallel_options,
-    print_json,
-    progress_bar,
-    quiet_numpy,
-    validated_text,
-)
+from mtmc.cli.common import input_specs, print_json, print_trials_seed, validated_text
+from mtmc.cli.run_options import run_lines
 from mtmc.errors import InputError, MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
     from mtmc.study.outputs import ModelOutput
     from mtmc.uncertainty.distributions import Distribution
 
-__all__ = ["is_several", "parse_outputs", "propagate_outputs"]
+__all__ = ["check_inputs", "is_several", "parse_outputs", "print_outputs", "summary_record"]
 
 
 def is_several(text: str) -> bool:
@@ -78,7 +70,14 @@ def parse_outputs(text: str) -> tuple[ModelOutput, ...]:
     return tuple(outputs)
 
 
-def _inputs(outputs: tuple[ModelOutput, ...], specs: list[str]) -> dict[str, Distribution]:
+def check_inputs(outputs: tuple[ModelOutput, ...], specs: list[str]) -> dict[str, Distribution]:
+    """The ``-i`` options checked against the outputs: each variable has one, no other.
+
+    Raises
+    ------
+    InputError
+        Naming the input or ``EXPR``.
+    """
     from mtmc.study.outputs import JointModel, check_vector_use
 
     names = JointModel(outputs).names
@@ -107,87 +106,89 @@ def _fmt(x: float | None) -> str:
     return "—" if x is None else f"{x:.6g}"
 
 
-def propagate_outputs(
-    text: str,
-    specs: list[str],
-    *,
-    trials: int,
-    seed: int | None,
-    adaptive: bool,
-    with_gum: bool,
-    p: float,
-    as_json: bool,
-    nan: str,
-    workers: int,
-    executor: str,
-    scheduler: str | None,
-    progress: bool | None,
-) -> None:
-    """Run and print several outputs of the same inputs (see the module docstring)."""
-    from mtmc.study.outputs import JointModel, NamedOutputs, joint_summary
-    from mtmc.uncertainty.gum import gum
-    from mtmc.uncertainty.montecarlo import monte_carlo
-    from mtmc.uncertainty.results import MonteCarloResults
+def summary_record(q: Any, with_gum: bool) -> dict[str, Any]:
+    """One output's numbers of ``--json``: y, U, k, u, the intervals, the unit.
 
-    try:
-        outputs = parse_outputs(text)
-        dists = _inputs(outputs, specs)
-        with progress_bar("Monte Carlo", progress) as bar, quiet_numpy():
-            mc = monte_carlo(
-                NamedOutputs(outputs),
-                dists,
-                trials=None if adaptive else trials,
-                seed=seed,
-                adaptive=adaptive,
-                p=p,
-                progress=bar,
-                nan_policy=nan_policy(nan),
-                keep=True,
-                **parallel_options(workers, executor, scheduler),
-            )
-        assert isinstance(mc, MonteCarloResults)
-        with quiet_numpy():
-            g = gum(JointModel(outputs), dists, p=p)
-        out: dict[str, Any] = {"outputs": {}, "trials": mc.trials, "omitted": mc.omitted}
-        out["seed"] = mc.seed
-        for i, o in enumerate(outputs):
-            r = mc[o.name]
-            row: dict[str, Any] = {
-                "model": o.model.text,
-                "estimate": r.estimate,
-                "u": r.u,
-                "p": p,
-                "shortest": list(r.coverage_interval(p, kind="shortest")),
-                "symmetric": list(r.coverage_interval(p, kind="symmetric")),
-            }
-            if with_gum:
-                row["gum"], row["validation"] = gum_lines(g.component(i), r, p)
-            out["outputs"][o.name] = row
-        joint = joint_summary(outputs, mc, g, p)
-        joint.pop("units")
-        if joint["region"] is not None:
-            joint["region"].pop("scatter", None)
-        out["joint"] = joint
-    except (MtmcError, ValueError) as exc:
-        fail(engine_message(exc))
+    With ``with_gum`` (``--gum``) the GUM and the JCGM 101 §8 validation too.
+    """
+    mc = q.mc
+    out: dict[str, Any] = {
+        "unit": q.unit,
+        "estimate": mc.estimate,
+        "U": mc.U,
+        "k": mc.k,
+        "u": mc.u,
+        "p": mc.p,
+        "interval_kind": mc.interval,
+        "shortest": list(mc.shortest),
+        "symmetric": list(mc.symmetric),
+        "reported": q.reported.to_dict(),
+    }
+    if with_gum and q.gum is not None and q.validation is not None:
+        g, v = q.gum, q.validation
+        out["gum"] = {
+            "estimate": g.estimate,
+            "U": g.U,
+            "k": g.k,
+            "u": g.u,
+            "interval": list(g.interval),
+        }
+        out["validation"] = {
+            "d_low": v.d_low,
+            "d_high": v.d_high,
+            "delta": v.delta,
+            "passed": v.passed,
+            "verdict": v.verdict,
+        }
+    return out
+
+
+def print_outputs(
+    result: Any, outdir: Path | None, *, with_gum: bool, as_json: bool, quiet: bool
+) -> None:
+    """Print the result of a propagate study of several outputs: a table or one JSON object."""
+    run = result.extra.get("run") or {}
+    models = result.extra["models"]
+    out: dict[str, Any] = {
+        "outputs": {
+            q.name: {"model": models[q.name], **summary_record(q, with_gum)}
+            for q in result.quantities
+        },
+        "trials": result.trials,
+        "omitted": run.get("omitted", 0),
+        "seed": result.seed,
+        "run": result.extra.get("run"),
+        "output": None if outdir is None else str(outdir),
+    }
+    joint = dict(result.extra["joint"])
+    if joint.get("region") is not None:
+        joint["region"] = {k: v for k, v in joint["region"].items() if k != "scatter"}
+    out["joint"] = joint
     if as_json:
         print_json(out)
         return
-    _print(out, p, with_gum)
+    if not quiet:
+        _print(out, result.p, with_gum)
+    print_trials_seed(out["trials"], out["seed"])
+    for line in run_lines(result.extra.get("run")):
+        typer.echo(line)
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")
 
 
 def _print(out: dict[str, Any], p: float, with_gum: bool) -> None:
     console = Console()
     names = list(out["outputs"])
     table = Table(title=f"Monte Carlo (JCGM 101, JCGM 102) of {len(names)} outputs")
-    for col in ("output", "estimate y", "u(y)", f"symmetric {100 * p:g} % interval"):
+    big_u = f"U (k, p = {100 * p:g} %)"
+    for col in ("output", "estimate y", big_u, "u(y)"):
         table.add_column(col, justify="left" if col == "output" else "right")
     if with_gum:
         table.add_column("u(y), GUM", justify="right")
         table.add_column("GUM validated", justify="right")
     for name, r in out["outputs"].items():
-        cells = [name, _fmt(r["estimate"]), _fmt(r["u"])]
-        cells.append(f"[{_fmt(r['symmetric'][0])}, {_fmt(r['symmetric'][1])}]")
+        k = "" if r["k"] is None else f" (k = {r['k']:.3f})"
+        cells = [name, _fmt(r["estimate"]), _fmt(r["U"]) + k, _fmt(r["u"])]
         if with_gum:
             cells += [_fmt(r["gum"]["u"]), validated_text(r["validation"]["passed"])]
         table.add_row(*cells)
@@ -217,4 +218,3 @@ def _print(out: dict[str, Any], p: float, with_gum: bool) -> None:
         )
     elif joint["region_note"]:
         console.print(f"no coverage region: {joint['region_note']}")
-    console.print(f"trials {out['trials']}  seed {out['seed']}")

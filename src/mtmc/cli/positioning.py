@@ -44,6 +44,7 @@ from mtmc.errors import InputError, MtmcError
 __all__ = ["app", "evaluate_cmd", "parse_columns"]
 
 app = typer.Typer(
+    rich_markup_mode=None,
     help="Positioning tests of an axis (ISO 230-2): parameters with U by GUM and Monte Carlo.",
     no_args_is_help=True,
 )
@@ -102,7 +103,7 @@ def evaluate_cmd(
     study_file: Path | None = typer.Option(
         None,
         "--study",
-        help="A positioning study whose environment, instrument, tolerances and \\[run] apply "
+        help="A positioning study whose environment, instrument, tolerances and [run] apply "
         "to DATA (default: the Type A evaluation of the readings alone).",
     ),
     units: str = typer.Option(

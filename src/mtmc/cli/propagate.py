@@ -1,12 +1,15 @@
 """``mtmc propagate``: propagate distributions through an expression.
 
-Parses the expression and the ``-i NAME=DIST`` options, calls
-:func:`mtmc.monte_carlo` (and, with ``--gum``, :func:`mtmc.gum` and
-:func:`mtmc.validate`), and prints a table or one JSON object. No maths here.
+Parses the expression and the ``-i NAME=DIST`` options into a ``propagate`` study
+(:func:`study_text`), runs it through the study layer as ``mtmc run`` runs a study file
+(:func:`mtmc.cli.run.run_study`: the Monte Carlo, the GUM, the JCGM 101 §8 validation and,
+asked for, the sensitivity of :mod:`mtmc.study.propagate`), and prints a table or one JSON
+object; with ``-o`` the result folder too. No maths here.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import typer
@@ -18,21 +21,26 @@ from mtmc.cli.common import (
     JSON_OPTION,
     NAN_POLICY_OPTION,
     PROGRESS_OPTION,
+    QUIET_OPTION,
+    RESULT_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     check_trials,
     engine_message,
     fail,
-    gum_lines,
     input_specs,
+    input_texts,
     nan_policy,
     parallel_options,
     print_json,
-    progress_bar,
+    print_trials_seed,
+    progress_flag,
     quiet_numpy,
     seed_option,
     validated_text,
 )
+from mtmc.cli.run import command_line, run_study
+from mtmc.cli.run_options import ADAPTIVE_OPTION, run_lines
 from mtmc.errors import InputError, MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
@@ -138,40 +146,105 @@ def _fmt(x: float) -> str:
     return f"{x:.6g}"
 
 
-def _sensitivity(
-    model: Expression,
-    dists: dict[str, Distribution],
-    trials: int,
-    seed: Any,
-    u_mc: float,
-    p: float,
-    workers: int,
-    executor: str,
-    scheduler: str | None,
-) -> dict[str, Any]:
-    """The ``sensitivity`` record of ``--sensitivity`` (as a study's ``[sensitivity]``)."""
-    from mtmc.study.sensitivity import SensitivitySettings, sensitivity_record
-    from mtmc.uncertainty.gum import gum
-    from mtmc.uncertainty.sampling import SEED_BLOCK_SIZE
+#: The name of the study text that ``mtmc propagate`` builds from its options.
+COMMAND_FILE = "mtmc propagate"
 
-    if trials < 2 * SEED_BLOCK_SIZE or trials % SEED_BLOCK_SIZE:
-        raise InputError(
-            f"expected a multiple of {SEED_BLOCK_SIZE}, at least {2 * SEED_BLOCK_SIZE}, "
-            f"got {trials}",
-            field="--sensitivity-trials",
-        )
-    with quiet_numpy():
-        return sensitivity_record(
-            model,
-            dists,
-            SensitivitySettings(trials=trials),
-            seed=int(seed),
-            output="y",
-            unit="1",
-            u_mc=u_mc,
-            gum_result=gum(model, dists, p=p),
-            parallel=parallel_options(workers, executor, scheduler),
-        )
+#: A study's field, as the option of ``mtmc propagate`` that gave it.
+_OPTION_OF_FIELD = (
+    ("inputs.", "-i "),
+    ("outputs", "EXPR"),
+    ("model", "EXPR"),
+    ("correlation", "--correlate"),
+    ("sensitivity", "--sensitivity-trials"),
+    ("run.trials", "--trials"),
+    ("run.p", "--coverage-probability"),
+    ("run.nan_policy", "--nan-policy"),
+)
+
+
+def option_error(exc: MtmcError) -> InputError:
+    """An error of the study built from the options, naming the option instead of a line.
+
+    The study text is the command's, not a file of the user's: its line numbers point
+    nowhere, so the error names the option (``-i a``, ``EXPR``, ``--correlate``) that
+    gave the field.
+
+    Examples
+    --------
+    >>> str(option_error(InputError("output a has the name of an input", file=COMMAND_FILE,
+    ...                              line=9, field="outputs.a")))
+    'field EXPR: output a has the name of an input'
+    """
+    field = exc.field
+    for prefix, option in _OPTION_OF_FIELD:
+        if field is not None and field.startswith(prefix):
+            field = option + field[len(prefix) :] if option.endswith(" ") else option
+            break
+    return InputError(exc.message, field=field)
+
+
+def study_text(
+    outputs: dict[str, str] | str,
+    inputs: dict[str, str],
+    *,
+    trials: int | None,
+    seed: int | None,
+    p: float,
+    nan: str,
+    correlation: list[tuple[str, str, float]] | None = None,
+    copula: Any = None,
+    sensitivity_trials: int | None = None,
+) -> str:
+    """The ``propagate`` study (``docs/study-format.md``) that the options describe.
+
+    Parameters
+    ----------
+    outputs : str or dict of str to str
+        The model text of one output ``y``, or the model texts of several named outputs
+        (``[outputs]``).
+    inputs : dict of str to str
+        Each input's distribution text, as given to ``-i NAME=DISTRIBUTION``.
+    trials : int or None
+        ``[run] trials`` (None: ``"adaptive"``).
+    seed : int or None
+        ``[run] seed`` (None: fresh entropy, drawn by the run and recorded).
+    p, nan
+        ``[run] p`` and ``nan_policy``.
+    correlation, copula : optional
+        ``[correlation] pairs`` and ``copula`` (:class:`~mtmc.uncertainty.copula.Copula`).
+    sensitivity_trials : int, optional
+        ``[sensitivity] trials``.
+
+    Returns
+    -------
+    str
+        The TOML text, read by :func:`mtmc.study.loads_study` as a study file is and copied
+        into the result folder, so that ``mtmc run`` repeats the run from it.
+    """
+    import tomlkit
+
+    doc = tomlkit.document()
+    doc["kind"] = "propagate"
+    doc["title"] = "Propagation of distributions"
+    if isinstance(outputs, str):
+        doc["model"] = outputs
+    else:
+        doc["outputs"] = outputs
+    doc["inputs"] = inputs
+    run: dict[str, Any] = {"trials": "adaptive" if trials is None else trials, "p": p}
+    if seed is not None:
+        run["seed"] = seed
+    run["nan_policy"] = nan
+    doc["run"] = run
+    if correlation:
+        cop = copula.to_dict()
+        doc["correlation"] = {
+            "pairs": [list(pair) for pair in correlation],
+            "copula": cop["kind"] if cop["kind"] == "gaussian" else cop,
+        }
+    if sensitivity_trials is not None:
+        doc["sensitivity"] = {"trials": sensitivity_trials}
+    return tomlkit.dumps(doc)
 
 
 def _print_sensitivity(console: Console, rec: dict[str, Any]) -> None:
@@ -197,6 +270,7 @@ def _print_sensitivity(console: Console, rec: dict[str, Any]) -> None:
 
 
 def propagate(
+    ctx: typer.Context,
     expr: str = typer.Argument(
         ...,
         help="Model expression, e.g. 'a * b + c', or several outputs of the same inputs, "
@@ -205,10 +279,17 @@ def propagate(
     inputs: list[str] = typer.Option(
         [], "-i", "--input", help="An input as NAME=DISTRIBUTION, e.g. x='normal(0, 1)'."
     ),
-    trials: int = typer.Option(10**6, "--trials", "-n", help="Number of Monte Carlo trials."),
+    trials: int | None = typer.Option(
+        None,
+        "--trials",
+        "-n",
+        min=2,
+        help="Monte Carlo trials (default: 1000000).",
+        show_default=False,
+    ),
     seed: int | None = seed_option("fresh entropy"),
-    adaptive: bool = typer.Option(False, "--adaptive", help="Adaptive MC (JCGM 101 §7.9)."),
-    with_gum: bool = typer.Option(False, "--gum", help="Also the GUM and §8 validation."),
+    adaptive: bool = ADAPTIVE_OPTION,
+    with_gum: bool = typer.Option(False, "--gum", help="Also print the GUM and §8 validation."),
     sensitivity: bool = typer.Option(
         False,
         "--sensitivity",
@@ -231,131 +312,168 @@ def propagate(
     p: float = typer.Option(
         0.95, "--coverage-probability", "-p", help="Coverage probability p, 0 < p < 1."
     ),
+    outdir: Path | None = RESULT_OPTION,
     as_json: bool = JSON_OPTION,
+    quiet: bool = QUIET_OPTION,
     nan: str = NAN_POLICY_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
 ) -> None:
-    """Propagate input distributions through EXPR by Monte Carlo (JCGM 101)."""
-    from mtmc.cli.outputs import is_several, propagate_outputs
+    """Propagate input distributions through EXPR by Monte Carlo (JCGM 101).
+
+    The options make a propagate study (docs/study-format.md), run as mtmc run runs a
+    study file; with -o its result folder holds that study file and the report.
+    """
+    from mtmc.cli.outputs import (
+        check_inputs,
+        is_several,
+        parse_outputs,
+        print_outputs,
+    )
+    from mtmc.study import loads_study
     from mtmc.uncertainty.expression import expression
-    from mtmc.uncertainty.gum import gum
-    from mtmc.uncertainty.montecarlo import monte_carlo
 
     check_trials(trials)
-    if is_several(expr):  # NAME = MODEL; NAME = MODEL: several outputs (JCGM 102)
-        if sensitivity or correlate:
-            fail("--sensitivity and --correlate apply to one model, not to several outputs")
-        propagate_outputs(
-            expr,
-            inputs,
-            trials=trials,
-            seed=seed,
-            adaptive=adaptive,
-            with_gum=with_gum,
-            p=p,
-            as_json=as_json,
-            nan=nan,
-            workers=workers,
-            executor=executor,
-            scheduler=scheduler,
-            progress=progress,
-        )
-        return
+    if adaptive and trials is not None:
+        fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
+    several = is_several(expr)  # NAME = MODEL; NAME = MODEL: several outputs (JCGM 102)
+    if several and (sensitivity or correlate):
+        fail("--sensitivity and --correlate apply to one model, not to several outputs")
     try:
-        model = expression(expr)
-        dists = parse_inputs(model, inputs)
-        corr, cop = parse_correlation(correlate, copula)
-        if corr and sensitivity:
+        if not 0.0 < p < 1.0:
+            raise InputError(f"expected 0 < p < 1, got {p}", field="--coverage-probability")
+        texts = input_texts(inputs)
+        models: dict[str, str] | str
+        if several:
+            outputs = parse_outputs(expr)
+            check_inputs(outputs, inputs)
+            models = {o.name: o.model.text for o in outputs}
+        else:
+            model = expression(expr)
+            parse_inputs(model, inputs)
+            texts = {n: texts[n] for n in model.names}
+            models = model.text
+        pairs, cop = parse_correlation(correlate, copula)
+        if pairs and sensitivity:
             raise InputError(
                 "--sensitivity varies each input alone, which assumes independent inputs",
                 field="--correlate",
             )
-        with progress_bar("Monte Carlo", progress) as bar, quiet_numpy():
-            mc = monte_carlo(
-                model,
-                dists,
-                trials=None if adaptive else trials,
-                seed=seed,
-                adaptive=adaptive,
-                p=p,
-                progress=bar,
-                nan_policy=nan_policy(nan),
-                **parallel_options(workers, executor, scheduler),
-                **({"correlation": corr, "copula": cop} if corr else {}),
-            )
-        if mc.dim != 0:
-            raise InputError(
-                f"the expression gives an output of {mc.dim} components; propagate "
-                "reports scalar outputs",
-                field="EXPR",
-            )
-        shortest = mc.coverage_interval(p, kind="shortest")
-        symmetric = mc.coverage_interval(p, kind="symmetric")
-        out: dict[str, Any] = {
-            "estimate": mc.estimate,
-            "u": mc.u,
-            "p": p,
-            "shortest": list(shortest),
-            "symmetric": list(symmetric),
-            "trials": mc.trials,
-            "omitted": mc.omitted,
-            "seed": mc.seed,
-        }
-        if corr:
-            out["correlation"] = {
-                "copula": cop.to_dict(),
-                "pairs": [[a, b, r] for (a, b), r in corr.items()],
-            }
-        if with_gum:
-            with quiet_numpy():
-                g = gum(model, dists, p=p, correlation=corr or None)
-            out["gum"], out["validation"] = gum_lines(g, mc, p)
         if sensitivity:
-            out["sensitivity"] = _sensitivity(
-                model, dists, sensitivity_trials, mc.seed, mc.u, p, workers, executor, scheduler
+            check_sensitivity_trials(sensitivity_trials)
+        text = study_text(
+            models,
+            texts,
+            trials=None if adaptive else (10**6 if trials is None else trials),
+            seed=seed,
+            p=p,
+            nan=nan_policy(nan),
+            correlation=[(a, b, r) for (a, b), r in pairs.items()],
+            copula=cop,
+            sensitivity_trials=sensitivity_trials if sensitivity else None,
+        )
+        try:
+            study = loads_study(text, file=COMMAND_FILE)
+        except MtmcError as exc:
+            raise option_error(exc) from None
+        with quiet_numpy():
+            result = run_study(
+                study,
+                outdir,
+                label="propagate",
+                progress=progress_flag(progress, quiet),
+                argv=command_line(ctx),
+                parallel=parallel_options(workers, executor, scheduler),
             )
     except (MtmcError, ValueError) as exc:
         fail(engine_message(exc))
+    except OSError as exc:
+        fail(f"{outdir}: cannot write: {exc.strerror or exc}")
+    if several:
+        print_outputs(result, outdir, with_gum=with_gum, as_json=as_json, quiet=quiet)
+        return
+    out = one_output(result, outdir, with_gum)
     if as_json:
         print_json(out)
         return
+    if not quiet:
+        _print(out, model.text)
+    print_trials_seed(out["trials"], out["seed"])
+    for line in run_lines(result.extra.get("run")):
+        typer.echo(line)
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")
+
+
+def check_sensitivity_trials(trials: int) -> None:
+    """Refuse ``--sensitivity-trials`` that are not whole seed blocks (naming the option)."""
+    from mtmc.uncertainty.sampling import SEED_BLOCK_SIZE
+
+    if trials < 2 * SEED_BLOCK_SIZE or trials % SEED_BLOCK_SIZE:
+        raise InputError(
+            f"expected a multiple of {SEED_BLOCK_SIZE}, at least {2 * SEED_BLOCK_SIZE}, "
+            f"got {trials}",
+            field="--sensitivity-trials",
+        )
+
+
+def one_output(result: Any, outdir: Path | None, with_gum: bool) -> dict[str, Any]:
+    """The ``--json`` object of a propagate study of one output (``docs/cli.md``)."""
+    from mtmc.cli.outputs import summary_record
+
+    out = summary_record(result.quantities[0], with_gum)
+    run = result.extra.get("run") or {}
+    out |= {
+        "trials": result.trials,
+        "omitted": run.get("omitted", 0),
+        "seed": result.seed,
+        "run": result.extra.get("run"),
+        "output": None if outdir is None else str(outdir),
+    }
+    for key in ("correlation", "sensitivity"):
+        if key in result.extra:
+            out[key] = result.extra[key]
+    return out
+
+
+def _print(out: dict[str, Any], text: str) -> None:
+    """The tables of one output: U (k, p) first, u beside it; the GUM and budget if asked."""
     console = Console()
-    table = Table(title=f"Monte Carlo (JCGM 101): {model.text}")
+    p = out["p"]
+    table = Table(title=f"Monte Carlo (JCGM 101): {text}")
     table.add_column("quantity")
     table.add_column("value", justify="right")
     table.add_row("estimate y", _fmt(out["estimate"]))
+    k = "" if out["k"] is None else f"k = {out['k']:.3f}, "
+    table.add_row(f"expanded uncertainty U ({k}p = {100 * p:g} %)", _fmt(out["U"]))
     table.add_row("standard uncertainty u(y)", _fmt(out["u"]))
-    table.add_row(f"shortest {100 * p:g} % interval", f"[{_fmt(shortest[0])}, {_fmt(shortest[1])}]")
-    table.add_row(
-        f"symmetric {100 * p:g} % interval", f"[{_fmt(symmetric[0])}, {_fmt(symmetric[1])}]"
-    )
-    table.add_row("trials", str(out["trials"]))
-    if out["omitted"]:
-        table.add_row("trials left out (NaN or inf)", str(out["omitted"]))
-    table.add_row("seed", str(out["seed"]))
-    if corr:
-        pairs = ", ".join(f"r({a}, {b}) = {r:g}" for (a, b), r in corr.items())
-        table.add_row(f"correlation ({cop} copula)", pairs)
+    for kind in ("shortest", "symmetric"):
+        lo, hi = out[kind]
+        table.add_row(f"{kind} {100 * p:g} % interval", f"[{_fmt(lo)}, {_fmt(hi)}]")
+    corr = out.get("correlation")
+    if corr is not None:
+        cop = corr["copula"]
+        name = "gaussian" if cop["kind"] == "gaussian" else f"t (ν = {cop['dof']:g})"
+        pairs = ", ".join(f"r({x['a']}, {x['b']}) = {x['r']:g}" for x in corr["pairs"])
+        table.add_row(f"correlation ({name} copula)", pairs)
     console.print(table)
-    if with_gum:
+    if "gum" in out:
         gt = Table(title="GUM (JCGM 100) and JCGM 101 §8 validation")
         gt.add_column("quantity")
         gt.add_column("value", justify="right")
         g_out, v_out = out["gum"], out["validation"]
         gt.add_row("estimate y", _fmt(g_out["estimate"]))
+        gt.add_row(f"expanded uncertainty U (k = {g_out['k']:.3f})", _fmt(g_out["U"]))
         gt.add_row("standard uncertainty u(y)", _fmt(g_out["u"]))
-        gt.add_row("coverage factor k", _fmt(g_out["k"]))
         gt.add_row(
-            "interval y ± k u", f"[{_fmt(g_out['interval'][0])}, {_fmt(g_out['interval'][1])}]"
+            "interval y ± U", f"[{_fmt(g_out['interval'][0])}, {_fmt(g_out['interval'][1])}]"
         )
         gt.add_row("d_low", _fmt(v_out["d_low"]))
         gt.add_row("d_high", _fmt(v_out["d_high"]))
         gt.add_row("numerical tolerance δ", _fmt(v_out["delta"]))
-        passed = v_out["passed"]
-        gt.add_row("GUM validated", validated_text(passed))
+        gt.add_row("GUM validated", validated_text(v_out["passed"]))
         console.print(gt)
-    if sensitivity:
+    if "sensitivity" in out:
         _print_sensitivity(console, out["sensitivity"])

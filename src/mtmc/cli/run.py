@@ -19,6 +19,8 @@ from rich.table import Table
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
+    PROGRESS_OPTION,
+    QUIET_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     check_trials,
@@ -28,6 +30,7 @@ from mtmc.cli.common import (
     print_json,
     print_trials_seed,
     progress_bar,
+    progress_flag,
     seed_option,
     warn,
 )
@@ -43,6 +46,8 @@ __all__ = [
     "default_outdir",
     "report_cmd",
     "run_cmd",
+    "command_line",
+    "run_study",
     "run_study_file",
     "run_summary",
     "summary_table",
@@ -135,6 +140,62 @@ def run_summary(result: Any, outdir: Path) -> dict[str, Any]:
     }
 
 
+def run_study(
+    study: Any,
+    outdir: Path | None,
+    *,
+    label: str,
+    trials: int | None = None,
+    seed: int | None = None,
+    samples: bool | None = None,
+    progress: bool | None = None,
+    argv: list[str] | None = None,
+    parallel: dict[str, Any] | None = None,
+    adaptive: bool | None = None,
+    nan_policy: str | None = None,
+) -> Any:
+    """Run a loaded study and, with ``outdir``, write its result folder: every command's route.
+
+    Parameters
+    ----------
+    study : Study
+        The study (:func:`mtmc.study.load_study` or :func:`mtmc.study.loads_study`).
+    outdir : Path or None
+        The result folder to write (created with its parents), with the study's text as
+        ``study.toml`` and ``report.html`` (:func:`mtmc.study.write_result`); None: none.
+    label : str
+        The text before the progress bar.
+    trials, seed, samples, adaptive, nan_policy, parallel
+        As :meth:`mtmc.study.Study.run` (None: as the study says); ``parallel`` holds
+        its ``workers``, ``executor`` and ``scheduler``.
+    progress : bool or None
+        ``--progress/--no-progress`` (None: when stderr is a terminal).
+    argv : list of str, optional
+        The command line, for ``provenance.json``.
+
+    Returns
+    -------
+    StudyResult
+    """
+    from mtmc.study import write_result
+    from mtmc.study.write import now
+
+    started = now()
+    with progress_bar(f"{label}: Monte Carlo", progress) as bar:
+        result = study.run(
+            trials=trials,
+            seed=seed,
+            samples=samples,
+            progress=bar,
+            adaptive=adaptive,
+            nan_policy=nan_policy,
+            **(parallel or {}),
+        )
+    if outdir is not None:
+        write_result(result, outdir, study_text=study.source.text, started=started, argv=argv)
+    return result
+
+
 def run_study_file(
     study: Path,
     outdir: Path,
@@ -154,23 +215,50 @@ def run_study_file(
     :meth:`mtmc.study.Study.run`; ``adaptive`` and ``nan_policy`` override ``[run]``
     (None: as the file says).
     """
-    from mtmc.study import load_study, write_result
-    from mtmc.study.write import now
+    from mtmc.study import load_study
 
-    s = load_study(study)
-    started = now()
-    with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
-        result = s.run(
-            trials=trials,
-            seed=seed,
-            samples=samples,
-            progress=bar,
-            adaptive=adaptive,
-            nan_policy=nan_policy,
-            **(parallel or {}),
+    return run_study(
+        load_study(study),
+        outdir,
+        label=study.name,
+        trials=trials,
+        seed=seed,
+        samples=samples,
+        progress=progress,
+        argv=argv,
+        parallel=parallel,
+        adaptive=adaptive,
+        nan_policy=nan_policy,
+    )
+
+
+def command_line(ctx: typer.Context) -> list[str]:
+    """The command line of ``ctx`` as :func:`mtmc.cli.main.main` received it."""
+    return list((ctx.find_root().obj or {}).get("argv", ["mtmc", *sys.argv[1:]]))
+
+
+def _reader_of(path: Path, exc: BaseException) -> str:
+    """Where a file without ``kind`` is not a study: the command that reads it, else ``""``.
+
+    A measurement graph (``[[place]]``, ``[[transition]]``) is run by ``mtmc graph run``;
+    an artefact definition (``[[ball]]``) is named by an artefact study's ``artefact`` key.
+    """
+    import tomllib
+
+    if not (isinstance(exc, MtmcError) and exc.field == "kind" and "missing kind" in exc.message):
+        return ""
+    try:
+        keys = set(tomllib.loads(path.read_text(encoding="utf-8")))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return ""
+    if keys & {"place", "transition"}:
+        return f"; {path} is a measurement graph: run it with mtmc graph run {path}"
+    if "ball" in keys:
+        return (
+            f"; {path} defines an artefact's balls: an artefact study names it "
+            '(kind = "artefact", artefact = "FILE"), run by mtmc artefact simulate or mtmc run'
         )
-    write_result(result, outdir, study_text=s.source.text, started=started, argv=argv)
-    return result
+    return ""
 
 
 def run_cmd(
@@ -184,9 +272,8 @@ def run_cmd(
     ),
     seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     samples: bool = typer.Option(False, "--samples", help="Also write the samples as .npy."),
-    quiet: bool = typer.Option(
-        False, "--quiet", "-q", help="No progress bar, no table (the seed is still printed)."
-    ),
+    quiet: bool = QUIET_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
     as_json: bool = JSON_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
@@ -208,14 +295,14 @@ def run_cmd(
             trials=trials,
             seed=seed,
             samples=True if samples else None,
-            progress=False if quiet else None,
-            argv=(ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]]),
+            progress=progress_flag(progress, quiet),
+            argv=command_line(ctx),
             parallel=parallel_options(workers, executor, scheduler),
             adaptive=True if adaptive else None,
             nan_policy=None if nan is None else nan_policy(nan),
         )
     except (MtmcError, OSError) as exc:
-        fail(run_message(exc))
+        fail(run_message(exc) + _reader_of(study, exc))
     warn(result.extra.get("warnings", ()))
     if as_json:
         print_json(run_summary(result, out))
@@ -249,7 +336,8 @@ def demo_cmd(
     out: Path = typer.Option(Path("mtmc-demo"), "-o", "--output", help="Output folder."),
     trials: int | None = typer.Option(None, "--trials", "-n", help="Trials of every study."),
     seed: int | None = seed_option("each study's run.seed"),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    quiet: bool = QUIET_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
     as_json: bool = JSON_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
@@ -267,7 +355,7 @@ def demo_cmd(
     check_trials(trials)
 
     def bar(label: str) -> Any:
-        return progress_bar(f"{label}: Monte Carlo", False if quiet else None)
+        return progress_bar(f"{label}: Monte Carlo", progress_flag(progress, quiet))
 
     summaries: list[dict[str, Any]] = []
     try:

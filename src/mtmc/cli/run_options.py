@@ -21,7 +21,7 @@ ADAPTIVE_OPTION: Any = typer.Option(
     "--adaptive",
     help="Adaptive Monte Carlo (JCGM 101 §7.9): add blocks of trials until u, the estimate "
     "and the interval ends of every output are stable to ndig significant digits of u "
-    "(a study's \\[run] ndig; 2 otherwise); not with --trials.",
+    "(a study's [run] ndig; 2 otherwise); not with --trials.",
 )
 
 #: ``--nan-policy`` of ``mtmc run``: no default, the study's ``[run] nan_policy`` holds.
@@ -30,7 +30,7 @@ RUN_NAN_POLICY_OPTION: Any = typer.Option(
     "--nan-policy",
     help="raise: stop at a model value that is NaN or infinite; omit: leave those trials "
     "out (their number is printed and kept in result.json). Default: the study's "
-    "\\[run] nan_policy, else raise.",
+    "[run] nan_policy, else raise.",
     show_default=False,
 )
 

@@ -30,6 +30,7 @@ from mtmc.cli.common import (
 from mtmc.errors import MtmcError
 
 app = typer.Typer(
+    rich_markup_mode=None,
     help="Laser-tracker volumetric verification: plan, simulate, identify, place.",
     no_args_is_help=True,
 )
@@ -42,11 +43,30 @@ def _load(path: Path) -> Any:
     return load_study_of_kind(path, "verification")
 
 
+def _verification(path: Path, st: Any, points: str | None, tracker: str | None) -> Any:
+    """The study's verification of ``--points`` and ``--tracker``.
+
+    An unknown point set or tracker position is refused naming the study file and the
+    option.
+    """
+    from mtmc.errors import InputError
+
+    try:
+        return st.verification(points, tracker)
+    except InputError as exc:
+        if exc.file is not None or exc.field not in ("points", "tracker"):
+            raise
+        raise InputError(exc.message, file=str(path), field=f"--{exc.field}") from None
+
+
 @app.command("plan")
 def plan_cmd(
     study: Path = STUDY,
     out: Path = typer.Option(
-        Path("."), "-o", "--output", help="Folder for the NC programs and the points table."
+        Path("."),
+        "-o",
+        "--output",
+        help="Folder for the NC programs and the points table; created with its parents.",
     ),
     as_json: bool = JSON_OPTION,
 ) -> None:
@@ -60,9 +80,8 @@ def plan_cmd(
         vis = load_plan_visibility(study, plan)
     except MtmcError as exc:
         fail(exc)
-    if not out.is_dir():
-        fail(f"{out}: the output folder does not exist")
     try:
+        out.mkdir(parents=True, exist_ok=True)
         files = write_programs(plan, nc, out)
     except OSError as exc:
         fail(f"{out}: cannot write: {exc.strerror or exc}")
@@ -157,7 +176,7 @@ def simulate_cmd(
     try:
         kind = _load(study)
         st = kind.study
-        ver = st.verification(points, tracker)
+        ver = _verification(study, st, points, tracker)
         warnings = visibility_warnings(
             study_visibility(st, points, [tracker or st.default_tracker]), st.machine.axes
         )
@@ -298,7 +317,7 @@ def identify_cmd(
         fail(f"--export: expected isg, etalon or csv, got {export!r}")
     try:
         st = _load(study).study
-        ver = st.verification(None, tracker)
+        ver = _verification(study, st, None, tracker)
         from mtmc.verification.datafile import load_identification_csv, measured_points
         from mtmc.verification.identify import identify
 
@@ -378,7 +397,7 @@ def place_cmd(
         st = kind.study
         if st.limits is None:
             fail(f"{study}: placement needs [tracker.limits] with height_mm")
-        ver = st.verification(points, None)
+        ver = _verification(study, st, points, None)
         warnings = visibility_warnings(study_visibility(st, points), st.machine.axes)
         warn(warnings)
         used_seed = resolve_seed(kind.settings.seed if seed is None else seed)

@@ -11,6 +11,7 @@ GUM ``u``, and the error vectors of Fig. 7 at the probed balls.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,19 +39,36 @@ class ArtefactKindStudy(Study):
     ----------
     study : ArtefactStudy
         The validated study of :func:`mtmc.artefact.study.read_artefact_study`.
+    noise, gum
+        The ``noise`` and ``gum_too`` of :func:`mtmc.artefact.study.simulate_artefact`
+        (``mtmc artefact simulate --noise``, ``--no-gum``); a study file runs with the
+        defaults.
+    on_simulated : callable, optional
+        Called with the :class:`~mtmc.artefact.study.ArtefactResult` of a run, before it
+        is tabulated (the command line draws Fig. 7 from it).
     """
 
     kind = "artefact"
     run_options = frozenset({ADAPTIVE, NAN_POLICY})
     study: Any
+    noise: str = "points"
+    gum: bool = True
+    on_simulated: Any = dataclasses.field(default=None, compare=False, repr=False)
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Simulate the study (:func:`mtmc.artefact.study.simulate_artefact`) and tabulate it."""
         from mtmc.artefact.study import simulate_artefact
 
         res = simulate_artefact(
-            self.study, seed=settings.seed, progress=progress, **settings.engine
+            self.study,
+            seed=settings.seed,
+            progress=progress,
+            gum_too=self.gum,
+            noise=self.noise,
+            **settings.engine,
         )
+        if self.on_simulated is not None:
+            self.on_simulated(res)
         j = res.to_json()
         rows = []
         for pose in j["poses"]:

@@ -1,0 +1,97 @@
+"""The options every Monte Carlo command shares, and pointers to the command that reads a file."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from mtmc.cli.main import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize("flag", ["--no-progress", "--progress", "-q"])
+def test_run_takes_progress_and_quiet(
+    flag: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = ROOT / "examples" / "studies" / "mass_calibration.toml"
+    argv = ["run", str(study), "-n", "200", "-s", "1", "-o", str(tmp_path / "r"), flag]
+    assert main(argv) == 0, capsys.readouterr().err
+    out, err = capsys.readouterr()
+    assert out.splitlines()[-1] == f"report: {tmp_path / 'r' / 'report.html'}"
+    assert ("200/200 trials" in err) == (flag == "--progress")
+
+
+@pytest.mark.parametrize(
+    ("path", "pointer"),
+    [
+        ("examples/graphs/ball_centre.toml", "is a measurement graph: run it with mtmc graph run"),
+        (
+            "examples/artefacts/wang2022_five_ball.toml",
+            'an artefact study names it (kind = "artefact"',
+        ),
+    ],
+)
+def test_run_on_a_file_that_is_no_study_names_its_reader(
+    path: str, pointer: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["run", str(ROOT / path), "-o", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "missing kind" in err
+    assert pointer in err
+
+
+def test_an_unknown_point_set_names_the_study_file_and_the_option(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    study = ROOT / "examples" / "studies" / "aguado2017.toml"
+    assert main(["verify", "simulate", str(study), "--points", "nope", "-n", "2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"mtmc: error: {study}: field --points: no point set 'nope'; the study has mesh")
+
+
+def test_verify_plan_creates_its_output_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = ROOT / "examples" / "studies" / "aguado2016.toml"
+    out = tmp_path / "a" / "b"  # neither exists, as run -o creates its folder
+    assert main(["verify", "plan", str(study), "-o", str(out), "--json"]) == 0
+    files = json.loads(capsys.readouterr().out)["files"]
+    assert files
+    assert all(Path(f).parent == out and Path(f).is_file() for f in files.values())
+
+
+def test_artefact_simulate_runs_the_study_as_run_does_and_writes_its_folder(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One route: `artefact simulate -o` and `mtmc run` give the same result.json numbers,
+    the trials left out and the blocks come from the study's run record, the JSON names µm."""
+    study = str(ROOT / "examples" / "studies" / "wang2022.toml")
+    a, b = tmp_path / "a" / "sim", tmp_path / "run"
+    argv = ["artefact", "simulate", study, "-n", "40", "-s", "2", "-o", str(a), "--json"]
+    assert main(argv) == 0, capsys.readouterr().err
+    got = json.loads(capsys.readouterr().out)
+    assert got["unit"] == "µm"
+    assert got["output"] == str(a)
+    assert got["run"] == {
+        "adaptive": False,
+        "trials": 40,
+        "omitted": 0,
+        "nan_policy": "raise",
+        "ndig": 2,
+    }
+    assert main(["run", study, "-n", "40", "-s", "2", "-o", str(b), "-q"]) == 0
+    capsys.readouterr()
+    one, two = (json.loads((d / "result.json").read_text()) for d in (a, b))
+    # the same seeded draws and reductions: equal to the bit
+    assert one["quantities"] == two["quantities"]
+    assert (a / "report.html").is_file()
+    by_name = {q["name"]: q["monte_carlo"] for q in one["quantities"]}
+    # the quantity's u is reduced from the samples again (MonteCarloResult), the table's
+    # by the engine: the same values summed in another order, so to a few ulp
+    assert by_name["setup.dpx"]["u"] == pytest.approx(got["setup_errors"]["dpx"]["u"], rel=1e-14)
+    assert main([*argv[:-1], "--no-gum"]) == 2
+    assert "not with --no-gum" in capsys.readouterr().err
