@@ -73,7 +73,7 @@ def simulate_cmd(
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties."""
-    from mtmc.artefact.study import simulate_artefact
+    from mtmc.artefact.simulation import simulate_artefact
     from mtmc.uncertainty.montecarlo import adaptive_block_size
 
     if figure is not None and figure.suffix.lower() not in FIG_SUFFIXES:

@@ -1,9 +1,9 @@
 """Study kind ``artefact``: a fiducial-artefact study of Wang, Cheung and Kong (2022).
 
 The file is an artefact study (``docs/artefact.md``) with ``kind = "artefact"``: it is
-read by :func:`mtmc.artefact.study.read_artefact_study` and run by
-:func:`mtmc.artefact.study.simulate_artefact` (the noise-free chain, Monte Carlo over the probing,
-CMM and repeatability noise, the GUM beside it). The result holds the tables of the
+read by :func:`mtmc.artefact.simulation.read_artefact_study` and run by
+:func:`mtmc.artefact.simulation.simulate_artefact` (the noise-free chain, Monte Carlo over
+the probing, CMM and repeatability noise, the GUM beside it). The result holds the tables of the
 paper — Table 2 per pose (``r_max``, ``r_avg`` of the measured and the modelled centres),
 the identified setup errors (eq. 18) — each with the Monte Carlo mean and ``u`` and the
 GUM ``u``, and the error vectors of Fig. 7 at the probed balls.
@@ -37,7 +37,7 @@ class ArtefactKindStudy(Study):
     Attributes
     ----------
     study : ArtefactStudy
-        The validated study of :func:`mtmc.artefact.study.read_artefact_study`.
+        The validated study of :func:`mtmc.artefact.simulation.read_artefact_study`.
     """
 
     kind = "artefact"
@@ -45,8 +45,8 @@ class ArtefactKindStudy(Study):
     study: Any
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
-        """Simulate the study (:func:`mtmc.artefact.study.simulate_artefact`) and tabulate it."""
-        from mtmc.artefact.study import simulate_artefact
+        """Simulate the study (:func:`~mtmc.artefact.simulation.simulate_artefact`), tabulate it."""
+        from mtmc.artefact.simulation import simulate_artefact
 
         res = simulate_artefact(
             self.study, seed=settings.seed, progress=progress, **settings.engine
@@ -222,8 +222,8 @@ def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
 
 @register_kind("artefact", "a fiducial artefact probed at rotary poses (Wang, Cheung and Kong)")
 def read_artefact_kind(top: Fields) -> ArtefactKindStudy:
-    """Validate an ``artefact`` study file (reader: :mod:`mtmc.artefact.study`)."""
-    from mtmc.artefact.study import read_artefact_study
+    """Validate an ``artefact`` study file (reader: :mod:`mtmc.artefact.simulation`)."""
+    from mtmc.artefact.simulation import read_artefact_study
 
     settings = RunSettings.read(top, default_trials=10_000)
     study = read_artefact_study(top)
