@@ -29,8 +29,8 @@ from mtmc.cli.common import (
 from mtmc.errors import InputError, MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
-    from mtmc.study.outputs import ModelOutput
     from mtmc.uncertainty.distributions import Distribution
+    from mtmc.uncertainty.joint import ModelOutput
 
 __all__ = ["is_several", "parse_outputs", "propagate_outputs"]
 
@@ -44,7 +44,7 @@ def is_several(text: str) -> bool:
 
 
 def parse_outputs(text: str) -> tuple[ModelOutput, ...]:
-    """The outputs of ``"NAME = MODEL; NAME = MODEL"``, as :class:`~mtmc.study.outputs.ModelOutput`.
+    """The outputs of ``"NAME = MODEL; NAME = MODEL"``, as :class:`~mtmc.uncertainty.ModelOutput`.
 
     Raises
     ------
@@ -52,8 +52,8 @@ def parse_outputs(text: str) -> tuple[ModelOutput, ...]:
         Naming the part (``field`` ``EXPR``): a part without ``NAME =``, a name that is not
         an identifier or is given twice, or a model that does not parse.
     """
-    from mtmc.study.outputs import ModelOutput
     from mtmc.uncertainty.expression import expression
+    from mtmc.uncertainty.joint import ModelOutput
 
     outputs: list[ModelOutput] = []
     for part in (p.strip() for p in text.split(";")):
@@ -79,7 +79,8 @@ def parse_outputs(text: str) -> tuple[ModelOutput, ...]:
 
 
 def _inputs(outputs: tuple[ModelOutput, ...], specs: list[str]) -> dict[str, Distribution]:
-    from mtmc.study.outputs import JointModel, check_vector_use
+    from mtmc.study.outputs import check_vector_use
+    from mtmc.uncertainty.joint import JointModel
 
     names = JointModel(outputs).names
     dists = input_specs(specs)
@@ -124,8 +125,9 @@ def propagate_outputs(
     progress: bool | None,
 ) -> None:
     """Run and print several outputs of the same inputs (see the module docstring)."""
-    from mtmc.study.outputs import JointModel, NamedOutputs, joint_summary
+    from mtmc.study.outputs import joint_summary
     from mtmc.uncertainty.gum import gum
+    from mtmc.uncertainty.joint import JointModel, NamedOutputs
     from mtmc.uncertainty.montecarlo import monte_carlo
     from mtmc.uncertainty.results import MonteCarloResults
 
