@@ -19,7 +19,8 @@ import numpy as np
 from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Quantity, Study, StudyResult, Table, quantity
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 from mtmc.uncertainty.montecarlo import adaptive_block_size
 from mtmc.uncertainty.results import MonteCarloResult
 

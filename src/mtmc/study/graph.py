@@ -43,7 +43,8 @@ from mtmc.study.base import (
 )
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.results import MonteCarloResult
 

@@ -38,7 +38,7 @@ from mtmc.study.conformity import ConformitySpec, assess_quantity
 from mtmc.study.correlation import CorrelationSpec, correlation_record
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings
+from mtmc.study.settings import RunSettings
 from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.expression import Expression, check_components, expression
 from mtmc.uncertainty.gum import GumResult, gum

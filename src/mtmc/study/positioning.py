@@ -27,7 +27,8 @@ from mtmc.document import Fields, Source
 from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 
 __all__ = ["PositioningStudy", "positioning_study", "summary", "unit_label"]
 

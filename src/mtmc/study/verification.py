@@ -21,7 +21,8 @@ from numpy.typing import NDArray
 
 from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 
 __all__ = ["VerificationKindStudy"]
 
