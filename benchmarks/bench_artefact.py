@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from mtmc import parallel
-from mtmc.artefact.study import gum_outputs, study_model
+from mtmc.artefact.simulation import gum_outputs, study_model
 from mtmc.study import load_study
 from mtmc.uncertainty import monte_carlo
 from mtmc.uncertainty.heap import keep_heap

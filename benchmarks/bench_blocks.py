@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-import mtmc.artefact.study as artefact_study
+import mtmc.artefact.simulation as artefact_study
 from mtmc.geometry import matrix_from_rotation_vector
 from mtmc.geometry.transforms import rotation_vector_from_matrix
 from mtmc.study import load_study

@@ -9,8 +9,8 @@ import pytest
 
 from mtmc.geometry import Circle, Line, Plane, Sphere
 from mtmc.graph.assertions import TYPE_CODES
-from mtmc.graph.model import LENGTH_UNITS
 from mtmc.graph.ops import OP_PARAMS
+from mtmc.graph.structure import LENGTH_UNITS
 from mtmc.kinematics import Machine
 from mtmc.kinematics.topology import AXIS_DIRECTION
 from mtmc.uncertainty import Normal, gum

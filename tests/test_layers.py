@@ -18,7 +18,7 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 PKG = SRC / "mtmc"
 
 #: The bottom: imported by every layer, importing nothing of mtmc but each other.
-BASE = {"errors", "frozen", "io", "document", "parallel"}
+BASE = {"errors", "frozen", "io", "document", "parallel", "_version"}
 
 #: What each package may import besides :data:`BASE` (docs/architecture.md).
 ALLOWED: dict[str, set[str]] = {
@@ -27,6 +27,7 @@ ALLOWED: dict[str, set[str]] = {
     "io": set(),
     "document": set(),
     "parallel": set(),
+    "_version": set(),
     "uncertainty": set(),
     "geometry": set(),
     "kinematics": {"geometry"},

@@ -1221,7 +1221,7 @@ def wang2022(scale: float = 1.0) -> tuple[Numbers, dict[str, Any]]:
     """
     from dataclasses import replace
 
-    from mtmc.artefact.study import simulate_artefact
+    from mtmc.artefact.simulation import simulate_artefact
 
     kind = load("wang2022")
     study = kind.study

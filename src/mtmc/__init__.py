@@ -25,9 +25,8 @@ import importlib.util
 from typing import TYPE_CHECKING, Any
 
 from mtmc import errors as errors
+from mtmc._version import __version__ as __version__
 from mtmc.errors import *  # noqa: F403
-
-__version__ = "0.1.0"
 
 #: The names resolved on first access, and the subpackage each comes from.
 _NAMES: dict[str, str] = {

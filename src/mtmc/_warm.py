@@ -18,7 +18,7 @@ MODULES = (
     "mtmc.study",
     "mtmc.graph.run",
     "mtmc.verification.simulate",
-    "mtmc.artefact.study",
+    "mtmc.artefact.simulation",
     "mtmc.kinematics.machine",
     "mtmc.positioning.uncertainty",
 )

@@ -9,7 +9,7 @@ import matplotlib
 import pytest
 
 from mtmc.artefact.plot import plot_error_vectors
-from mtmc.artefact.study import simulate_artefact
+from mtmc.artefact.simulation import simulate_artefact
 from mtmc.study import load_study
 
 STUDY = Path(__file__).resolve().parents[2] / "examples" / "studies" / "wang2022.toml"

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mtmc.artefact.study import (
+from mtmc.artefact.simulation import (
     ArtefactStudy,
     gum_outputs,
     simulate_artefact,
@@ -58,7 +58,7 @@ PAPER_T2 = {
 
 def _table2_noise_free(study: ArtefactStudy) -> tuple[np.ndarray, np.ndarray]:
     from mtmc.artefact.analysis import analyse
-    from mtmc.artefact.study import _prepare
+    from mtmc.artefact.simulation import _prepare
 
     pr = _prepare(study)
     a = analyse(pr.meas.centres[None, None].repeat(3, axis=1), pr.cal, pr.pinv, pr.Jp)
@@ -215,7 +215,7 @@ def test_thin_products_in_slices_against_exact_sums(rows: int, k: int, n: int) -
     """The row slices of the thin products against correctly rounded sums (math.fsum)."""
     import math
 
-    from mtmc.artefact.study import _thin_matmul
+    from mtmc.artefact.simulation import _thin_matmul
 
     rng = np.random.default_rng(np.random.SeedSequence(rows))
     a = rng.normal(size=(rows, 2, k))[:, 1]  # a strided view, as the model's slices are

@@ -208,6 +208,6 @@ def test_numbers_the_new_strategies_broke_are_refused_with_their_place() -> None
     from mtmc.graph.assertions import loads_assertions
 
     with pytest.raises(ParseError) as info:
-        loads_assertions('p(1, 1e400, 0).\n', file="g.pl")
+        loads_assertions("p(1, 1e400, 0).\n", file="g.pl")
     assert (info.value.file, info.value.line) == ("g.pl", 1)
     assert "expected a finite number at most 1.8e+308 in size, got '1e400'" in str(info.value)

@@ -52,7 +52,7 @@ def test_round_trip_property(values, u, units):
         Transition(f"t{i}", "displace", (f"r{i}", f"r{i + 1}"), f"s{i}")
         for i in range(len(values) - 1)
     )
-    from mtmc.graph.model import Graph
+    from mtmc.graph.structure import Graph
 
     g = Graph(places, trans, title='a "quoted" title', units=units)
     assert loads_graph(dumps_graph(g)) == g

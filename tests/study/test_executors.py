@@ -130,7 +130,7 @@ def test_every_executor_writes_the_same_folder(kind, tmp_path, client):
 @pytest.mark.parametrize("name", ["five_axis.toml", "wang2022.toml", "axis_c.toml"])
 def test_library_models_are_picklable(name):
     """The models the library builds are module-level callables holding their data."""
-    from mtmc.artefact.study import study_model
+    from mtmc.artefact.simulation import study_model
     from mtmc.graph.run import graph_model
     from mtmc.study.kinematics import tool_positions_model
 

@@ -19,7 +19,7 @@ import mtmc
 from mtmc.errors import InputError
 from mtmc.study import load_result, loads_study, study_result, write_result
 from mtmc.study.base import Quantity, StudyResult, quantity
-from mtmc.study.spec import RunSettings
+from mtmc.study.settings import RunSettings
 
 STUDY = """\
 kind = "propagate"

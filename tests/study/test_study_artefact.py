@@ -15,7 +15,7 @@ STUDY = ROOT / "examples" / "studies" / "wang2022.toml"
 
 
 def test_artefact_study_reports_what_simulate_computes():
-    from mtmc.artefact.study import simulate_artefact
+    from mtmc.artefact.simulation import simulate_artefact
 
     r = load_study(STUDY).run(trials=300, seed=4)
     ref = simulate_artefact(load_study(STUDY).study, 300, 4)
@@ -61,7 +61,7 @@ def test_a_broken_artefact_field_keeps_its_line():
 
 
 def test_artefact_quantities_are_the_monte_carlo_values_with_the_gum_beside_them():
-    from mtmc.artefact.study import simulate_artefact
+    from mtmc.artefact.simulation import simulate_artefact
 
     r = load_study(STUDY).run(trials=300, seed=4)
     ref = simulate_artefact(load_study(STUDY).study, 300, 4)

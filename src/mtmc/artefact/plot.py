@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from mtmc.artefact.study import ArtefactResult
+from mtmc.artefact.simulation import ArtefactResult
 
 __all__ = ["plot_error_vectors"]
 

@@ -311,7 +311,7 @@ def check_trials(trials: int | None) -> None:
     typer.Exit
         Through :func:`fail`, with one line naming the option.
     """
-    from mtmc.study.spec import MAX_TRIALS
+    from mtmc.study.settings import MAX_TRIALS
 
     if trials is not None and trials > MAX_TRIALS:
         fail(f"--trials: expected at most {MAX_TRIALS} trials, got {trials}")

@@ -41,7 +41,7 @@ if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
     import numpy as np
     from numpy.typing import NDArray
 
-    from mtmc.graph.model import Graph
+    from mtmc.graph.structure import Graph
 
 app = typer.Typer(
     rich_markup_mode=None,

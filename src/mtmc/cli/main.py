@@ -18,7 +18,7 @@ from types import FrameType
 
 import typer
 
-from mtmc import __version__
+from mtmc._version import __version__
 from mtmc.cli import artefact, circle, graph, kinematics, positioning, propagate, run, verify
 
 app = typer.Typer(

@@ -21,8 +21,8 @@ from mtmc.cli.run_options import run_lines
 from mtmc.errors import InputError, MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
-    from mtmc.study.outputs import ModelOutput
     from mtmc.uncertainty.distributions import Distribution
+    from mtmc.uncertainty.joint import ModelOutput
 
 __all__ = ["check_inputs", "is_several", "parse_outputs", "print_outputs", "summary_record"]
 
@@ -44,8 +44,8 @@ def parse_outputs(text: str) -> tuple[ModelOutput, ...]:
         Naming the part (``field`` ``EXPR``): a part without ``NAME =``, a name that is not
         an identifier or is given twice, or a model that does not parse.
     """
-    from mtmc.study.outputs import ModelOutput
     from mtmc.uncertainty.expression import expression
+    from mtmc.uncertainty.joint import ModelOutput
 
     outputs: list[ModelOutput] = []
     for part in (p.strip() for p in text.split(";")):
@@ -78,7 +78,8 @@ def check_inputs(outputs: tuple[ModelOutput, ...], specs: list[str]) -> dict[str
     InputError
         Naming the input or ``EXPR``.
     """
-    from mtmc.study.outputs import JointModel, check_vector_use
+    from mtmc.study.outputs import check_vector_use
+    from mtmc.uncertainty.joint import JointModel
 
     names = JointModel(outputs).names
     dists = input_specs(specs)

@@ -15,10 +15,11 @@ the top of :mod:`mtmc` carry ``graph`` (``load_graph``, ``check_graph``).
 from mtmc.graph.assertions import dumps_assertions, load_assertions, loads_assertions
 from mtmc.graph.draw import draw_graph, graph_to_dot
 from mtmc.graph.files import load_graph
-from mtmc.graph.model import Graph, Plan, Step, check_graph
+from mtmc.graph.model import check_graph
 from mtmc.graph.ops import rotary_axis
 from mtmc.graph.places import Place, ProbeDefaults, Transition
 from mtmc.graph.run import GraphResult, PlaceSummary, graph_model, run_graph
+from mtmc.graph.structure import Graph, Plan, Step
 from mtmc.graph.sweep import Surrogate, SweepResult, fit_surrogate, sweep_graph
 from mtmc.graph.toml_format import dump_graph, dumps_graph, loads_graph
 from mtmc.graph.units import file_unit, place_dimension, unit_of

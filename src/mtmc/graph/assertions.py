@@ -55,8 +55,9 @@ from typing import Any
 
 from mtmc.document import read_number
 from mtmc.errors import GraphError, MtmcError, ParseError
-from mtmc.graph.model import Graph, check_graph
+from mtmc.graph.model import check_graph
 from mtmc.graph.places import Place, ProbeDefaults, Transition
+from mtmc.graph.structure import Graph
 from mtmc.io import decode_utf8
 
 __all__ = ["loads_assertions", "load_assertions", "dumps_assertions", "TYPE_CODES"]

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtmc.graph.model import Graph, Plan, check_graph
+from mtmc.graph.model import check_graph
+from mtmc.graph.structure import Graph, Plan
 
 __all__ = ["layout", "graph_to_dot", "draw_graph"]
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from mtmc.document import read_text
 from mtmc.graph.assertions import load_assertions
-from mtmc.graph.model import Graph
+from mtmc.graph.structure import Graph
 from mtmc.graph.toml_format import loads_graph
 
 __all__ = ["load_graph", "ASSERTION_SUFFIXES"]

@@ -39,7 +39,7 @@ import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,11 +47,9 @@ from numpy.typing import NDArray
 from mtmc.errors import ConditioningWarning, DegenerateGeometryError, GraphError, MtmcError
 from mtmc.frozen import frozen_floats
 from mtmc.graph.places import VECTOR_TYPES
+from mtmc.graph.structure import Plan, Step
 from mtmc.graph.units import place_dimension
 from mtmc.graph.values import PARTS, flatten, marked_value, unflatten
-
-if TYPE_CHECKING:
-    from mtmc.graph.model import Plan, Step
 
 __all__ = [
     "ANGLE_RTOL",

@@ -30,8 +30,9 @@ from mtmc.errors import GraphError, InputError, MtmcError
 from mtmc.frozen import frozen_array, frozen_mapping, read_only
 from mtmc.graph import ops as _ops
 from mtmc.graph import probe as _probe
-from mtmc.graph.model import Graph, Plan, check_graph
+from mtmc.graph.model import check_graph
 from mtmc.graph.places import SCALAR_TYPES, VECTOR_TYPES, Place
+from mtmc.graph.structure import Graph, Plan
 from mtmc.graph.values import PARTS, flatten, marked_value, place_factor, unflatten
 from mtmc.parallel import ExecutorKind
 from mtmc.uncertainty.distributions import (

@@ -38,9 +38,10 @@ import numpy.typing as npt
 from numpy.typing import NDArray
 
 from mtmc.errors import GraphError, InputError, MtmcError
-from mtmc.graph.model import Graph, check_graph
+from mtmc.graph.model import check_graph
 from mtmc.graph.places import SCALAR_TYPES, ProbeDefaults
 from mtmc.graph.run import run_graph
+from mtmc.graph.structure import Graph
 from mtmc.parallel import ExecutorKind, map_blocks, planned_workers
 from mtmc.uncertainty.montecarlo import NanPolicy
 from mtmc.uncertainty.sampling import resolve_seed

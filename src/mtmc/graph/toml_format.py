@@ -22,8 +22,9 @@ import numpy as np
 
 from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, KeyPath, loads_toml
 from mtmc.errors import GraphError, MtmcError
-from mtmc.graph.model import Graph, check_graph
+from mtmc.graph.model import check_graph
 from mtmc.graph.places import MAX_MAGNITUDE, Place, ProbeDefaults, Transition
+from mtmc.graph.structure import Graph
 from mtmc.io import write_text_atomic
 from mtmc.uncertainty.distributions import parse_distribution
 

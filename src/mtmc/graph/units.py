@@ -8,10 +8,7 @@ in the file's unit, and the library's results stay in mm and rad.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from mtmc.graph.model import Plan
+from mtmc.graph.structure import Plan
 
 __all__ = ["file_unit", "place_dimension", "unit_of"]
 
@@ -108,7 +105,8 @@ def place_dimension(plan: Plan, name: str, part: str = "value") -> tuple[int, in
     Examples
     --------
     >>> from mtmc.graph.places import Place, Transition
-    >>> from mtmc.graph.model import Graph, check_graph
+    >>> from mtmc.graph.model import check_graph
+    >>> from mtmc.graph.structure import Graph
     >>> g = Graph(
     ...     places=(Place("a", "point", [0, 0, 0]), Place("b", "point", [1, 0, 0])),
     ...     transitions=(Transition("t", "distance", ("a", "b"), "d"),),

@@ -31,8 +31,8 @@ from mtmc.study.base import (
 )
 from mtmc.study.load import load_result, study_result
 from mtmc.study.render import render_report
+from mtmc.study.settings import RunSettings
 from mtmc.study.spec import (
-    RunSettings,
     StudyKind,
     load_study,
     loads_study,

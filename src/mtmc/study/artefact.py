@@ -1,9 +1,9 @@
 """Study kind ``artefact``: a fiducial-artefact study of Wang, Cheung and Kong (2022).
 
 The file is an artefact study (``docs/artefact.md``) with ``kind = "artefact"``: it is
-read by :func:`mtmc.artefact.study.read_artefact_study` and run by
-:func:`mtmc.artefact.study.simulate_artefact` (the noise-free chain, Monte Carlo over the probing,
-CMM and repeatability noise, the GUM beside it). The result holds the tables of the
+read by :func:`mtmc.artefact.simulation.read_artefact_study` and run by
+:func:`mtmc.artefact.simulation.simulate_artefact` (the noise-free chain, Monte Carlo over
+the probing, CMM and repeatability noise, the GUM beside it). The result holds the tables of the
 paper — Table 2 per pose (``r_max``, ``r_avg`` of the measured and the modelled centres),
 the identified setup errors (eq. 18) — each with the Monte Carlo mean and ``u`` and the
 GUM ``u``, and the error vectors of Fig. 7 at the probed balls.
@@ -20,7 +20,8 @@ import numpy as np
 from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Quantity, Study, StudyResult, Table, quantity
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 from mtmc.uncertainty.montecarlo import adaptive_block_size
 from mtmc.uncertainty.results import MonteCarloResult
 
@@ -38,13 +39,13 @@ class ArtefactKindStudy(Study):
     Attributes
     ----------
     study : ArtefactStudy
-        The validated study of :func:`mtmc.artefact.study.read_artefact_study`.
+        The validated study of :func:`mtmc.artefact.simulation.read_artefact_study`.
     noise, gum
-        The ``noise`` and ``gum_too`` of :func:`mtmc.artefact.study.simulate_artefact`
+        The ``noise`` and ``gum_too`` of :func:`mtmc.artefact.simulation.simulate_artefact`
         (``mtmc artefact simulate --noise``, ``--no-gum``); a study file runs with the
         defaults.
     on_simulated : callable, optional
-        Called with the :class:`~mtmc.artefact.study.ArtefactResult` of a run, before it
+        Called with the :class:`~mtmc.artefact.simulation.ArtefactResult` of a run, before it
         is tabulated (the command line draws Fig. 7 from it).
     """
 
@@ -56,8 +57,8 @@ class ArtefactKindStudy(Study):
     on_simulated: Any = dataclasses.field(default=None, compare=False, repr=False)
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
-        """Simulate the study (:func:`mtmc.artefact.study.simulate_artefact`) and tabulate it."""
-        from mtmc.artefact.study import simulate_artefact
+        """Simulate the study (:func:`~mtmc.artefact.simulation.simulate_artefact`), tabulate it."""
+        from mtmc.artefact.simulation import simulate_artefact
 
         res = simulate_artefact(
             self.study,
@@ -240,8 +241,8 @@ def _quantities(res: Any, settings: RunSettings) -> tuple[Quantity, ...]:
 
 @register_kind("artefact", "a fiducial artefact probed at rotary poses (Wang, Cheung and Kong)")
 def read_artefact_kind(top: Fields) -> ArtefactKindStudy:
-    """Validate an ``artefact`` study file (reader: :mod:`mtmc.artefact.study`)."""
-    from mtmc.artefact.study import read_artefact_study
+    """Validate an ``artefact`` study file (reader: :mod:`mtmc.artefact.simulation`)."""
+    from mtmc.artefact.simulation import read_artefact_study
 
     settings = RunSettings.read(top, default_trials=10_000)
     study = read_artefact_study(top)

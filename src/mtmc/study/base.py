@@ -27,7 +27,8 @@ from mtmc.document import InputFile, Source
 from mtmc.frozen import frozen_array, frozen_floats
 from mtmc.io import to_jsonable
 from mtmc.report.folder import RESULT_FORMAT  # the ``format`` of result.json: its reader's
-from mtmc.study.spec import RunSettings
+from mtmc.study.options import unsupported_option
+from mtmc.study.settings import RunSettings
 from mtmc.uncertainty.gum import GumResult, endpoint_std_error, one_value, validate
 from mtmc.uncertainty.results import IntervalKind, MonteCarloResult
 from mtmc.uncertainty.sampling import resolve_seed
@@ -1100,7 +1101,6 @@ class Study:
             not offer (:func:`mtmc.study.options.unsupported_option`), naming it.
         """
         from mtmc.errors import InputError
-        from mtmc.study.options import unsupported_option
 
         s = self.settings
         if adaptive and trials is not None:

@@ -25,9 +25,10 @@ from numpy.typing import NDArray
 from mtmc.document import Fields, check_number
 from mtmc.errors import MtmcError
 from mtmc.graph import load_graph
-from mtmc.graph.model import Graph, Plan, check_graph
+from mtmc.graph.model import check_graph
 from mtmc.graph.places import SCALAR_TYPES
 from mtmc.graph.run import graph_model, random_inputs, run_graph
+from mtmc.graph.structure import Graph, Plan
 from mtmc.graph.sweep import Surrogate, apply_setting, sweep_graph
 from mtmc.graph.units import file_unit, place_dimension, unit_of
 from mtmc.graph.values import PARTS, normal_plane_parts
@@ -43,7 +44,8 @@ from mtmc.study.base import (
 )
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.results import MonteCarloResult
 

@@ -27,7 +27,8 @@ from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, q
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.propagate import read_inputs
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.montecarlo import monte_carlo

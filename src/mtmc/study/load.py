@@ -41,7 +41,7 @@ from mtmc.study.base import (
     quantity,
     region,
 )
-from mtmc.study.spec import RunSettings
+from mtmc.study.settings import RunSettings
 from mtmc.uncertainty.gum import GumResult
 from mtmc.uncertainty.results import MonteCarloResult, MonteCarloResults
 

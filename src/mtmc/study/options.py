@@ -19,11 +19,9 @@ result says of its run (``run`` of ``result.json``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any, ClassVar, Protocol
 
-if TYPE_CHECKING:
-    from mtmc.study.base import Study
-    from mtmc.study.spec import RunSettings
+from mtmc.study.settings import RunSettings
 
 __all__ = ["ADAPTIVE", "NAN_POLICY", "run_record", "unsupported_option"]
 
@@ -33,7 +31,15 @@ ADAPTIVE = "adaptive"
 NAN_POLICY = "nan_policy"
 
 
-def unsupported_option(study: Study, settings: RunSettings) -> tuple[str, str] | None:
+class OffersOptions(Protocol):
+    """What :func:`unsupported_option` reads of a study (:class:`mtmc.study.Study`)."""
+
+    kind: ClassVar[str]
+    run_options: ClassVar[frozenset[str]]
+    no_adaptive: ClassVar[str]
+
+
+def unsupported_option(study: OffersOptions, settings: RunSettings) -> tuple[str, str] | None:
     """The first option of ``settings`` that the kind of ``study`` does not offer.
 
     Parameters
@@ -100,7 +106,7 @@ def run_record(
 
     Examples
     --------
-    >>> from mtmc.study.spec import RunSettings
+    >>> from mtmc.study.settings import RunSettings
     >>> run_record(RunSettings(nan_policy="omit"), 1000, 3)
     {'adaptive': False, 'trials': 1000, 'omitted': 3, 'nan_policy': 'omit', 'ndig': 2}
     """

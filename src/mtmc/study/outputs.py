@@ -38,99 +38,26 @@ from mtmc.study.conformity import ConformitySpec, assess_quantity
 from mtmc.study.correlation import CorrelationSpec, correlation_record
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings
+from mtmc.study.settings import RunSettings
 from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.expression import Expression, check_components, expression
 from mtmc.uncertainty.gum import GumResult, gum
-from mtmc.uncertainty.joint import correlation, gum_coverage_ellipsoid
+from mtmc.uncertainty.joint import (
+    JointModel,
+    ModelOutput,
+    NamedOutputs,
+    correlation,
+    gum_coverage_ellipsoid,
+)
 from mtmc.uncertainty.montecarlo import monte_carlo
 from mtmc.uncertainty.results import CoverageEllipsoid, MonteCarloResult, MonteCarloResults
 
 __all__ = [
-    "JointModel",
-    "ModelOutput",
-    "NamedOutputs",
     "OutputsStudy",
     "check_vector_use",
     "joint_summary",
     "read_outputs_study",
 ]
-
-
-@dataclass(frozen=True)
-class ModelOutput:
-    """One output quantity of a study with several outputs.
-
-    Attributes
-    ----------
-    name : str
-        The output (a key of ``[outputs]``).
-    model : Expression
-        Its measurement model ``Y_i = f_i(X)``.
-    unit : str
-        Its unit (as text, for the report).
-    """
-
-    name: str
-    model: Expression
-    unit: str
-
-
-def _union(outputs: tuple[ModelOutput, ...]) -> tuple[str, ...]:
-    names: list[str] = []
-    for o in outputs:
-        names.extend(n for n in o.model.names if n not in names)
-    return tuple(names)
-
-
-class NamedOutputs:
-    """The outputs as one model with named outputs, for :func:`mtmc.monte_carlo`.
-
-    ``model(**arrays)`` returns ``{name: (m,) values}``, each output evaluated on the
-    same trials from the inputs it uses.
-
-    Parameters
-    ----------
-    outputs : tuple of ModelOutput
-    """
-
-    def __init__(self, outputs: tuple[ModelOutput, ...]) -> None:
-        self.outputs = outputs
-        self.names = _union(outputs)
-
-    def __call__(self, **arrays: Any) -> dict[str, NDArray[Any]]:
-        """``{name: values}`` of every output, from the arrays of its variables."""
-        return {o.name: o.model(**{n: arrays[n] for n in o.model.names}) for o in self.outputs}
-
-
-class JointModel:
-    """The outputs stacked as one vector model ``(m, d)``, for :func:`mtmc.gum`.
-
-    Its sensitivity matrix is the ``C`` of ``U_y = C U_x Cᵀ`` (JCGM 102 §6.2.1.3). It is
-    complex-safe where every output is, and has the variables and components of all of
-    them (:func:`~mtmc.uncertainty.expression.check_variables`,
-    :func:`~mtmc.uncertainty.expression.check_components`).
-
-    Parameters
-    ----------
-    outputs : tuple of ModelOutput
-    """
-
-    def __init__(self, outputs: tuple[ModelOutput, ...]) -> None:
-        self.outputs = outputs
-        self.names = _union(outputs)
-        self.complex_safe = all(o.model.complex_safe for o in outputs)
-        comps: dict[str, int] = {}
-        for o in outputs:
-            for n, k in o.model.components.items():
-                comps[n] = max(comps.get(n, 0), k)
-        self.components: Mapping[str, int] = comps
-        self.text = "; ".join(f"{o.name} = {o.model.text}" for o in outputs)
-
-    def __call__(self, **arrays: Any) -> NDArray[Any]:
-        """The outputs' values as the columns of an ``(m, d)`` array."""
-        cols = [o.model(**{n: arrays[n] for n in o.model.names}) for o in self.outputs]
-        return np.stack(cols, axis=-1)
 
 
 def check_vector_use(
@@ -420,7 +347,7 @@ def read_outputs_study(
         if o.name in inputs:
             raise err(f"output {o.name} has the name of an input; expected another name")
         check_vector_use(o.model, inputs, err)
-    used = _union(outputs)
+    used = JointModel(outputs).names
     extra = [n for n in inputs if n not in used]
     if extra:
         raise inputs_t.error(

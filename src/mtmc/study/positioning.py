@@ -37,7 +37,8 @@ from mtmc.study.base import (
     quantity,
 )
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 from mtmc.uncertainty.tolerance import round_to_uncertainty
 
 __all__ = ["PositioningStudy", "positioning_study", "summary", "unit_label"]

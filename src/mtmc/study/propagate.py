@@ -27,7 +27,8 @@ from mtmc.study.observations import input_record, read_input_table
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.outputs import check_vector_use, read_outputs_study
 from mtmc.study.sensitivity import SensitivitySettings, read_sensitivity, sensitivity_record
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 from mtmc.uncertainty.distributions import Distribution, as_distribution, parse_distribution
 from mtmc.uncertainty.expression import Expression, check_variables, expression
 from mtmc.uncertainty.gum import gum

@@ -1,7 +1,7 @@
 """Study kind ``verification``: a laser-tracker volumetric verification (Aguado et al.).
 
 The file is a verification study (``docs/verification.md``), read by
-:func:`mtmc.verification.study.read_verification_study` and run by
+:func:`mtmc.verification.definition.read_verification_study` and run by
 :func:`mtmc.verification.simulate.simulate`: the tracker noise is drawn by Monte Carlo, each
 trial identifies the machine's error functions from its readings, and the result gives
 the volumetric error before and after compensation (Aguado et al. 2017 §3, Fig. 5–6) and
@@ -21,7 +21,8 @@ from numpy.typing import NDArray
 
 from mtmc.document import Fields
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 
 __all__ = ["VerificationKindStudy"]
 
@@ -38,7 +39,7 @@ class VerificationKindStudy(Study):
     Attributes
     ----------
     study : VerificationStudy
-        The validated study of :func:`mtmc.verification.study.read_verification_study`.
+        The validated study of :func:`mtmc.verification.definition.read_verification_study`.
     """
 
     kind = "verification"
@@ -201,8 +202,8 @@ def _inputs(s: Any, tracker: Any, points: NDArray[np.float64]) -> tuple[dict[str
 
 @register_kind("verification", "a laser-tracker volumetric verification (Aguado et al.)")
 def read_verification_kind(top: Fields) -> VerificationKindStudy:
-    """Validate a ``verification`` study file (reader: :mod:`mtmc.verification.study`)."""
-    from mtmc.verification.study import RUN_KEYS, read_verification_study
+    """Validate a ``verification`` study file (reader: :mod:`mtmc.verification.definition`)."""
+    from mtmc.verification.definition import RUN_KEYS, read_verification_study
 
     settings = RunSettings.read(top, default_trials=1000, extra=RUN_KEYS)
     study = read_verification_study(top)

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from mtmc._version import __version__
 from mtmc.document import InputFile
 from mtmc.errors import InputError
 from mtmc.io import _umask, deferred_interrupt, naming_os_errors
@@ -79,8 +80,6 @@ def provenance(
         ``given`` (the path as the field gave it), ``source`` (the file read), ``copy``
         (in the result folder; None before it is written) and ``sha256``.
     """
-    from mtmc import __version__
-
     libs: dict[str, str | None] = {}
     for name in LIBRARIES:
         try:

@@ -6,7 +6,11 @@ their correlation matrix (JCGM 102 §3.22) and a coverage region (JCGM 102 §7.7
 Monte Carlo region comes from
 :meth:`~mtmc.uncertainty.results.MonteCarloResult.coverage_ellipsoid`; this module adds
 the region of the GUM (JCGM 102 §6.5.2.3: the ellipsoid of ``U_y = C U_x Cᵀ`` with
-``k_p² = χ²_d(p)``, exact for a Gaussian output) and the correlation matrix.
+``k_p² = χ²_d(p)``, exact for a Gaussian output) and the correlation matrix, and the
+vector model itself: outputs of expression models (:class:`ModelOutput`) as one model
+with named outputs for :func:`~mtmc.uncertainty.montecarlo.monte_carlo`
+(:class:`NamedOutputs`) and as one vector model for :func:`~mtmc.uncertainty.gum.gum`
+(:class:`JointModel`, whose sensitivity matrix is the ``C`` of JCGM 102 §6.2.1.3).
 
 Examples
 --------
@@ -18,6 +22,9 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -25,10 +32,11 @@ from numpy.typing import NDArray
 
 from mtmc.errors import InputError
 from mtmc.uncertainty.checks import check_probability
+from mtmc.uncertainty.expression import Expression
 from mtmc.uncertainty.gum import GumResult
 from mtmc.uncertainty.results import CoverageEllipsoid
 
-__all__ = ["correlation", "gum_coverage_ellipsoid"]
+__all__ = ["JointModel", "ModelOutput", "NamedOutputs", "correlation", "gum_coverage_ellipsoid"]
 
 
 def correlation(cov: npt.ArrayLike) -> NDArray[np.float64]:
@@ -126,3 +134,79 @@ def gum_coverage_ellipsoid(result: GumResult, p: float | None = None) -> Coverag
     # refuses a singular U_y by the same test as the Monte Carlo region (a Cholesky factor)
     region.mahalanobis2(centre[None, :])
     return region
+
+
+@dataclass(frozen=True)
+class ModelOutput:
+    """One output quantity of a study with several outputs.
+
+    Attributes
+    ----------
+    name : str
+        The output (a key of ``[outputs]``).
+    model : Expression
+        Its measurement model ``Y_i = f_i(X)``.
+    unit : str
+        Its unit (as text, for the report).
+    """
+
+    name: str
+    model: Expression
+    unit: str
+
+
+def _union(outputs: tuple[ModelOutput, ...]) -> tuple[str, ...]:
+    names: list[str] = []
+    for o in outputs:
+        names.extend(n for n in o.model.names if n not in names)
+    return tuple(names)
+
+
+class NamedOutputs:
+    """The outputs as one model with named outputs, for :func:`mtmc.monte_carlo`.
+
+    ``model(**arrays)`` returns ``{name: (m,) values}``, each output evaluated on the
+    same trials from the inputs it uses.
+
+    Parameters
+    ----------
+    outputs : tuple of ModelOutput
+    """
+
+    def __init__(self, outputs: tuple[ModelOutput, ...]) -> None:
+        self.outputs = outputs
+        self.names = _union(outputs)
+
+    def __call__(self, **arrays: Any) -> dict[str, NDArray[Any]]:
+        """``{name: values}`` of every output, from the arrays of its variables."""
+        return {o.name: o.model(**{n: arrays[n] for n in o.model.names}) for o in self.outputs}
+
+
+class JointModel:
+    """The outputs stacked as one vector model ``(m, d)``, for :func:`mtmc.gum`.
+
+    Its sensitivity matrix is the ``C`` of ``U_y = C U_x Cᵀ`` (JCGM 102 §6.2.1.3). It is
+    complex-safe where every output is, and has the variables and components of all of
+    them (:func:`~mtmc.uncertainty.expression.check_variables`,
+    :func:`~mtmc.uncertainty.expression.check_components`).
+
+    Parameters
+    ----------
+    outputs : tuple of ModelOutput
+    """
+
+    def __init__(self, outputs: tuple[ModelOutput, ...]) -> None:
+        self.outputs = outputs
+        self.names = _union(outputs)
+        self.complex_safe = all(o.model.complex_safe for o in outputs)
+        comps: dict[str, int] = {}
+        for o in outputs:
+            for n, k in o.model.components.items():
+                comps[n] = max(comps.get(n, 0), k)
+        self.components: Mapping[str, int] = comps
+        self.text = "; ".join(f"{o.name} = {o.model.text}" for o in outputs)
+
+    def __call__(self, **arrays: Any) -> NDArray[Any]:
+        """The outputs' values as the columns of an ``(m, d)`` array."""
+        cols = [o.model(**{n: arrays[n] for n in o.model.names}) for o in self.outputs]
+        return np.stack(cols, axis=-1)

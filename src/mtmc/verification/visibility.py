@@ -51,7 +51,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from mtmc.verification.study import VerificationStudy
+    from mtmc.verification.definition import VerificationStudy
 
 _F = NDArray[np.float64]
 
@@ -190,7 +190,7 @@ def _machine(top: Fields) -> tuple[Machine, _F]:
         assert mf is not None
         where, key = mf, "topology"
         if "reflector" in mf.data:
-            from mtmc.verification.study import _vector
+            from mtmc.verification.definition import _vector
 
             tool = _vector(mf, "reflector")
     spec = where.text(key)
@@ -230,7 +230,7 @@ def load_plan_visibility(
     InputError
         On a bad machine, tracker or limit, naming the file, line and field.
     """
-    from mtmc.verification.study import read_trackers
+    from mtmc.verification.definition import read_trackers
 
     top = loads_toml(read_text(path, "study file"), str(path), Path(path).parent)
     if "tracker" not in top.data:
