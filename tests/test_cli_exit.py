@@ -32,7 +32,7 @@ SCRIPT = Path(sys.executable).parent / "mtmc"
             ["run", str(EXAMPLES.parent / "studies" / "ball_centre.toml"), "-n", "-5"],
             "--trials: expected an integer >= 2, got -5",
         ),
-        (["report", "no-such-folder"], "no-such-folder: not a result folder: it has no result"),
+        (["report", "no-such-folder"], "no-such-folder: not a result folder: no such folder"),
     ],
 )
 def test_usage_errors_are_one_line_exit_2(argv, fragment, capsys):

@@ -45,6 +45,6 @@ def test_report_of_a_result_lacking_monte_carlo_is_one_error(tmp_path):
     (out / "result.json").write_text(json.dumps(doc))
     from mtmc.report import render
 
-    with pytest.raises(InputError, match="no 'monte_carlo' where the report needs one"):
+    with pytest.raises(InputError, match="no 'monte_carlo' where a result needs one"):
         render(out)
     assert main(["report", str(out)]) == 2

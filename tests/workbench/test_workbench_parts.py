@@ -94,10 +94,11 @@ def test_a_file_that_cannot_be_read_or_written(tmp_path):
     )
     view = client.get("/tok/api/graph").json()["view"]
     path.unlink()
-    path.mkdir()  # the save renames over a folder: refused, one line
+    path.mkdir()  # a folder where the file was: the save reads it first and is refused
     r = client.post("/tok/api/save", json={"graph": view})
-    assert r.status_code == 500
-    assert "cannot write" in r.json()["error"]
+    assert r.status_code == 400
+    assert "cannot read the graph file" in r.json()["error"]
+    assert path.is_dir() and not any(path.iterdir())  # nothing written over it
 
 
 def test_the_view_of_texts_that_are_not_graphs():
