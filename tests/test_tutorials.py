@@ -196,3 +196,25 @@ def test_commands_run(name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
             assert cli(argv) == 0, line
             ran += 1
     assert ran
+
+
+def test_aguado2016_counts_of_readings_match_the_table() -> None:
+    """The sentence on the readings that let position 4 see, recounted from the table's ✗."""
+    text = (TUTORIALS / "aguado2016.md").read_text(encoding="utf-8")
+    table = re.search(r"<!-- generated: readings -->\n(.*?)<!-- end", text, re.S)
+    assert table is not None
+    rows = [r.split("|")[1:-1] for r in table[1].strip().splitlines()[2:]]
+    assert len(rows) == 48
+    ok4 = [r for r in rows if "✗" not in r[5]]
+    low = [r for r in ok4 if float(r[4].split("…")[0]) < -60.0]
+    high = [r for r in ok4 if float(r[4].split("…")[1].split()[0]) > 77.0]
+    said = re.search(
+        r"Position 4 sees every point under (\d+) of the (\d+) readings; positions 1–3 all "
+        r"see as well under (\d+) of them\. Position 3 leaves the limits below -60° under "
+        r"(\d+) of the \d+ and above 77° under (\d+)",
+        text,
+    )
+    assert said is not None
+    all_see = [r for r in ok4 if not any("✗" in c for c in r[2:5])]
+    assert [int(x) for x in said.groups()] == [len(ok4), 48, len(all_see), len(low), len(high)]
+    assert (len(ok4), len(low), len(high)) == (26, 18, 8)

@@ -1,9 +1,13 @@
 """Aguado's equations written out by hand against mtmc's chain with the mapped errors.
 
 Aguado et al. 2017, eqs. (1), (6)-(9): the XFYZ machine. Aguado et al. 2016, eqs. (3),
-(9)-(12): the ZYXF machine. Each is typed here as printed (the laser-tracker transform of
-2017 eq. 1 set to the identity; 2017 eq. 1 prints "+ Y - Z" where the part-side X is
-meant: "+ Y - X"), evaluated with exact matrix inverses, and compared with
+(9)-(12): the ZYXF machine. The error vectors and matrices (2017 eqs. 6-9, 2016 eqs. 9-12)
+are typed as printed; the two chains are not. 2017 eq. 1 prints "+ Y - Z" after the
+bracket of R_y; typed here is our reading "+ Y - X" (the part-side X, which the printed
+line does not contain elsewhere), with the laser-tracker transform set to the identity.
+2016 eq. 3 prints T_t = R(z)(R(y)(R(z) T_p + X) + Y) + z; typed here is our reconstruction
+T_t = R(z)(R(y)(R(x) T_p + X) + Y) + Z (the inner R(z) read as R(x), the lower-case z as
+the vector Z of eq. 11). Both are evaluated with exact matrix inverses and compared with
 ``Machine.tool_position`` given :func:`iso_errors_from_aguado`. The two agree to first
 order in the errors: the tolerance is well above the second-order terms (ε² L, ε δ) and
 well below the first-order ones the mapping is about (k ε, the lever of the pivot).
@@ -60,7 +64,7 @@ def _xfyz_by_hand(q: np.ndarray, err: dict[str, float]) -> np.ndarray:
     Y = np.array([dy[0] - y * err["Sxy"], y + dy[1], dy[2]])  # eq. 8
     Z = np.array([dz[0] - z * err["Sxz"], dz[1] - z * err["Syz"], z + dz[2]])  # eq. 9
     rx, ry, rz = (_r_active(_vec(err, "e", k)) for k in "xyz")
-    return np.linalg.solve(rx, ry @ (rz @ TOOL + Z) + Y - X)  # eq. 1
+    return np.linalg.solve(rx, ry @ (rz @ TOOL + Z) + Y - X)  # eq. 1, "- X" for its "- Z"
 
 
 def _zyxf_by_hand(q: np.ndarray, err: dict[str, float]) -> np.ndarray:
@@ -71,7 +75,8 @@ def _zyxf_by_hand(q: np.ndarray, err: dict[str, float]) -> np.ndarray:
     Y = np.array([dy[0], -y + dy[1], -y * err["Szy"] + dy[2]])  # eq. 10
     Z = np.array([dz[0], dz[1], -z + dz[2]])  # eq. 11, the part-side sign
     rx, ry, rz = (_r_passive(_vec(err, "e", k)) for k in "xyz")
-    # eq. (3): T_t = R(z)(R(y)(R(x) T_p + X) + Y) + Z, the tool T_t fixed on the frame
+    # eq. (3) as reconstructed (printed: R(z)(R(y)(R(z) T_p + X) + Y) + z):
+    # T_t = R(z)(R(y)(R(x) T_p + X) + Y) + Z, the tool T_t fixed on the frame
     return np.linalg.solve(rx, np.linalg.solve(ry, np.linalg.solve(rz, TOOL - Z) - Y) - X)
 
 
