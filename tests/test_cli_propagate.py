@@ -152,6 +152,31 @@ def test_table_output(capsys):
 
 
 @pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        # a = normal(10, 1) to the 200th power: finite values whose variance overflows
+        (["propagate", "a**200", "-i", "a=normal(10,1)", "-n", "1000"], "field model: "),
+        # a 95 % interval takes q = round(pM) of M values with q <= M - 1: M >= 11
+        (["propagate", "a", "-i", "a=normal(0, 1)", "--trials", "2"], "at least 11 trials"),
+        (["propagate", "a", "-i", "a=normal(0, 1)", "-n", "10"], "--trials: expected at least 11"),
+        (["propagate", "a", "-i", "a=normal(0, 1)", "-n", "50", "-p", "0.99"], "at least 51"),
+    ],
+)
+def test_hostile_numbers_are_input_errors(argv, fragment, capsys):
+    code, out, err = _run(argv, capsys)
+    assert code == 2
+    assert out == ""
+    assert err.count("\n") == 1
+    assert fragment in err
+
+
+def test_the_fewest_trials_run(capsys):
+    code, out, err = _run(["propagate", "a", "-i", "a=normal(0, 1)", "-n", "11", "--json"], capsys)
+    assert code == 0, err
+    assert json.loads(out)["trials"] == 11
+
+
+@pytest.mark.parametrize(
     ("argv", "fragments"),
     [
         (["propagate", "a * b", "-i", "a=normal(0, 1)"], ["variable(s) b", "no -i"]),

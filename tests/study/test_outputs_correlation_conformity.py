@@ -187,7 +187,7 @@ def test_unknown_names_are_refused_as_in_a_study_of_one_output():
 
 def test_a_conformity_table_without_an_output_table_is_refused():
     head = STUDY.split("[conformity.L1]")[0]
-    e = _error(head + "[conformity]\n\n[run]\ntrials = 10\n")
+    e = _error(head + "[conformity]\n\n[run]\ntrials = 20\n")
     assert e.field == "conformity"
     assert "a table of limits per output, e.g. [conformity.L1]" in e.message
     e = _error(head + "[conformity]\nL1 = 3\n")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -51,6 +52,10 @@ CASES = [
     ("trials = 1000", 'trials = "many"', 12, "run.trials", "expected an integer"),
     ("trials = 1000", "trials = 1", 12, "run.trials", ">= 2"),
     ("trials = 1000", "trials = 1e4", 12, "run.trials", "expected an integer"),
+    # a 95 % interval takes q = round(pM) of M sorted values with q <= M - 1: M >= 11
+    ("trials = 1000", "trials = 2", 12, "run.trials", "expected at least 11 trials"),
+    ("trials = 1000", "trials = 10", 12, "run.trials", "expected at least 11 trials"),
+    ("trials = 1000", "trials = 50\np = 0.99", 12, "run.trials", "expected at least 51"),
     ("seed = 3", "seed = -1", 13, "run.seed", ">= 0"),
     ("seed = 3", "seed = 3\np = nan", 14, "run.p", "finite"),
     ("seed = 3", "seed = 3\np = 1.5", 14, "run.p", "in (0, 1)"),
@@ -165,6 +170,51 @@ def test_not_toml_gives_line_and_column():
     with pytest.raises(MtmcError) as info:
         loads_study('kind = "graph"\nx = = 3\n', file="t.toml")
     assert (info.value.file, info.value.line) == ("t.toml", 2)
+
+
+def test_the_fewest_trials_of_a_coverage_interval_run():
+    # q = round(0.95 M) <= M - 1 first holds at M = 11 (q = 10), at M = 51 for p = 0.99
+    for p, least in ((0.95, 11), (0.99, 51)):
+        text = GOOD_PROPAGATE.replace("trials = 1000", f"trials = {least}\np = {p}")
+        r = loads_study(text, file="good.toml").run()
+        assert r.trials == least
+        lo, hi = r.quantities[0].mc.coverage_interval
+        assert lo < hi
+
+
+# a = normal(10, 1) reaches 10**200 and beyond: every value is finite, their variance is not
+OVERFLOW = GOOD_PROPAGATE.replace('model = "a + b"', 'model = "a**200 + b"').replace(
+    'a = "normal(1, 0.1)"', 'a = "normal(10, 1)"'
+)
+
+
+@pytest.mark.parametrize(
+    ("power", "words"),
+    [
+        (200, "finite in every trial but its standard uncertainty overflows float64"),
+        (400, "not finite (NaN or inf) in 1000 of 1000 trials"),
+    ],
+)
+def test_a_model_that_overflows_is_one_error_at_its_line(power, words):
+    assert math.isfinite(10.0**200)
+    assert math.isinf(10.0**200 * 10.0**200)  # its square: a variance overflows
+    text = OVERFLOW.replace("a**200", f"a**{power}")
+    with pytest.raises(MtmcError) as info:
+        loads_study(text, file="big.toml").run()
+    err = info.value
+    assert (err.file, err.line, err.field) == ("big.toml", 3, "model")
+    assert words in err.message
+
+
+def test_cli_names_the_model_line_of_a_study_that_overflows(tmp_path, capsys):
+    study = tmp_path / "big.toml"
+    study.write_text(OVERFLOW, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["run", str(study), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith(f"mtmc: error: {study}:3: field model: ")
+    assert not out.exists()
 
 
 @pytest.mark.parametrize(("old", "new"), [(c[0], c[1]) for c in CASES[:8]])

@@ -298,13 +298,18 @@ def validated_text(passed: bool | None) -> str:
     return "not applicable" if passed is None else "yes" if passed else "no"
 
 
-def check_trials(trials: int | None) -> None:
+def check_trials(trials: int | None, p: float | None = None) -> None:
     """Refuse ``--trials`` above the most a study's ``[run] trials`` may ask (10⁹).
+
+    With ``p``, also fewer than the coverage interval needs
+    (:func:`mtmc.uncertainty.require_trials`).
 
     Parameters
     ----------
     trials : int or None
         The option's value (None: not given).
+    p : float, optional
+        The coverage probability of the run.
 
     Raises
     ------
@@ -312,9 +317,16 @@ def check_trials(trials: int | None) -> None:
         Through :func:`fail`, with one line naming the option.
     """
     from mtmc.study.settings import MAX_TRIALS
+    from mtmc.uncertainty.results import require_trials
 
     if trials is not None and trials > MAX_TRIALS:
         fail(f"--trials: expected at most {MAX_TRIALS} trials, got {trials}")
+    if trials is not None and p is not None:
+        try:
+            require_trials(trials, p)
+        except InputError as exc:
+            if exc.field == "trials":  # not p itself: that is refused where it is read
+                fail(f"--trials: {exc.message}")
 
 
 def warn(lines: Iterable[str]) -> None:

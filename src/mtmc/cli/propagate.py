@@ -335,7 +335,7 @@ def propagate(
     from mtmc.study import loads_study
     from mtmc.uncertainty.expression import expression
 
-    check_trials(trials)
+    check_trials(trials, None if adaptive else p)
     if adaptive and trials is not None:
         fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
     several = is_several(expr)  # NAME = MODEL; NAME = MODEL: several outputs (JCGM 102)

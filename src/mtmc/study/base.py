@@ -1097,10 +1097,13 @@ class Study:
         Raises
         ------
         InputError
-            Fewer than 2 trials; ``adaptive`` with ``trials``; an option the kind does
-            not offer (:func:`mtmc.study.options.unsupported_option`), naming it.
+            Fewer trials than the coverage interval needs
+            (:func:`mtmc.uncertainty.require_trials`); ``adaptive`` with ``trials``; an
+            option the kind does not offer (:func:`mtmc.study.options.unsupported_option`),
+            naming it.
         """
-        from mtmc.errors import InputError
+        from mtmc.errors import InputError, MtmcError
+        from mtmc.uncertainty.results import require_trials
 
         s = self.settings
         if adaptive and trials is not None:
@@ -1112,10 +1115,8 @@ class Study:
         if nan_policy is not None and nan_policy not in ("raise", "omit"):
             raise InputError(f"expected 'raise' or 'omit', got {nan_policy!r}", field="nan_policy")
         t = s.trials if trials is None else int(trials)
-        if t < 2:
-            from mtmc.errors import InputError
-
-            raise InputError(f"expected at least 2 trials, got {t}", field="trials")
+        if not (adaptive or (s.adaptive and trials is None)):
+            require_trials(t, s.p)
         chosen = s.seed if seed is None else seed
         settings = RunSettings(
             trials=t,
@@ -1136,7 +1137,15 @@ class Study:
         if refused is not None:
             key, message = refused
             raise InputError(message, field="adaptive" if key == "trials" else key)
-        return self.execute(settings, progress)
+        try:
+            return self.execute(settings, progress)
+        except MtmcError as exc:  # an engine's error about the study: name its file and line
+            if exc.file is not None:
+                raise
+            at: tuple[str, ...] = (exc.field,) if exc.field else ()
+            raise type(exc)(
+                exc.message, file=self.source.file, line=self.source.line(at), field=exc.field
+            ) from None
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Run with resolved settings (the seed an int); each kind implements it."""

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from mtmc.document import Fields
+from mtmc.errors import InputError
+from mtmc.uncertainty.results import require_trials
 
 __all__ = ["MAX_TRIALS", "RunSettings"]
 
@@ -116,14 +118,22 @@ class RunSettings:
         adaptive = given == "adaptive"
         if isinstance(given, str) and not adaptive:
             raise run.error(f'expected an integer >= 2 or "adaptive", got {given!r}', "trials")
-        return cls(
-            trials=default_trials
+        p = run.number("p", 0.95, low=0.0, high=1.0, open_low=True, open_high=True)
+        trials = (
+            default_trials
             if adaptive
-            else run.integer("trials", default_trials, minimum=2, maximum=MAX_TRIALS),
+            else run.integer("trials", default_trials, minimum=2, maximum=MAX_TRIALS)
+        )
+        try:
+            require_trials(trials, p)
+        except InputError as exc:
+            raise run.error(exc.message, "trials") from None
+        return cls(
+            trials=trials,
             adaptive=adaptive,
             nan_policy=run.text("nan_policy", "raise", choices=("raise", "omit")),
             seed=run.integer("seed", None, minimum=0),
-            p=run.number("p", 0.95, low=0.0, high=1.0, open_low=True, open_high=True),
+            p=p,
             interval=run.text("interval", "symmetric", choices=("symmetric", "shortest")),
             ndig=run.integer("ndig", 2, minimum=1, maximum=15),
             samples=run.flag("samples", False),

@@ -701,7 +701,35 @@ class _Collector:
                     omitted=self.omitted,
                     **run,
                 )
+        _check_summary(out)
         return out
+
+
+def _check_summary(results: Mapping[str, MonteCarloResult]) -> None:
+    """Refuse finite model values whose estimate or ``u`` overflows float64.
+
+    Every value may be finite while their mean or variance is not: a variance overflows
+    once the values spread beyond about ``1e154`` (the square root of the largest
+    float). The result would carry ``u = inf``; the run stops here instead, naming the
+    output, as for a model value that is not finite.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        for n, res in results.items():
+            est, u = res.estimate_vector, res.u_vector
+            if np.isfinite(est).all() and np.isfinite(u).all():
+                continue
+            what = f"output {n!r}" if n else "the model value"
+            which = (
+                "standard uncertainty overflows"
+                if np.isfinite(est).all()
+                else "estimate and standard uncertainty overflow"
+            )
+            raise InputError(
+                f"{what} is finite in every trial but its {which} float64: the values "
+                "spread beyond about 1e154, whose square overflows; expected a model whose "
+                "values a float64 variance holds (state the output in a larger unit)",
+                field="model",
+            )
 
 
 def _shape_text(shapes: Mapping[str, tuple[int, ...]]) -> str:

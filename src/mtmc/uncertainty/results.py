@@ -55,9 +55,18 @@ __all__ = [
     "MonteCarloResult",
     "Trace",
     "coverage_indices",
+    "min_trials",
+    "require_trials",
 ]
 
 IntervalKind = Literal["shortest", "symmetric"]
+
+
+def _q_of(m: int, pf: float) -> int:
+    """``q = pM`` if ``pM`` is an integer, else ``⌊pM + ½⌋`` (JCGM 101 §7.7.1)."""
+    # pM is an integer exactly when round(pM) reproduces it (within rounding of p).
+    pm = pf * m
+    return int(round(pm) if abs(pm - round(pm)) <= 1e-9 * max(1.0, pm) else math.floor(pm + 0.5))
 
 
 def coverage_indices(m: int, p: float) -> tuple[int, int]:
@@ -90,9 +99,7 @@ def coverage_indices(m: int, p: float) -> tuple[int, int]:
     (951, 25)
     """
     pf = check_probability(p)
-    # pM is an integer exactly when round(pM) reproduces it (within rounding of p).
-    pm = pf * m
-    q = round(pm) if abs(pm - round(pm)) <= 1e-9 * max(1.0, pm) else math.floor(pm + 0.5)
+    q = _q_of(m, pf)
     if not 1 <= q <= m - 1:
         raise InputError(
             f"{m} values are too few for a {100 * pf:g} % coverage interval "
@@ -101,6 +108,72 @@ def coverage_indices(m: int, p: float) -> tuple[int, int]:
         )
     r = (m - q) // 2 if (m - q) % 2 == 0 else (m - q + 1) // 2
     return int(q), int(max(r, 1))
+
+
+def min_trials(p: float) -> int:
+    """The fewest trials ``M`` whose coverage interval :func:`coverage_indices` can take.
+
+    The shortest and the probabilistically symmetric ``100p %`` intervals both take
+    ``q = pM`` (rounded) of ``M`` sorted values with ``1 <= q <= M - 1``: about
+    ``M > 1/(2(1 - p))`` (and ``M >= 1/(2p)``); ``M = 11`` for ``p = 0.95``, ``M = 501``
+    for ``p = 0.999``. This is the hard minimum of a run; JCGM 101 §7.2.2 recommends
+    ``M >= 10⁴/(1 - p)`` for a reliable interval.
+
+    Parameters
+    ----------
+    p : float
+        Coverage probability, ``0 < p < 1``.
+
+    Returns
+    -------
+    int
+        At least 2.
+
+    Examples
+    --------
+    >>> min_trials(0.95), min_trials(0.99), min_trials(0.5)
+    (11, 51, 2)
+    """
+    pf = check_probability(p)
+    m = max(2, math.floor(0.5 / min(pf, 1.0 - pf)) - 2)  # a few below the bound
+    while True:  # up by at most a few steps: the rounding of q decides the last one
+        if 1 <= _q_of(m, pf) <= m - 1:
+            return m
+        m += 1
+
+
+def require_trials(m: int, p: float) -> None:
+    """Refuse fewer trials than :func:`min_trials` for coverage probability ``p``.
+
+    Parameters
+    ----------
+    m : int
+        The number of trials ``M``.
+    p : float
+        Coverage probability, ``0 < p < 1``.
+
+    Raises
+    ------
+    InputError
+        At field ``trials``, stating the minimum and JCGM 101 §7.2.2's recommendation.
+
+    Examples
+    --------
+    >>> require_trials(11, 0.95)
+    >>> require_trials(10, 0.95)
+    Traceback (most recent call last):
+    ...
+    mtmc.errors.InputError: field trials: expected at least 11 trials for a 95 % ... got 10
+    """
+    least = min_trials(p)
+    if m < least:
+        pf = float(p)
+        raise InputError(
+            f"expected at least {least} trials for a {100 * pf:g} % coverage interval "
+            "(q = pM of the M sorted values must be 1 to M - 1; JCGM 101 §7.2.2 "
+            f"recommends M >= {math.ceil(1e4 / (1.0 - pf) - 1e-6)}), got {m}",
+            field="trials",
+        )
 
 
 @dataclass(frozen=True)
