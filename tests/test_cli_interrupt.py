@@ -41,7 +41,7 @@ def test_propagate_nan_policy_omit_leaves_those_trials_out(capsys):
 
 
 def test_nan_policy_rejects_other_values(capsys):
-    argv = ["propagate", "x", "-i", "x=normal(0, 1)", "-n", "10", "--nan-policy", "skip"]
+    argv = ["propagate", "x", "-i", "x=normal(0, 1)", "-n", "1000", "--nan-policy", "skip"]
     assert main(argv) == 2
     assert "field --nan-policy: expected raise or omit" in capsys.readouterr().err
 

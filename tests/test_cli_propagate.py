@@ -155,7 +155,7 @@ def test_table_output(capsys):
     ("argv", "fragment"),
     [
         # a = normal(10, 1) to the 200th power: finite values whose variance overflows
-        (["propagate", "a**200", "-i", "a=normal(10,1)", "-n", "1000"], "field model: "),
+        (["propagate", "a**200", "-i", "a=normal(10,1)", "-n", "1000"], "error: field EXPR: "),
         # a 95 % interval takes q = round(pM) of M values with q <= M - 1: M >= 11
         (["propagate", "a", "-i", "a=normal(0, 1)", "--trials", "2"], "at least 11 trials"),
         (["propagate", "a", "-i", "a=normal(0, 1)", "-n", "10"], "--trials: expected at least 11"),

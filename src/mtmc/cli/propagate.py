@@ -183,6 +183,13 @@ def option_error(exc: MtmcError) -> InputError:
     return InputError(exc.message, field=field)
 
 
+def _at_option(exc: MtmcError | ValueError) -> MtmcError | ValueError:
+    """A run's error located in the command's study text, at its option instead."""
+    if isinstance(exc, MtmcError) and exc.file == COMMAND_FILE:
+        return option_error(exc)
+    return exc
+
+
 def study_text(
     outputs: dict[str, str] | str,
     inputs: dict[str, str],
@@ -388,7 +395,7 @@ def propagate(
                 parallel=parallel_options(workers, executor, scheduler),
             )
     except (MtmcError, ValueError) as exc:
-        fail(engine_message(exc))
+        fail(engine_message(_at_option(exc)))
     except OSError as exc:
         fail(f"{outdir}: cannot write: {exc.strerror or exc}")
     if several:
