@@ -13,7 +13,9 @@ and the results are put back in trial order. This module is the one place that d
   function, not a lambda);
 * ``executor="dask"``: a Dask cluster (the optional extra ``mtmc[distributed]``):
   with ``scheduler=None`` a :class:`distributed.LocalCluster` of ``workers`` worker
-  processes started for the call and closed after it; with ``scheduler`` a running
+  processes started for the call and closed after it (started and closed whole: a
+  Ctrl-C or SIGTERM meanwhile waits for it; its scratch files in a temporary folder
+  removed with it; Dask's warnings off); with ``scheduler`` a running
   cluster, by the address of its scheduler (``"tcp://host:8786"``) or a
   :class:`distributed.Client`. The function (the model and what it was built from) is
   sent to every worker once; each task (a few blocks of trials) is submitted with
@@ -48,6 +50,8 @@ import concurrent.futures as cf
 import contextlib
 import itertools
 import pickle
+import shutil
+import tempfile
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
@@ -247,28 +251,67 @@ def planned_workers(workers: int, executor: ExecutorKind | cf.Executor) -> int:
     return max(workers, 2) if executor == "dask" else workers
 
 
-def _dask_client(scheduler: Any, workers: int) -> tuple[Any, Any]:
-    """A ``distributed.Client`` for ``scheduler`` (or a new local cluster) and what to close."""
+#: Dask's log level in a cluster started for one call (:func:`_dask_client`), in this
+#: process and (through :mod:`mtmc._warm`, which reads the setting ``mtmc.worker-log-level``)
+#: in its workers: the run reports its own failures, and an interrupted run's workers would
+#: otherwise log the cancelled tasks of their ending ("Async instruction ... ended with
+#: CancelledError", one line a worker).
+CALL_CLUSTER_LOG_LEVEL: str = "ERROR"
+
+
+@contextlib.contextmanager
+def _dask_client(scheduler: Any, workers: int) -> Iterator[Any]:
+    """A ``distributed.Client`` for ``scheduler`` (or a new local cluster), closed after.
+
+    A cluster started here is started and closed whole: Ctrl-C or SIGTERM arriving while
+    it starts or closes is held until it is running or closed, then raised
+    (:func:`mtmc.io.deferred_interrupt`). A start cut short leaves worker processes in
+    Dask's start-up state that its close at exit then asserts on (a traceback
+    ``AssertionError: Status.init`` after the command's own message), and the workers'
+    scratch folders in the temporary folder. The workers keep their scratch files in a
+    temporary folder of this call, removed with the cluster.
+    """
+    from mtmc.io import deferred_interrupt
+
     distributed = _import_distributed()
-    if scheduler is None:
-        cluster = local_cluster(workers)
-        client = distributed.Client(cluster)
-        return client, (client, cluster)
     if isinstance(scheduler, distributed.Client):
-        return scheduler, ()
-    if not isinstance(scheduler, str) or not scheduler:
+        yield scheduler
+        return
+    if scheduler is not None and (not isinstance(scheduler, str) or not scheduler):
         raise InputError(
             f"expected a scheduler address such as 'tcp://127.0.0.1:8786' or a "
             f"distributed.Client, got {scheduler!r}",
             field="scheduler",
         )
+    to_close: list[Any] = []
+    scratch = tempfile.mkdtemp(prefix="mtmc-dask-") if scheduler is None else None
     try:
-        client = distributed.Client(scheduler, timeout="5s")
-    except (OSError, TimeoutError) as exc:
-        raise InputError(
-            f"cannot reach the Dask scheduler at {scheduler}: {exc}", field="scheduler"
-        ) from None
-    return client, (client,)
+        with deferred_interrupt():
+            if scratch is None:
+                try:
+                    client = distributed.Client(scheduler, timeout="5s")
+                except (OSError, TimeoutError) as exc:
+                    raise InputError(
+                        f"cannot reach the Dask scheduler at {scheduler}: {exc}",
+                        field="scheduler",
+                    ) from None
+            else:
+                import dask
+
+                quiet = {"mtmc.worker-log-level": CALL_CLUSTER_LOG_LEVEL}
+                # the scheduler's and the workers' scratch folders (dask-scratch-space)
+                with dask.config.set({**quiet, "temporary-directory": scratch}):
+                    cluster = local_cluster(workers, silence_logs=CALL_CLUSTER_LOG_LEVEL)
+                to_close.append(cluster)
+                client = distributed.Client(cluster)
+            to_close.insert(0, client)
+        yield client
+    finally:
+        with deferred_interrupt():  # a second Ctrl-C does not cut the closing short
+            for obj in to_close:
+                obj.close()
+            if scratch is not None:
+                shutil.rmtree(scratch, ignore_errors=True)
 
 
 def _apply(fn: Callable[[T], R], task: T) -> R:
@@ -371,13 +414,9 @@ def map_blocks(
             f"a scheduler ({scheduler!r}) is used with executor='dask' only", field="scheduler"
         )
     if executor == "dask":
-        client, to_close = _dask_client(scheduler, workers)
-        try:
+        with _dask_client(scheduler, workers) as client:
             with one_blas_thread():  # a cluster of threads in this process shares its BLAS
                 yield from _dask_map(_OneBlasThread(fn), list(tasks), client)
-        finally:
-            for obj in to_close:
-                obj.close()
         return
     if workers == 1:
         with one_blas_thread():
