@@ -101,3 +101,13 @@ def test_place_progress_and_quiet(flag: str, capsys: pytest.CaptureFixture[str])
     assert (f"{total}/{total} steps" in err) == (flag == "--progress")
     assert (out == "trials 4  seed 2\n") == (flag == "-q")
     assert re.search(r"mean point u [0-9.]+ µm", out) or flag == "-q"
+
+
+def test_the_verify_commands_scale_by_the_studys_units_only() -> None:
+    # mm → µm and rad → µrad have one home, the study's file_unit: no factor in the CLI
+    from mtmc.study.verification import file_unit
+
+    assert file_unit("mm") == ("µm", 1e3)
+    assert file_unit("rad") == ("µrad", 1e6)
+    text = (ROOT / "src" / "mtmc" / "cli" / "verify.py").read_text(encoding="utf-8")
+    assert not re.search(r"\b1e[36]\b", text)
