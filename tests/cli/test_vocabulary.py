@@ -158,7 +158,8 @@ def _graph_sweep(_tmp: Path) -> list[str]:
 
 
 def _verify_simulate(_tmp: Path) -> list[str]:
-    return ["verify", "simulate", str(STUDIES / "aguado2016.toml"), "-n", "2"]
+    # 40 trials: the fewest of whole-number 95 % intervals, as a study run reports them
+    return ["verify", "simulate", str(STUDIES / "aguado2016.toml"), "-n", "40"]
 
 
 def _verify_place(_tmp: Path) -> list[str]:
@@ -262,13 +263,14 @@ def test_u_and_U_are_labelled_and_the_json_states_its_units(
     assert q["k"] == pytest.approx(q["U"] / q["u"])
     assert q["p"] == 0.95
     # verify simulate: standard uncertainties, labelled u, in µm, as its JSON keys say
-    argv = ["verify", "simulate", str(STUDIES / "aguado2016.toml"), "-n", "2", "-s", "3"]
+    argv = ["verify", "simulate", str(STUDIES / "aguado2016.toml"), "-n", "40", "-s", "3"]
     text = _call(argv, capsys)
     assert "µm" in text.splitlines()[1]
     assert re.search(r"max [0-9.]+ \(u = [0-9.]+\)", text), text
     data = json.loads(_call([*argv, "--json"], capsys))
-    assert set(data["initial_ve_um"]["max"]) == {"estimate", "u"}
-    assert {c["unit"] for c in data["coefficients"].values()} <= {"um", "urad"}
+    assert {"estimate", "U", "k", "p", "u"} <= set(data["initial_ve_um"]["max"])
+    assert data["unit"] == "µm"
+    assert {c["unit"] for c in data["coefficients"].values()} <= {"µm", "µrad"}
     # demo: each study's line gives U with its unit, k and p
     monkeypatch.setattr(demo, "STUDIES", ("mass_calibration.toml",))
     text = _call(["demo", "-o", str(tmp_path / "d"), "-n", "200", "-s", "3", "-q"], capsys)

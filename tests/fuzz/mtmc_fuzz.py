@@ -399,7 +399,7 @@ def targets() -> list[Target]:
             "verify-simulate",
             "studies/aguado2017.toml",
             "toml",
-            ("verify", "simulate", "{file}", "-n", "5", "--seed", "1", "--json"),
+            ("verify", "simulate", "{file}", "-n", "20", "--seed", "1", "--json"),
             cost=3,
         ),
         Target(

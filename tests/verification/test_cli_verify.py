@@ -68,12 +68,14 @@ def test_simulate_json_contract(capsys) -> None:  # type: ignore[no-untyped-def]
     for key in ("initial_ve_um", "residual_ve_um"):
         assert set(d[key]) == {"max", "mean", "min"}
         for v in d[key].values():
-            assert set(v) == {"estimate", "u"}
+            assert set(v) == {"estimate", "U", "k", "p", "u", "unit", "reported"}
+            assert v["unit"] == "µm"
             assert v["u"] >= 0
     assert d["initial_ve_um"]["mean"]["estimate"] > d["residual_ve_um"]["mean"]["estimate"]
     assert set(d["coefficients"]) == set(d["gum"])
     ec0y = d["coefficients"]["EC0Y"]
-    assert ec0y["unit"] == "urad"
+    assert d["unit"] == "µm"
+    assert ec0y["unit"] == "µrad"
     assert abs(ec0y["estimate"] - 40.0) < 5 * ec0y["u"]
     assert d["point_u_um"]["max"] >= d["point_u_um"]["mean"] > 0
     assert main(["verify", "simulate", str(STUDIES / "aguado2017.toml"), "--tracker", "x"]) == 2
@@ -91,10 +93,11 @@ def test_simulate_text_rounds_as_the_gum_says(capsys) -> None:  # type: ignore[n
     assert main([*args, "--seed", "3", "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert "±" not in out
-    assert "standard uncertainty, k = 1" in out
+    assert "U (k, p = 95 %) and u" in out
     v = d["initial_ve_um"]["max"]
-    y, u = round_to_uncertainty(v["estimate"], v["u"])
-    assert f"initial: max {y} (u = {u})," in out
+    y, big_u = v["reported"]["estimate"], v["reported"]["U"]
+    u = round_to_uncertainty(v["u"], v["u"])[1]
+    assert f"initial max : {y}  U = {big_u} (k = {v['k']:.3f})  u = {u}" in out
     pu = d["point_u_um"]
     mx, mean = (round_to_uncertainty(pu[k], pu[k])[1] for k in ("max", "mean"))
     assert f"calibration u per point: max {mx} µm, mean {mean} µm (MC)" in out

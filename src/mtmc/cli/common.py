@@ -425,7 +425,11 @@ class _Estimate:
 
 @contextlib.contextmanager
 def progress_bar(
-    description: str, enabled: bool | None = None, *, console: Console | None = None
+    description: str,
+    enabled: bool | None = None,
+    *,
+    console: Console | None = None,
+    unit: str = "trials",
 ) -> Iterator[ProgressFn]:
     """A Rich progress bar on stderr, as a library progress callback.
 
@@ -439,6 +443,8 @@ def progress_bar(
     console : rich.console.Console, optional
         Where to draw (default: a console on stderr). On a terminal the bar is removed
         when done; elsewhere (stderr redirected to a file) its final state is printed once.
+    unit : str
+        What the bar counts (``verify place``: the steps of its search).
 
     Yields
     ------
@@ -468,7 +474,7 @@ def progress_bar(
         TextColumn("{task.description}"),
         BarColumn(),
         MofNCompleteColumn(),
-        TextColumn("trials"),
+        TextColumn(unit),
         TimeElapsedColumn(),
         TimeRemainingColumn(),
         console=con,

@@ -6,6 +6,7 @@ files are written atomically (:mod:`mtmc.io`).
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +16,8 @@ from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
     PROGRESS_OPTION,
+    QUIET_OPTION,
+    RESULT_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
@@ -23,10 +26,12 @@ from mtmc.cli.common import (
     print_json,
     print_trials_seed,
     progress_bar,
+    progress_flag,
     seed_option,
     warn,
     with_u,
 )
+from mtmc.cli.run import command_line, run_study
 from mtmc.errors import MtmcError
 
 app = typer.Typer(
@@ -130,118 +135,96 @@ def plan_cmd(
             typer.echo("  " + v.text(plan.axes).replace("\n", "\n  "))
 
 
-def _stats_um(r: Any, which: str) -> dict[str, dict[str, float]]:
-    """Max, mean and min of one volumetric error over the points, µm (``r.ve``)."""
-    out = {}
-    for k in ("max", "mean", "min"):
-        est, u = r.ve(f"{which}.{k}")
-        out[k] = {"estimate": est * 1e3, "u": u * 1e3}
+def _coef_unit(model: Any, name: str) -> tuple[str, float]:
+    """The unit of a parameter and its factor from the code's mm or rad (µm, µrad)."""
+    from mtmc.study.verification import file_unit
+    from mtmc.verification.identify import parameter_unit
+
+    return file_unit(parameter_unit(model.machine, name))
+
+
+def _in_um(value: Any) -> Any:
+    """A length of the code's mm in the µm a verification study writes (``file_unit``)."""
+    from mtmc.study.verification import file_unit
+
+    return value * file_unit("mm")[1]
+
+
+def _statement(q: Any) -> dict[str, Any]:
+    """One volumetric-error statistic of the result: y, U (k, p) and u, in its unit."""
+    mc = q.mc
+    return {
+        "estimate": mc.estimate,
+        "U": mc.U,
+        "k": mc.k,
+        "p": mc.p,
+        "u": mc.u,
+        "unit": q.unit,
+        "reported": q.reported.to_dict(),
+    }
+
+
+def simulate_record(result: Any, outdir: Path | None) -> dict[str, Any]:
+    """The ``--json`` object of ``verify simulate``, every number the result's (µm, µrad)."""
+    from mtmc.verification.simulate import VE_NAMES
+
+    extra = result.extra["verification"]
+    out: dict[str, Any] = {
+        "unit": "µm",
+        "trials": result.trials,
+        "seed": result.seed,
+        "p": result.p,
+        "points": extra["points"],
+        "point_set": extra["point_set"],
+        "tracker": extra["tracker"],
+    }
+    for which in ("initial", "residual", "compensated"):
+        out[f"{which}_ve_um"] = {
+            name.split(".")[1]: _statement(result.quantity(f"volumetric_error.{name}"))
+            for name in VE_NAMES
+            if name.startswith(f"{which}.")
+        }
+    out["point_mean_ve_um"] = extra["point_mean_ve_um"]
+    coefs, gum_u = {}, {}
+    table = next(t for t in result.tables if t.name == "coefficients")
+    for name, unit, _free, est, u, u_gum in table.rows:
+        coefs[name] = {"estimate": est, "u": u, "unit": unit}
+        gum_u[name] = {"u": u_gum, "unit": unit}
+    out["coefficients"] = coefs
+    out["gum"] = gum_u
+    values = next(f for f in result.fields if f.name == "calibration_u").values
+    out["point_u_um"] = {"max": float(values.max()), "mean": float(values.mean())}
+    out["point_u_gum_um"] = extra["point_u_gum_um"]
+    out["warnings"] = list(result.extra.get("warnings", ()))
+    out["run"] = result.extra.get("run")
+    out["output"] = None if outdir is None else str(outdir)
     return out
 
 
-def _point_stats_um(r: Any) -> dict[str, dict[str, dict[str, float]]]:
-    """``point_mean_ve_um``: max, mean, min over the points of each point's mean error."""
-    return {
-        which: {
-            k: {"estimate": est * 1e3, "u": u * 1e3}
-            for k, (est, u) in r.point_mean_ve(which).items()
-        }
-        for which in ("initial", "compensated")
-    }
+def _print_simulated(out: dict[str, Any]) -> None:
+    """The text of ``verify simulate``: U (k, p) with u beside it, in µm."""
+    from mtmc.uncertainty.tolerance import round_to_uncertainty
 
-
-def _coef_unit(model: Any, name: str) -> tuple[str, float]:
-    """File unit of a parameter: µm for lengths, µrad for angles (pose: µrad and µm)."""
-    from mtmc.verification.identify import parameter_unit
-
-    return ("urad", 1e6) if parameter_unit(model.machine, name) == "rad" else ("um", 1e3)
-
-
-@app.command("simulate")
-def simulate_cmd(
-    study: Path = STUDY,
-    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Trials (tests)."),
-    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
-    points: str | None = typer.Option(None, "--points", help="A point set of the study."),
-    tracker: str | None = typer.Option(None, "--tracker", help="A tracker position of the study."),
-    as_json: bool = JSON_OPTION,
-    workers: int = WORKERS_OPTION,
-    executor: str = EXECUTOR_OPTION,
-    scheduler: str | None = SCHEDULER_OPTION,
-    progress: bool | None = PROGRESS_OPTION,
-) -> None:
-    """Monte Carlo of the whole verification: volumetric errors, coefficients, point u."""
-    from mtmc.verification.visibility import study_visibility, visibility_warnings
-
-    try:
-        kind = _load(study)
-        st = kind.study
-        ver = _verification(study, st, points, tracker)
-        warnings = visibility_warnings(
-            study_visibility(st, points, [tracker or st.default_tracker]), st.machine.axes
-        )
-        warn(warnings)
-        par = parallel_options(workers, executor, scheduler)
-        m = kind.settings.trials if trials is None else trials
-        s = kind.settings.seed if seed is None else seed
-        with progress_bar(f"{study.name}: verifications", progress) as bar:
-            r = st.simulate(m, s, points=points, tracker=tracker, progress=bar, **par)
-    except MtmcError as exc:
-        if exc.field == "trials" and exc.message.endswith("run fewer trials"):
-            fail(f"{exc.message} (--trials N, or trials in the [run] table of {study})")
-        fail(exc)
-    coefs = {}
-    gum_u = {}
-    for i, n in enumerate(r.names):
-        unit, f = _coef_unit(st.model, n)
-        coefs[n] = {
-            "estimate": float(r.coef_estimate[i]) * f,
-            "u": float(r.coef_u[i]) * f,
-            "unit": unit,
-        }
-        gum_u[n] = {"u": float(r.gum.u[i]) * f, "unit": unit}
-    out: dict[str, Any] = {
-        "trials": r.trials,
-        "seed": r.seed,
-        "points": ver.n_points,
-        "point_set": points or st.default_points,
-        "tracker": tracker or st.default_tracker,
-        "initial_ve_um": _stats_um(r, "initial"),
-        "residual_ve_um": _stats_um(r, "residual"),
-        "compensated_ve_um": _stats_um(r, "compensated"),
-        "point_mean_ve_um": _point_stats_um(r),
-        "coefficients": coefs,
-        "gum": gum_u,
-        "point_u_um": {"max": float(r.point_u.max()) * 1e3, "mean": float(r.point_u.mean()) * 1e3},
-        "point_u_gum_um": {
-            "max": float(r.gum.point_u.max()) * 1e3,
-            "mean": float(r.gum.point_u.mean()) * 1e3,
-        },
-        "warnings": warnings,
-    }
-    if as_json:
-        print_json(out)
-        return
     typer.echo(
-        f"{r.trials} verifications (seed {r.seed}), {ver.n_points} points "
+        f"{out['trials']} verifications (seed {out['seed']}), {out['points']} points "
         f"({out['point_set']}), tracker {out['tracker']}"
     )
     typer.echo(
-        "volumetric error over the points, µm: Monte Carlo mean (u: its standard "
-        "uncertainty, k = 1, to two digits, JCGM 100 §7.2.6)"
+        f"volumetric error over the points, µm: y, U (k, p = {100 * out['p']:g} %) "
+        "and u (standard uncertainty, JCGM 100 §7.2.6)"
     )
-    for key, label in (
-        ("initial_ve_um", "initial"),
-        ("residual_ve_um", "residual (eq. 17)"),
-        ("compensated_ve_um", "after compensation"),
+    for which, label in (
+        ("initial", "initial"),
+        ("residual", "residual (eq. 17)"),
+        ("compensated", "after compensation"),
     ):
-        d = out[key]
-        typer.echo(
-            f"{label:>18}: "
-            + ", ".join(
-                f"{s} {with_u(d[s]['estimate'], d[s]['u'])}" for s in ("max", "mean", "min")
+        for stat, d in out[f"{which}_ve_um"].items():
+            k = "" if d["k"] is None else f" (k = {d['k']:.3f})"
+            u = round_to_uncertainty(d["u"], d["u"])[1] if d["u"] > 0 else f"{d['u']:g}"
+            typer.echo(
+                f"{label:>18} {stat:<4}: {d['reported']['estimate']}  "
+                f"U = {d['reported']['U']}{k}  u = {u}"
             )
-        )
     typer.echo(
         "each point's error averaged over the verifications, µm: max, mean, min over the "
         "points (u: the spread of one verification there)"
@@ -255,10 +238,67 @@ def simulate_cmd(
             )
         )
     pu = out["point_u_um"]
-    from mtmc.uncertainty.tolerance import round_to_uncertainty
-
     mx, mean = (round_to_uncertainty(pu[k], pu[k])[1] for k in ("max", "mean"))
     typer.echo(f"calibration u per point: max {mx} µm, mean {mean} µm (MC)")
+
+
+@app.command("simulate")
+def simulate_cmd(
+    ctx: typer.Context,
+    study: Path = STUDY,
+    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Trials (tests)."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
+    points: str | None = typer.Option(None, "--points", help="A point set of the study."),
+    tracker: str | None = typer.Option(None, "--tracker", help="A tracker position of the study."),
+    outdir: Path | None = RESULT_OPTION,
+    as_json: bool = typer.Option(
+        False, "--json", help="Print one JSON object (lengths in µm, angles in µrad, as it says)."
+    ),
+    quiet: bool = QUIET_OPTION,
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
+) -> None:
+    """Monte Carlo of the whole verification: volumetric errors, coefficients, point u.
+
+    The study runs as mtmc run runs it; with -o its result folder and report are written.
+    """
+    if outdir is not None and (points is not None or tracker is not None):
+        fail(
+            "-o writes the study as its file gives it, which simulates its default point "
+            "set and tracker position: not with --points or --tracker"
+        )
+    try:
+        kind = _load(study)
+        _verification(study, kind.study, points, tracker)
+        kind = dataclasses.replace(kind, points=points, tracker=tracker)
+        result = run_study(
+            kind,
+            outdir,
+            label=f"{study.name}: verifications",
+            trials=trials,
+            seed=seed,
+            progress=progress_flag(progress, quiet),
+            argv=command_line(ctx),
+            parallel=parallel_options(workers, executor, scheduler),
+        )
+    except MtmcError as exc:
+        if exc.field == "trials" and exc.message.endswith("run fewer trials"):
+            fail(f"{exc.message} (--trials N, or trials in the [run] table of {study})")
+        fail(exc)
+    except OSError as exc:
+        fail(f"{outdir}: cannot write: {exc.strerror or exc}")
+    out = simulate_record(result, outdir)
+    warn(out["warnings"])
+    if as_json:
+        print_json(out)
+        return
+    if not quiet:
+        _print_simulated(out)
+    print_trials_seed(result.trials, result.seed)
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")
 
 
 def _check_identified(r: Any, data: Path) -> None:
@@ -340,7 +380,7 @@ def identify_cmd(
     for i, n in enumerate(r.names):
         unit, f = _coef_unit(st.model, n)
         coefs[n] = {"estimate": float(r.estimate[0, i]) * f, "u": float(u[i]) * f, "unit": unit}
-    ini, res = r.initial_stats()[0] * 1e3, r.residual_stats()[0] * 1e3
+    ini, res = _in_um(r.initial_stats()[0]), _in_um(r.residual_stats()[0])
     result = {
         "points": int(q.shape[0]),
         "data": d.kind,
@@ -381,9 +421,11 @@ def place_cmd(
     grid: int = typer.Option(11, "--grid", min=2, help="Candidates per horizontal axis."),
     refine: int = typer.Option(300, "--refine", min=0, help="Evaluations of the refinement."),
     as_json: bool = JSON_OPTION,
+    quiet: bool = QUIET_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
 ) -> None:
     """Search the tracker position with the smallest mean calibration uncertainty."""
     import math
@@ -401,16 +443,20 @@ def place_cmd(
         warnings = visibility_warnings(study_visibility(st, points), st.machine.axes)
         warn(warnings)
         used_seed = resolve_seed(kind.settings.seed if seed is None else seed)
-        r = place(
-            ver,
-            st.limits,
-            references=st.trackers,
-            n_xy=grid,
-            refine=refine,
-            trials=trials,
-            seed=used_seed,
-            **parallel_options(workers, executor, scheduler),
-        )
+        with progress_bar(
+            f"{study.name}: placement", progress_flag(progress, quiet), unit="steps"
+        ) as bar:
+            r = place(
+                ver,
+                st.limits,
+                references=st.trackers,
+                n_xy=grid,
+                refine=refine,
+                trials=trials,
+                seed=used_seed,
+                progress=bar,
+                **parallel_options(workers, executor, scheduler),
+            )
     except MtmcError as exc:
         fail(exc)
     p = r.best.position
@@ -422,10 +468,10 @@ def place_cmd(
             "z": float(p[2]),
             "euler": st.euler,
             "euler_deg": [math.degrees(a) for a in r.best.euler(st.euler)],
-            "u_um": r.u_best * 1e3,
-            "u_mc_um": None if r.u_best_mc is None else r.u_best_mc * 1e3,
+            "u_um": _in_um(r.u_best),
+            "u_mc_um": None if r.u_best_mc is None else _in_um(r.u_best_mc),
         },
-        "reference": {n: {"u_um": u * 1e3} for n, u in r.reference.items()},
+        "reference": {n: {"u_um": _in_um(u)} for n, u in r.reference.items()},
         "candidates": r.candidates,
         "rejected": r.rejected,
         "trials": trials,
@@ -436,6 +482,9 @@ def place_cmd(
         print_json(out)
         return
     b = out["best"]
+    if quiet:
+        print_trials_seed(trials, used_seed)
+        return
     typer.echo(
         f"best of {r.candidates} candidates ({r.rejected} out of the limits): "
         f"({b['x']:.0f}, {b['y']:.0f}, {b['z']:.0f}) mm, Euler {b['euler']} "

@@ -24,12 +24,26 @@ from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, q
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 
-__all__ = ["VerificationKindStudy"]
+__all__ = ["VerificationKindStudy", "file_unit"]
 
-#: µm per mm: the volumetric errors, computed in mm, are given in µm.
-_UM = 1e3
 #: The unit and factor of an error parameter given in the code's mm or rad.
 _ERROR_UNITS = {"mm": ("µm", 1e3), "rad": ("µrad", 1e6)}
+#: µm per mm: the volumetric errors, computed in mm, are given in µm.
+_UM = _ERROR_UNITS["mm"][1]
+
+
+def file_unit(unit: str) -> tuple[str, float]:
+    """The unit a verification study writes a value of the code's ``unit`` in, and its factor.
+
+    Lengths (mm) in µm and angles (rad) in µrad, as the study file gives the machine's
+    errors (``docs/results-format.md``, the unit rule); every command shows them so.
+
+    Examples
+    --------
+    >>> file_unit("mm"), file_unit("rad")
+    (('µm', 1000.0), ('µrad', 1000000.0))
+    """
+    return _ERROR_UNITS[unit]
 
 
 @dataclass(frozen=True)
@@ -40,6 +54,9 @@ class VerificationKindStudy(Study):
     ----------
     study : VerificationStudy
         The validated study of :func:`mtmc.verification.definition.read_verification_study`.
+    points, tracker : str, optional
+        The point set and tracker position simulated (``mtmc verify simulate --points``,
+        ``--tracker``); None, as a study file runs: the study's defaults.
     """
 
     kind = "verification"
@@ -48,6 +65,8 @@ class VerificationKindStudy(Study):
         "machine's error coefficients"
     )
     study: Any
+    points: str | None = None
+    tracker: str | None = None
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Simulate the verification and tabulate it (module docstring)."""
@@ -56,11 +75,19 @@ class VerificationKindStudy(Study):
         from mtmc.verification.visibility import study_visibility, visibility_warnings
 
         s = self.study
-        ver = s.verification()
+        ver = s.verification(self.points, self.tracker)
         warnings = visibility_warnings(
-            study_visibility(s, None, [s.default_tracker]), s.machine.axes
+            study_visibility(s, self.points, [self.tracker or s.default_tracker]),
+            s.machine.axes,
         )
-        mc = s.simulate(settings.trials, settings.seed, progress=progress, **settings.parallel)
+        mc = s.simulate(
+            settings.trials,
+            settings.seed,
+            points=self.points,
+            tracker=self.tracker,
+            progress=progress,
+            **settings.parallel,
+        )
         # the file gives the machine's errors in µm and µrad (its travel in mm): the
         # errors are shown in those units, each value of the code's mm or rad times the
         # exact factor (docs/results-format.md, the unit rule)
@@ -77,7 +104,7 @@ class VerificationKindStudy(Study):
         ref = np.asarray(mc.reference.estimate, dtype=np.float64)[0]
         coef_rows = []
         for i, name in enumerate(mc.names):
-            unit, f = _ERROR_UNITS[parameter_unit(s.machine, name)]
+            unit, f = file_unit(parameter_unit(s.machine, name))
             coef_rows.append(
                 (
                     name,
@@ -90,7 +117,7 @@ class VerificationKindStudy(Study):
             )
         errors, stats = POINT_STATS
         point_um = {
-            w: {k: {"estimate": 1e3 * e, "u": 1e3 * u} for k, (e, u) in mc.point_mean_ve(w).items()}
+            w: {k: {"estimate": _UM * e, "u": _UM * u} for k, (e, u) in mc.point_mean_ve(w).items()}
             for w in errors
         }
         point_rows = tuple(
@@ -143,6 +170,13 @@ class VerificationKindStudy(Study):
                     "note": s.note,
                     "machine": str(s.machine.topology),
                     "point_mean_ve_um": point_um,
+                    "point_set": self.points or s.default_points,
+                    "tracker": self.tracker or s.default_tracker,
+                    "points": int(ver.n_points),
+                    "point_u_gum_um": {
+                        "max": _UM * float(np.max(mc.gum.point_u)),
+                        "mean": _UM * float(np.mean(mc.gum.point_u)),
+                    },
                 },
                 "warnings": warnings,
             },

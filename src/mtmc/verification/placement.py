@@ -14,7 +14,7 @@ milliseconds per candidate; the best one is then confirmed by the Monte Carlo of
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -83,6 +83,21 @@ def _upright(pos: _F, centre: _F, noise: Any, name: str) -> LaserTracker:
     return LaserTracker(rotation_z(yaw), pos, noise, name)
 
 
+class _Steps:
+    """The steps of a placement search, reported as the engine reports trials."""
+
+    def __init__(self, total: int, progress: Callable[[int, int | None], None] | None) -> None:
+        self.total = total
+        self.done = 0
+        self.progress = progress
+
+    def __call__(self, n: int) -> None:
+        """Count ``n`` more steps (at most the total) and report them."""
+        self.done = min(self.done + n, self.total)
+        if self.progress is not None and n > 0:
+            self.progress(self.done, self.total)
+
+
 def place(
     ver: Verification,
     limits: TrackerLimits,
@@ -95,6 +110,7 @@ def place(
     trials: int = 0,
     seed: int | None = None,
     refine: int = 300,
+    progress: Callable[[int, int | None], None] | None = None,
     **engine: Any,
 ) -> Placement:
     """Search tracker positions for the smallest mean calibration uncertainty.
@@ -118,6 +134,10 @@ def place(
         Evaluations of a Nelder–Mead refinement of the best grid node over its position
         and its three Euler angles (``"xyz"``), within the limits.
     seed : int, optional
+    progress : callable, optional
+        Called with (steps done, steps in all) after each grid node, each evaluation of
+        the refinement and each block of confirming trials, as the engine reports a run:
+        ``n_xy² × heights + refine + trials`` steps.
     **engine
         ``workers``, ``executor``, ``scheduler`` of the confirming Monte Carlo
         (:func:`mtmc.verification.simulate.simulate`).
@@ -143,13 +163,16 @@ def place(
     ys = np.linspace(lo[1] - reach, hi[1] + reach, n_xy)
     zs = np.linspace(limits.height[0], limits.height[1], heights)
     ref_i = int(np.argmin(np.linalg.norm(pts - centre, axis=1)))
+    steps = _Steps(n_xy * n_xy * heights + refine + trials, progress)
     best: tuple[float, LaserTracker] | None = None
     scored = rejected = 0
     for x in xs:  # a small grid of candidates, each scored in milliseconds
         for y in ys:
             if lo[0] - margin < x < hi[0] + margin and lo[1] - margin < y < hi[1] + margin:
+                steps(heights)
                 continue
             for z in zs:
+                steps(1)
                 lt = _upright(np.array([x, y, z]), centre, noise, "best")
                 if not visibility(lt, pts, limits, reference=ref_i).ok:
                     rejected += 1
@@ -165,7 +188,10 @@ def place(
     x0 = np.concatenate([lt0.position, lt0.euler("xyz")])
     scale = np.array([100.0, 100.0, 100.0, 0.2, 0.2, 0.2])
 
+    refined = steps.done + refine
+
     def score(v: _F) -> float:
+        steps(1 if steps.done < refined else 0)
         w = x0 + v * scale
         if not limits.height[0] <= w[2] <= limits.height[1]:
             return math.inf
@@ -186,10 +212,15 @@ def place(
             float(opt.fun),
             LaserTracker.from_euler(w[:3], w[3:], seq="xyz", noise=noise, name="best"),
         )
+    steps(refined - steps.done)  # the refinement may stop before ``refine``
     refs = {n: _gum_score(ver, lt) for n, lt in (references or {}).items()}
     u_mc = None
     if trials > 0:
         b = best[1]
         v2 = Verification(ver.model, ver.q, b, ver.true_errors, pose=ver.pose, fixed=ver.fixed)
-        u_mc = float(np.mean(simulate(v2, trials, seed, **engine).point_u))
+        offset = steps.done
+        mc = simulate(
+            v2, trials, seed, progress=lambda n, _t: steps(offset + n - steps.done), **engine
+        )
+        u_mc = float(np.mean(mc.point_u))
     return Placement(best[1], best[0], u_mc, scored, rejected, refs)
