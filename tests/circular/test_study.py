@@ -187,3 +187,72 @@ def test_the_report_draws_the_polar_plot_and_prints_the_numbers_of_result_json(t
     assert np.all(np.abs(resid) <= w / 2 + 1e-9)
     lsc_resid = np.asarray(c["trace_um"])[idx] - coef @ basis.T
     assert w <= np.ptp(lsc_resid) + 1e-9
+
+
+C_AXIS = study_path("circle_c_axis.toml")
+
+
+def test_the_c_axis_study_gives_the_numbers_of_the_library_called_directly():
+    from mtmc.circular import follow_positions, rotary_model
+    from mtmc.kinematics import Machine
+
+    result = load_study(C_AXIS).run(trials=TRIALS, seed=SEED)
+    m = Machine.from_topology("wCBXfYZt")
+    c = np.radians(np.linspace(0.0, 360.0, 36, endpoint=False))
+    q = follow_positions(m, {"B": 0.0, "C": c}, [150.0, 0.0, 80.0])
+    names = ["EX0C", "EY0C", "EA0C", "EB0C", "EXP", "EYP", "EZP"]
+    errors = {
+        "EX0C": "normal(0.010, 0.002)",
+        "EY0C": "normal(-0.020, 0.002)",
+        "EA0C": "normal(30e-6, 5e-6)",
+        "EB0C": "normal(-20e-6, 5e-6)",
+        "EXP": 0.005,
+        "EYP": 0.004,
+        "EZP": -0.003,
+    }
+    model, inputs = rotary_model(
+        m.jacobian(q, None, names=names), errors, gain="normal(0, 5e-4)", noise=0.0002
+    )
+    res = evaluate_uncertainty(model, inputs, TRIALS, SEED)
+    assert [x.name for x in result.quantities] == list(res.outputs)
+    for x in result.quantities:
+        f = {"µm": 1e3, "µrad": 1e6}[x.unit]
+        # bit for bit: the same seeded draws and reductions, times the exact unit factor
+        assert x.mc.estimate == f * res.monte_carlo(x.name).estimate
+        assert x.mc.u == f * res.monte_carlo(x.name).u
+    # the R-test separates every location error: the identified means are the PDFs'
+    # means within 4 standard errors
+    qs = {x.name: x for x in result.quantities}
+    for name, mean in (("EX0C", 10.0), ("EY0C", -20.0), ("EA0C", 30.0), ("EB0C", -20.0)):
+        assert abs(qs[name].mc.estimate - mean) < 4 * qs[name].mc.u / np.sqrt(TRIALS)
+
+
+def test_the_c_axis_report_plots_the_trace_against_the_rotary_angle(tmp_path):
+    study = load_study(C_AXIS)
+    folder = write_result(
+        study.run(trials=300, seed=SEED), tmp_path / "r", study_text=study.source.text
+    )
+    html = (folder / "report.html").read_text(encoding="utf-8")
+    assert 'data-plot="circular"><svg' in html
+    assert "C-axis test of wCBXfYZt" in html
+    doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    disp = np.asarray(doc["circular"]["displacement_um"])
+    assert disp.shape == (36, 3)
+
+
+@pytest.mark.parametrize(
+    ("text", "field", "message"),
+    [
+        (
+            '[rotary]\nmachine = "wCBXfYZt"\naxis = "D"\nball = [1, 2, 3]',
+            "rotary.axis",
+            "expected one of",
+        ),
+        ('[rotary]\nmachine = "wCBXfYZt"\naxis = "C"\nball = [1, 2]', "rotary.ball", "[x, y, z]"),
+    ],
+)
+def test_bad_rotary_input_is_named_at_its_line(text, field, message):
+    with pytest.raises(InputError) as err:
+        loads_study(f'kind = "circular"\n{text}\n[errors]\nEX0C = 0.01\n', file="c.toml")
+    assert err.value.field == field
+    assert message in str(err.value)

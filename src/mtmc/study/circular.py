@@ -96,6 +96,11 @@ class CircularStudy(Study):
         Its inputs: the errors (model units) and the ballbar's.
     conformity : dict of str to ConformitySpec
         Limits per parameter, in µm.
+    units : dict of str to str
+        The model's unit of each output (``mm``, ``rad``, ``1``, ``s``).
+    plot : dict
+        ``circular`` of ``result.json`` less its notes: the trace at the inputs'
+        estimates, for the report.
     """
 
     kind = "circular"
@@ -103,6 +108,8 @@ class CircularStudy(Study):
     model: Any
     inputs: Any
     conformity: Any
+    units: Any
+    plot: Any
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Run the test by Monte Carlo and the GUM and tabulate it (module docstring)."""
@@ -114,8 +121,7 @@ class CircularStudy(Study):
         res = evaluate_uncertainty(
             self.model, self.inputs, trials, settings.seed, p=p, progress=progress, **engine
         )
-        des = self.model.design
-        units = dict(zip(des.names, des.units, strict=True))
+        units = self.units
         quantities: list[Quantity] = []
         samples: dict[str, Any] = {}
         for name in res.outputs:
@@ -142,35 +148,18 @@ class CircularStudy(Study):
             for q in quantities
         )
         cols = ("quantity", "unit", "GUM y", "GUM U", "MC y", "MC U", "GUM by JCGM 101 §8")
-        n_par = len(self.model.symbols)
+        n_par = len(_parameters(self.model))
+        title = (
+            "Parameters of ISO 230-4"
+            if "rotary" not in self.plot
+            else "Range of the sphere's displacement along x, y, z (R-test)"
+        )
         tables = (
-            Table("parameters", "Parameters of ISO 230-4", cols, rows[:n_par]),
-            Table("errors", "Identified errors (first-order model ΔR = e · n)", cols, rows[n_par:]),
+            Table("parameters", title, cols, rows[:n_par]),
+            Table("errors", "Identified errors (first-order model)", cols, rows[n_par:]),
         )
-        trace = (
-            1e3
-            * self.model.readings(
-                **{
-                    k: np.asarray(d.mean, dtype=np.float64)[None, ...]
-                    for k, d in self.inputs.items()
-                }
-            )[0]
-        )
-        extra = {
-            "circular": {
-                "plane": des.plane,
-                "radius": des.radius,
-                "feed": des.feed,
-                "theta_deg": np.degrees(des.theta),
-                "direction": des.direction,
-                "trace_um": trace,
-                "circles": _circles(des.theta, des.direction, trace),
-                "notes": list(res.notes),
-                "limits": {
-                    k: {"lower": s.lower, "upper": s.upper} for k, s in self.conformity.items()
-                },
-            }
-        }
+        limits = {k: {"lower": c.lower, "upper": c.upper} for k, c in self.conformity.items()}
+        extra = {"circular": {**self.plot, "notes": list(res.notes), "limits": limits}}
         inputs = []
         for name, d in self.inputs.items():
             u = float(np.max(np.asarray(d.std)))
@@ -201,7 +190,7 @@ class CircularStudy(Study):
         )
 
 
-_INPUT_UNITS = {"alpha": "1/K", "temperature": "°C"}
+_INPUT_UNITS = {"alpha": "1/K", "temperature": "°C", "gain_x": "1", "gain_y": "1", "gain_z": "1"}
 
 
 def _circles(theta: Any, direction: Any, trace_um: Any) -> dict[str, Any]:
@@ -230,7 +219,7 @@ def _scaled(mc: Any, f: float) -> Any:
     return MonteCarloResult.from_samples(f * mc.values, seed=mc.seed)
 
 
-def _read(top: Fields) -> tuple[Any, dict[str, Any], dict[str, ConformitySpec]]:
+def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[str, Any]]:
     """The model, its inputs and the limits of a ``circular`` study."""
     from mtmc.circular import Ballbar, circular_model
     from mtmc.circular.model import TERMS, default_terms, design
@@ -286,7 +275,115 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], dict[str, ConformitySpec]]:
             kw[key] = bb.number(key, 0.0, low=0.0)
     model, inputs = circular_model(identify_with, Ballbar(**kw), errors=errors, simulate_with=truth)
     limits = read_output_conformity(top, model.symbols)
-    return model, inputs, limits
+    units = dict(zip(identify_with.names, identify_with.units, strict=True))
+    trace = (
+        1e3
+        * model.readings(
+            **{k: np.asarray(d.mean, dtype=np.float64)[None, ...] for k, d in inputs.items()}
+        )[0]
+    )
+    th, d = identify_with.theta, identify_with.direction
+    plot = {
+        "plane": identify_with.plane,
+        "radius": identify_with.radius,
+        "feed": identify_with.feed,
+        "theta_deg": np.degrees(th),
+        "direction": d,
+        "trace_um": trace,
+        "circles": _circles(th, d, trace),
+    }
+    return model, inputs, limits, units, plot
+
+
+def _parameters(model: Any) -> tuple[str, ...]:
+    """The outputs of a model that are the test's parameters (the rest: identified errors)."""
+    return tuple(getattr(model, "symbols", model.outputs[:3]))
+
+
+_ROTARY_KEYS = ("machine", "axis", "start", "stop", "steps", "hold", "ball")
+
+
+def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[str, Any]]:
+    """The model of an R-test of a rotary axis, the linear axes following (``[rotary]``).
+
+    ``[rotary]``: the machine's topology (``wCBXfYZt``), the rotary ``axis`` turned from
+    ``start`` to ``stop`` (deg, ``steps`` positions), the other rotary axes held at
+    ``hold`` (deg), the sphere at ``ball`` (mm, workpiece frame); ``[errors]`` by their
+    ISO 230-1 / 230-7 names (mm, rad); ``[rtest]``: ``gain`` (a PDF of each sensor's
+    relative gain error) and ``noise`` (mm); ``[identify] terms`` the errors identified.
+    """
+    from mtmc.circular import follow_positions, rotary_displacement, rotary_model
+    from mtmc.kinematics import Machine
+    from mtmc.verification.identify import parameter_unit
+
+    rot = top.table("rotary")
+    assert rot is not None
+    rot.only(_ROTARY_KEYS)
+    topo = rot.text("machine")
+    try:
+        machine = Machine.from_topology(topo)
+    except MtmcError as exc:
+        raise rot.error(exc.message, "machine") from None
+    rotary = [a for a in machine.axes if a in "ABC"]
+    axis = rot.text("axis", choices=rotary)
+    steps = rot.integer("steps", 36, minimum=4, maximum=100_000)
+    angles = np.radians(
+        np.linspace(rot.number("start", 0.0), rot.number("stop", 360.0), steps, endpoint=False)
+    )
+    hold: dict[str, Any] = {a: 0.0 for a in rotary if a != axis}
+    ht = rot.table("hold", required=False)
+    if ht is not None:
+        ht.only(tuple(hold))
+        for a in ht.data:
+            hold[a] = np.radians(ht.number(a))
+    ball = rot.data.get("ball")
+    if (
+        not isinstance(ball, list)
+        or len(ball) != 3
+        or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in ball)
+    ):
+        raise rot.error(f"expected the sphere's centre [x, y, z] in mm, got {ball!r}", "ball")
+    point = np.asarray(ball, dtype=np.float64)
+    try:
+        q = follow_positions(machine, {**hold, axis: angles}, point)
+    except MtmcError as exc:
+        raise rot.error(exc.message, None) from None
+    errs = top.table("errors")
+    assert errs is not None
+    names = tuple(errs.data)
+    try:
+        jac = machine.jacobian(q, None, names=list(names))
+    except MtmcError as exc:
+        raise errs.error(exc.message, None) from None
+    errors = {k: _distribution(errs, k) for k in names}
+    rt = top.table("rtest", required=False)
+    gain: Any = 0.0
+    noise = 0.0
+    if rt is not None:
+        rt.only(("gain", "noise"))
+        if rt.has("gain"):
+            gain = _distribution(rt, "gain")
+        noise = rt.number("noise", 0.0, low=0.0)
+    ident = top.table("identify", required=False)
+    terms = names
+    if ident is not None:
+        ident.only(("terms",))
+        terms = ident.texts("terms")
+        for t in terms:
+            if t not in names:
+                raise ident.error(
+                    f"unknown error {t!r}; expected some of {', '.join(names)}", "terms"
+                )
+    model, inputs = rotary_model(jac, errors, identify=terms, gain=gain, noise=noise)
+    limits = read_output_conformity(top, model.outputs[:3])
+    units = {k: parameter_unit(machine, k) for k in names}
+    means = {k: float(np.mean(np.asarray(d.mean))) for k, d in errors.items()}
+    disp = 1e3 * rotary_displacement(machine, q, point, means)[0]
+    plot = {
+        "rotary": {"machine": topo, "axis": axis, "angle_deg": np.degrees(angles)},
+        "displacement_um": disp,
+    }
+    return model, inputs, limits, units, plot
 
 
 def _pair(t: Fields, key: str, default: Any) -> Any:
@@ -307,9 +404,22 @@ def _pair(t: Fields, key: str, default: Any) -> Any:
 @register_kind("circular", "an ISO 230-4 circular test (ballbar) simulated with its uncertainty")
 def read_circular_study(top: Fields) -> CircularStudy:
     """Validate a ``circular`` study file (module docstring)."""
-    top.only(("kind", "title", "path", "errors", "ballbar", "identify", "run", "conformity"))
+    top.only(
+        (
+            "kind",
+            "title",
+            "path",
+            "rotary",
+            "errors",
+            "ballbar",
+            "rtest",
+            "identify",
+            "run",
+            "conformity",
+        )
+    )
     settings = RunSettings.read(top, default_trials=10_000)
-    model, inputs, limits = _read(top)
+    model, inputs, limits, units, plot = _read_rotary(top) if top.has("rotary") else _read(top)
     return CircularStudy(
         title=top.text("title", "Circular test"),
         source=top.source,
@@ -317,4 +427,6 @@ def read_circular_study(top: Fields) -> CircularStudy:
         model=model,
         inputs=inputs,
         conformity=limits,
+        units=units,
+        plot=plot,
     )
