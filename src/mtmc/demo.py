@@ -50,6 +50,7 @@ STUDIES: tuple[str, ...] = (
     "five_axis.toml",
     "aguado2017.toml",
     "wang2022.toml",
+    "circle_c_axis.toml",
 )
 
 
