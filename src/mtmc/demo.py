@@ -50,7 +50,6 @@ STUDIES: tuple[str, ...] = (
     "five_axis.toml",
     "aguado2017.toml",
     "wang2022.toml",
-    "circle_c_axis.toml",
 )
 
 

@@ -140,7 +140,7 @@ def simulate_cmd(
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
-    """Simulate STUDY as ``mtmc run`` does: the parameters and the identified errors with U."""
+    """Simulate STUDY as mtmc run does: the parameters and the identified errors with U."""
     from mtmc.study import write_result
 
     try:

@@ -58,7 +58,8 @@ from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, qua
 from mtmc.study.conformity import ConformitySpec, assess_quantity, read_output_conformity
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.positioning import _distribution
-from mtmc.study.spec import RunSettings, register_kind
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
 
 __all__ = ["CircularStudy", "REPORT_UNITS"]
 
