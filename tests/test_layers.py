@@ -40,6 +40,7 @@ ALLOWED: dict[str, set[str]] = {
     "report": {"graph", "kinematics", "uncertainty"},
     "study": {
         "artefact",
+        "circular",
         "geometry",
         "graph",
         "instruments",

@@ -185,6 +185,18 @@ def _circle_evaluate(tmp: Path) -> list[str]:
     return ["circle", "evaluate", str(tmp / "trace.csv"), "--radius", "100", "-n", "50"]
 
 
+def _circle_simulate(tmp: Path) -> list[str]:
+    return [
+        "circle",
+        "simulate",
+        str(STUDIES / "circle_c_axis.toml"),
+        "-n",
+        "50",
+        "-o",
+        str(tmp / "c"),
+    ]
+
+
 #: A short run of every command that runs a Monte Carlo (its seed is added to it).
 RUNS: dict[str, Callable[[Path], list[str]]] = {
     "propagate": _propagate,
@@ -197,6 +209,7 @@ RUNS: dict[str, Callable[[Path], list[str]]] = {
     "artefact simulate": _artefact_simulate,
     "positioning evaluate": _positioning_evaluate,
     "circle evaluate": _circle_evaluate,
+    "circle simulate": _circle_simulate,
 }
 
 

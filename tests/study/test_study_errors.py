@@ -38,7 +38,7 @@ CASES = [
         'kind = "spline"',
         1,
         "kind",
-        "expected one of artefact, graph, kinematics, positioning, propagate",
+        "expected one of artefact, circular, graph, kinematics, positioning, propagate",
     ),
     ('kind = "propagate"', "kind = 3", 1, "kind", "expected a string"),
     ('kind = "propagate"\n', "", None, "kind", "missing kind"),

@@ -8,6 +8,7 @@ file, the line and the column, and exit with status 2.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -15,11 +16,26 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import JSON_OPTION, fail, print_json, print_trials_seed, seed_option
+from mtmc.cli.common import (
+    EXECUTOR_OPTION,
+    JSON_OPTION,
+    PROGRESS_OPTION,
+    SCHEDULER_OPTION,
+    WORKERS_OPTION,
+    fail,
+    load_study_of_kind,
+    nan_policy,
+    parallel_options,
+    print_json,
+    print_trials_seed,
+    progress_bar,
+    seed_option,
+)
 from mtmc.cli.positioning import parse_columns
+from mtmc.cli.run_options import ADAPTIVE_OPTION, RUN_NAN_POLICY_OPTION, run_lines, run_message
 from mtmc.errors import InputError, MtmcError
 
-__all__ = ["app", "evaluate_cmd"]
+__all__ = ["app", "evaluate_cmd", "simulate_cmd"]
 
 app = typer.Typer(
     help="Circular tests (ISO 230-4 ballbar): parameters and errors with U by GUM and Monte Carlo.",
@@ -105,3 +121,80 @@ def evaluate_cmd(
     print_trials_seed(out["trials"], out["seed"])
     for note in out["notes"]:
         typer.echo(f"note: {note}")
+
+
+@app.command("simulate")
+def simulate_cmd(
+    ctx: typer.Context,
+    study: Path = typer.Argument(..., help='A circular study (kind = "circular").'),
+    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
+    as_json: bool = JSON_OPTION,
+    outdir: Path | None = typer.Option(
+        None, "-o", "--output", help="Also write the result folder with its HTML report."
+    ),
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
+    adaptive: bool = ADAPTIVE_OPTION,
+    nan: str | None = RUN_NAN_POLICY_OPTION,
+) -> None:
+    """Simulate STUDY as mtmc run does: the parameters and the identified errors with U."""
+    from mtmc.study import write_result
+
+    try:
+        s = load_study_of_kind(study, "circular")
+        with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
+            result = s.run(
+                trials=trials,
+                seed=seed,
+                progress=bar,
+                adaptive=True if adaptive else None,
+                nan_policy=None if nan is None else nan_policy(nan),
+                **parallel_options(workers, executor, scheduler),
+            )
+        if outdir is not None:
+            argv = (ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]])
+            write_result(result, outdir, study_text=s.source.text, argv=argv)
+    except (MtmcError, OSError) as exc:
+        fail(run_message(exc))
+    out: dict[str, Any] = {
+        "trials": result.trials,
+        "seed": result.seed,
+        "quantities": {
+            q.name: {
+                "estimate": q.mc.estimate,
+                "U": q.mc.U,
+                "U_gum": None if q.gum is None else q.gum.U,
+                "unit": q.unit,
+                "validated": None if q.validation is None else q.validation.passed,
+                **({"conformity": q.conformity} if q.conformity else {}),
+            }
+            for q in result.quantities
+        },
+        "notes": result.extra["circular"]["notes"],
+    }
+    if as_json:
+        print_json(out)
+        return
+    table = Table(title=f"{result.title} ({result.trials} trials)")
+    for col in ("quantity", "estimate", "U (MC)", "U (GUM)", "unit", "GUM §8"):
+        table.add_column(col, justify="left" if col in ("quantity", "unit") else "right")
+    for q in result.quantities:
+        table.add_row(
+            q.name,
+            f"{q.mc.estimate:.4g}",
+            f"{q.mc.U:.2g}",
+            "" if q.gum is None else f"{q.gum.U:.2g}",
+            q.unit,
+            "" if q.validation is None else q.validation.verdict,
+        )
+    Console().print(table)
+    print_trials_seed(result.trials, result.seed)
+    for line in run_lines(result.extra.get("run")):
+        typer.echo(line)
+    for note in out["notes"]:
+        typer.echo(f"note: {note}")
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")

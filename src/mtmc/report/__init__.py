@@ -189,6 +189,11 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
         from mtmc.report.positioning import positioning_svg
 
         figs["positioning"] = positioning_svg(result["positioning"])
+    if result.get("circular"):
+        from mtmc.report.circular import circular_svg, rotary_svg
+
+        circ = result["circular"]
+        figs["circular"] = rotary_svg(circ) if circ.get("rotary") else circular_svg(circ)
     template = _env().get_template("report.html.j2")
     # the units of the inputs, where the result gives them (a kinematics study: mm, rad)
     units = {x["name"]: x["unit"] for x in result.get("inputs", []) if x.get("unit")}

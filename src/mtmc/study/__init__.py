@@ -6,10 +6,11 @@ file, the line and the field. ``load_study(path).run()`` returns a frozen
 :class:`StudyResult`; :func:`write_result` writes the result folder
 (``docs/results-format.md``) with its HTML report. Kinds register themselves with
 :func:`register_kind`: ``propagate``, ``graph``, ``sweep``, ``kinematics``, ``artefact``,
-``positioning``.
+``positioning``, ``circular``.
 """
 
 from mtmc.study import artefact as _artefact  # noqa: F401  (registers artefact)
+from mtmc.study import circular as _circular  # noqa: F401  (registers circular)
 from mtmc.study import graph as _graph  # noqa: F401  (registers graph and sweep)
 from mtmc.study import kinematics as _kinematics  # noqa: F401  (registers kinematics)
 from mtmc.study import positioning as _positioning  # noqa: F401  (registers positioning)

@@ -1,0 +1,433 @@
+"""Study kind ``circular``: an ISO 230-4 circular test simulated with its uncertainty.
+
+The file describes the programmed path, the machine's errors and the axes' effects in
+the terms of the first-order model ``ΔR = e · n`` (:mod:`mtmc.circular.model`), each a
+PDF or a value, and the ballbar::
+
+    kind = "circular"
+    title = "XY circle, R 150 mm"
+
+    [path]
+    plane = "XY"                 # XY, YZ or ZX
+    radius = 150.0               # R, mm
+    centre = [0.0, 0.0]          # the circle's centre in axis coordinates, mm
+    points = 720                 # points per direction over 360° (the overrun is not evaluated)
+    start = 0.0                  # angle of the first point, deg
+    feed = 1000.0                # mm/min
+    directions = ["ccw", "cw"]
+    # spike_decay = 3.0          # φ₀ of the reversal spikes, deg
+    # cyclic_period = [5.0, 5.0] # the screws' periods, mm (for cyclic_*)
+
+    [errors]                     # the model's units: mm, rad, 1 (scale), s (servo lag)
+    squareness = "normal(20e-6, 2e-6)"
+    backlash_x = 0.004
+    ...
+
+    [ballbar]
+    length_error = "normal(0, 0.0005)"   # δL, mm
+    alpha = "normal(1.1e-5, 1e-6)"       # 1/K
+    temperature = "uniform(19, 21)"      # °C
+    resolution = 0.0001                  # mm
+    noise = 0.0003                       # mm
+
+    [identify]                   # optional: the terms identified (default: what one test separates)
+    terms = ["radius", "centre_u", "centre_v", "squareness", ...]
+
+    [conformity.G_lsc]           # limits per parameter (JCGM 106), µm
+    upper = 20.0
+
+The run is :func:`mtmc.circular.evaluate_uncertainty` of
+:func:`mtmc.circular.circular_model`: each trial one whole test (the readings, the
+parameters from their definitions, the identification), the GUM beside it, §8 per
+output. The quantities are the parameters ``F_max`` … ``G_b`` and the identified errors,
+reported in µm, µrad, µm/m and ms (the code's mm, rad, 1 and s times the exact factor,
+docs/results-format.md's unit rule); ``circular`` of ``result.json`` holds the trace at
+the inputs' estimates for the report's polar plot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from mtmc.document import Fields
+from mtmc.errors import MtmcError
+from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
+from mtmc.study.conformity import ConformitySpec, assess_quantity, read_output_conformity
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.positioning import _distribution
+from mtmc.study.settings import RunSettings
+from mtmc.study.spec import register_kind
+
+__all__ = ["CircularStudy", "REPORT_UNITS"]
+
+#: The reported unit and its exact factor, by the unit of a model's term.
+REPORT_UNITS: dict[str, tuple[str, float]] = {
+    "mm": ("µm", 1e3),
+    "rad": ("µrad", 1e6),
+    "1": ("µm/m", 1e6),
+    "s": ("ms", 1e3),
+}
+
+_PATH_KEYS = (
+    "plane",
+    "radius",
+    "centre",
+    "points",
+    "start",
+    "feed",
+    "directions",
+    "spike_decay",
+    "cyclic_period",
+)
+_BALLBAR_KEYS = ("length_error", "alpha", "temperature", "resolution", "noise")
+
+
+@dataclass(frozen=True)
+class CircularStudy(Study):
+    """A simulated circular test (kind ``circular``).
+
+    Attributes
+    ----------
+    model : CircularModel
+        The vectorised model of one whole test.
+    inputs : dict of str to Distribution
+        Its inputs: the errors (model units) and the ballbar's.
+    conformity : dict of str to ConformitySpec
+        Limits per parameter, in µm.
+    units : dict of str to str
+        The model's unit of each output (``mm``, ``rad``, ``1``, ``s``).
+    plot : dict
+        ``circular`` of ``result.json`` less its notes: the trace at the inputs'
+        estimates, for the report.
+    """
+
+    kind = "circular"
+    run_options = frozenset({ADAPTIVE, NAN_POLICY})
+    model: Any
+    inputs: Any
+    conformity: Any
+    units: Any
+    plot: Any
+
+    def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
+        """Run the test by Monte Carlo and the GUM and tabulate it (module docstring)."""
+        from mtmc.circular import evaluate_uncertainty
+
+        engine = settings.engine
+        trials = engine.pop("trials")
+        p = engine.pop("p")
+        res = evaluate_uncertainty(
+            self.model, self.inputs, trials, settings.seed, p=p, progress=progress, **engine
+        )
+        units = self.units
+        quantities: list[Quantity] = []
+        samples: dict[str, Any] = {}
+        for name in res.outputs:
+            label, f = REPORT_UNITS[units.get(name, "mm")]
+            mc, g = res.monte_carlo(name), res.gum_result(name)
+            q = quantity(name, units.get(name, "mm"), mc, g, settings).in_unit(label, f)
+            spec: ConformitySpec | None = self.conformity.get(name)
+            if spec is not None:
+                # the limits are in µm: the decision on the samples in µm
+                q = assess_quantity(q, spec, _scaled(mc, f), None)
+            quantities.append(q)
+            if settings.samples:
+                samples[name] = f * mc.values
+        rows = tuple(
+            (
+                q.name,
+                q.unit,
+                q.gum.estimate if q.gum else "",
+                q.gum.U if q.gum else "",
+                q.mc.estimate,
+                q.mc.U,
+                "" if q.validation is None else q.validation.verdict,
+            )
+            for q in quantities
+        )
+        cols = ("quantity", "unit", "GUM y", "GUM U", "MC y", "MC U", "GUM by JCGM 101 §8")
+        n_par = len(_parameters(self.model))
+        title = (
+            "Parameters of ISO 230-4"
+            if "rotary" not in self.plot
+            else "Range of the sphere's displacement along x, y, z (R-test)"
+        )
+        tables = (
+            Table("parameters", title, cols, rows[:n_par]),
+            Table("errors", "Identified errors (first-order model)", cols, rows[n_par:]),
+        )
+        limits = {k: {"lower": c.lower, "upper": c.upper} for k, c in self.conformity.items()}
+        extra = {"circular": {**self.plot, "notes": list(res.notes), "limits": limits}}
+        inputs = []
+        for name, d in self.inputs.items():
+            u = float(np.max(np.asarray(d.std)))
+            inputs.append(
+                {
+                    "name": name,
+                    "distribution": str(d),
+                    "estimate": float(np.asarray(d.mean).ravel()[0]),
+                    "u": u,
+                    "unit": _INPUT_UNITS.get(name) or units.get(name, "mm"),
+                }
+            )
+        mc_all = res.mc
+        return self._result(
+            settings,
+            run=run_record(
+                settings,
+                mc_all.trials,
+                mc_all.omitted,
+                blocks=mc_all.blocks,
+                tolerance=mc_all.tolerance,
+            ),
+            quantities=tuple(quantities),
+            tables=tables,
+            inputs=tuple(inputs),
+            extra=extra,
+            samples=samples,
+        )
+
+
+_INPUT_UNITS = {"alpha": "1/K", "temperature": "°C", "gain_x": "1", "gain_y": "1", "gain_z": "1"}
+
+
+def _circles(theta: Any, direction: Any, trace_um: Any) -> dict[str, Any]:
+    """The LSC and the MZ circles of each direction's trace, in µm, for the polar plot.
+
+    ``lsc``: ``(c, a, b)`` of :func:`mtmc.circular.parameters.lsc_fit`; ``mz``: the width
+    and ``(c, a, b)`` of :func:`mtmc.circular.parameters.minimum_zone`.
+    """
+    from mtmc.circular.parameters import lsc_fit, minimum_zone
+
+    out: dict[str, Any] = {}
+    for d, key in ((1.0, "ccw"), (-1.0, "cw")):
+        idx = direction == d
+        if not np.any(idx):
+            continue
+        lsc, _ = lsc_fit(theta[idx], trace_um[idx])
+        width, mz = minimum_zone(theta[idx], trace_um[idx])
+        out[key] = {"lsc": lsc[0], "mz_width": float(width[0]), "mz": mz[0]}
+    return out
+
+
+def _scaled(mc: Any, f: float) -> Any:
+    """The Monte Carlo result of ``f`` times the output (exact factor: a change of unit)."""
+    from mtmc.uncertainty.results import MonteCarloResult
+
+    return MonteCarloResult.from_samples(f * mc.values, seed=mc.seed)
+
+
+def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[str, Any]]:
+    """The model, its inputs and the limits of a ``circular`` study."""
+    from mtmc.circular import Ballbar, circular_model
+    from mtmc.circular.model import TERMS, default_terms, design
+
+    path = top.table("path")
+    assert path is not None
+    path.only(_PATH_KEYS)
+    plane = path.text("plane", "XY", choices=("XY", "YZ", "ZX"))
+    radius = path.number("radius", low=0.0, open_low=True)
+    centre = _pair(path, "centre", (0.0, 0.0))
+    n = path.integer("points", 720, minimum=8, maximum=100_000)
+    start = np.radians(path.number("start", 0.0))
+    feed = path.number("feed", 1000.0, low=0.0, open_low=True) / 60.0
+    dirs = path.texts("directions", ("ccw", "cw"))
+    for d in dirs:
+        if d not in ("ccw", "cw"):
+            raise path.error(f"expected 'ccw' and/or 'cw', got {d!r}", "directions")
+    decay = np.radians(path.number("spike_decay", 3.0, low=0.0, open_low=True))
+    period = _pair(path, "cyclic_period", None)
+    theta = start + 2.0 * np.pi * np.arange(n) / n
+    angles = {"theta_ccw": theta if "ccw" in dirs else None}
+    angles["theta_cw"] = (start - 2.0 * np.pi * np.arange(n) / n) if "cw" in dirs else None
+    common: dict[str, Any] = dict(
+        radius=radius, plane=plane, feed=feed, spike_decay=decay, centre=centre, **angles
+    )
+    all_terms = TERMS if period is not None else tuple(t for t in TERMS if "cyclic" not in t)
+    truth = design(terms=all_terms, cyclic_period=period, **common)
+    ident = top.table("identify", required=False)
+    terms = default_terms(len(dirs))
+    if ident is not None:
+        ident.only(("terms",))
+        terms = ident.texts("terms")
+    try:
+        identify_with = design(terms=terms, cyclic_period=period, **common)
+    except MtmcError as exc:
+        raise (ident or path).error(exc.message, "terms" if ident else None) from None
+    errs = top.table("errors")
+    assert errs is not None
+    for key in errs.data:
+        if key not in truth.names:
+            raise errs.error(
+                f"unknown error {key!r}; expected some of {', '.join(truth.names)}", key
+            )
+    errors = {k: _distribution(errs, k) for k in errs.data}
+    bb = top.table("ballbar", required=False)
+    kw: dict[str, Any] = {}
+    if bb is not None:
+        bb.only(_BALLBAR_KEYS)
+        for key in ("length_error", "alpha", "temperature"):
+            if bb.has(key):
+                kw[key] = _distribution(bb, key)
+        for key in ("resolution", "noise"):
+            kw[key] = bb.number(key, 0.0, low=0.0)
+    model, inputs = circular_model(identify_with, Ballbar(**kw), errors=errors, simulate_with=truth)
+    limits = read_output_conformity(top, model.symbols)
+    units = dict(zip(identify_with.names, identify_with.units, strict=True))
+    trace = (
+        1e3
+        * model.readings(
+            **{k: np.asarray(d.mean, dtype=np.float64)[None, ...] for k, d in inputs.items()}
+        )[0]
+    )
+    th, d = identify_with.theta, identify_with.direction
+    plot = {
+        "plane": identify_with.plane,
+        "radius": identify_with.radius,
+        "feed": identify_with.feed,
+        "theta_deg": np.degrees(th),
+        "direction": d,
+        "trace_um": trace,
+        "circles": _circles(th, d, trace),
+    }
+    return model, inputs, limits, units, plot
+
+
+def _parameters(model: Any) -> tuple[str, ...]:
+    """The outputs of a model that are the test's parameters (the rest: identified errors)."""
+    return tuple(getattr(model, "symbols", model.outputs[:3]))
+
+
+_ROTARY_KEYS = ("machine", "axis", "start", "stop", "steps", "hold", "ball")
+
+
+def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[str, Any]]:
+    """The model of an R-test of a rotary axis, the linear axes following (``[rotary]``).
+
+    ``[rotary]``: the machine's topology (``wCBXfYZt``), the rotary ``axis`` turned from
+    ``start`` to ``stop`` (deg, ``steps`` positions), the other rotary axes held at
+    ``hold`` (deg), the sphere at ``ball`` (mm, workpiece frame); ``[errors]`` by their
+    ISO 230-1 / 230-7 names (mm, rad); ``[rtest]``: ``gain`` (a PDF of each sensor's
+    relative gain error) and ``noise`` (mm); ``[identify] terms`` the errors identified.
+    """
+    from mtmc.circular import follow_positions, rotary_displacement, rotary_model
+    from mtmc.kinematics import Machine
+    from mtmc.verification.identify import parameter_unit
+
+    rot = top.table("rotary")
+    assert rot is not None
+    rot.only(_ROTARY_KEYS)
+    topo = rot.text("machine")
+    try:
+        machine = Machine.from_topology(topo)
+    except MtmcError as exc:
+        raise rot.error(exc.message, "machine") from None
+    rotary = [a for a in machine.axes if a in "ABC"]
+    axis = rot.text("axis", choices=rotary)
+    steps = rot.integer("steps", 36, minimum=4, maximum=100_000)
+    angles = np.radians(
+        np.linspace(rot.number("start", 0.0), rot.number("stop", 360.0), steps, endpoint=False)
+    )
+    hold: dict[str, Any] = {a: 0.0 for a in rotary if a != axis}
+    ht = rot.table("hold", required=False)
+    if ht is not None:
+        ht.only(tuple(hold))
+        for a in ht.data:
+            hold[a] = np.radians(ht.number(a))
+    ball = rot.data.get("ball")
+    if (
+        not isinstance(ball, list)
+        or len(ball) != 3
+        or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in ball)
+    ):
+        raise rot.error(f"expected the sphere's centre [x, y, z] in mm, got {ball!r}", "ball")
+    point = np.asarray(ball, dtype=np.float64)
+    try:
+        q = follow_positions(machine, {**hold, axis: angles}, point)
+    except MtmcError as exc:
+        raise rot.error(exc.message, None) from None
+    errs = top.table("errors")
+    assert errs is not None
+    names = tuple(errs.data)
+    try:
+        jac = machine.jacobian(q, None, names=list(names))
+    except MtmcError as exc:
+        raise errs.error(exc.message, None) from None
+    errors = {k: _distribution(errs, k) for k in names}
+    rt = top.table("rtest", required=False)
+    gain: Any = 0.0
+    noise = 0.0
+    if rt is not None:
+        rt.only(("gain", "noise"))
+        if rt.has("gain"):
+            gain = _distribution(rt, "gain")
+        noise = rt.number("noise", 0.0, low=0.0)
+    ident = top.table("identify", required=False)
+    terms = names
+    if ident is not None:
+        ident.only(("terms",))
+        terms = ident.texts("terms")
+        for t in terms:
+            if t not in names:
+                raise ident.error(
+                    f"unknown error {t!r}; expected some of {', '.join(names)}", "terms"
+                )
+    model, inputs = rotary_model(jac, errors, identify=terms, gain=gain, noise=noise)
+    limits = read_output_conformity(top, model.outputs[:3])
+    units = {k: parameter_unit(machine, k) for k in names}
+    means = {k: float(np.mean(np.asarray(d.mean))) for k, d in errors.items()}
+    disp = 1e3 * rotary_displacement(machine, q, point, means)[0]
+    plot = {
+        "rotary": {"machine": topo, "axis": axis, "angle_deg": np.degrees(angles)},
+        "displacement_um": disp,
+    }
+    return model, inputs, limits, units, plot
+
+
+def _pair(t: Fields, key: str, default: Any) -> Any:
+    """Two finite numbers ``[a, b]`` at ``key`` (``default`` when absent)."""
+    if not t.has(key):
+        return default
+    v = t.data[key]
+    if (
+        not isinstance(v, list)
+        or len(v) != 2
+        or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
+        or not all(np.isfinite(float(x)) for x in v)
+    ):
+        raise t.error(f"expected two finite numbers [a, b], got {v!r}", key)
+    return (float(v[0]), float(v[1]))
+
+
+@register_kind("circular", "an ISO 230-4 circular test (ballbar) simulated with its uncertainty")
+def read_circular_study(top: Fields) -> CircularStudy:
+    """Validate a ``circular`` study file (module docstring)."""
+    top.only(
+        (
+            "kind",
+            "title",
+            "path",
+            "rotary",
+            "errors",
+            "ballbar",
+            "rtest",
+            "identify",
+            "run",
+            "conformity",
+        )
+    )
+    settings = RunSettings.read(top, default_trials=10_000)
+    model, inputs, limits, units, plot = _read_rotary(top) if top.has("rotary") else _read(top)
+    return CircularStudy(
+        title=top.text("title", "Circular test"),
+        source=top.source,
+        settings=settings,
+        model=model,
+        inputs=inputs,
+        conformity=limits,
+        units=units,
+        plot=plot,
+    )
