@@ -220,6 +220,9 @@ def test_a_report_of_many_quantities_draws_the_first_few_and_says_so(written: Pa
     doc = _doc(written)
     q = doc["quantities"][0]
     doc["quantities"] = [dict(q, name=f"pose{i}.x") for i in range(MAX_PLOTTED + 3)]
+    # another kind draws every quantity; a kinematics study the first MAX_PLOTTED
+    assert html(doc).count('data-plot="histogram:') == MAX_PLOTTED + 3
+    doc["kind"] = "kinematics"
     page = html(doc)
     assert page.count('data-plot="histogram:') == MAX_PLOTTED
     assert page.count('data-plot="convergence:') == MAX_PLOTTED

@@ -98,7 +98,8 @@ def test_a_file_that_cannot_be_read_or_written(tmp_path):
     r = client.post("/tok/api/save", json={"graph": view})
     assert r.status_code == 400
     assert "cannot read the graph file" in r.json()["error"]
-    assert path.is_dir() and not any(path.iterdir())  # nothing written over it
+    assert path.is_dir()
+    assert not any(path.iterdir())  # nothing written over it
 
 
 def test_the_view_of_texts_that_are_not_graphs():

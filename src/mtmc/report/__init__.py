@@ -92,11 +92,17 @@ def at_place(x: Any, u: Any, ndig: int = 2, *, the_u: bool = False) -> str:
     return u_text if the_u else y_text
 
 
-#: The quantities whose histogram and convergence a report draws: the first 12 (four poses
-#: of a kinematics study, x, y and z). A reader looks at a few; a study of 100 poses took
-#: 45 s to draw 600 figures. The tables, and the figures over all quantities (a
-#: kinematics study's u at each pose), give every one.
+#: The quantities of a kinematics study whose histogram and convergence its report draws:
+#: the first 12 (four poses, x, y and z). A reader looks at a few; a study of 100 poses took
+#: 45 s to draw 600 figures. The tables, and the figures over all quantities (the u at each
+#: pose), give every one. Other kinds draw every quantity (an artefact study's 36).
 MAX_PLOTTED = 12
+
+
+def plotted_count(result: dict[str, Any]) -> int:
+    """How many quantities of ``result`` get a histogram and a convergence plot."""
+    n = len(result.get("quantities", []))
+    return min(n, MAX_PLOTTED) if result.get("kind") == "kinematics" else n
 
 
 def _env() -> Any:
@@ -163,7 +169,7 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
     from mtmc.report import plots
 
     figs: dict[str, str] = {}
-    for q in result.get("quantities", [])[:MAX_PLOTTED]:
+    for q in result.get("quantities", [])[: plotted_count(result)]:
         if not q["monte_carlo"]["u"]:  # u = 0 (or not finite): one value, nothing to draw
             continue
         figs[f"histogram:{q['name']}"] = plots.histogram_svg(q)
@@ -199,7 +205,11 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
     units = {x["name"]: x["unit"] for x in result.get("inputs", []) if x.get("unit")}
     return str(
         template.render(
-            r=result, prov=provenance or {}, figs=figs, input_units=units, max_plotted=MAX_PLOTTED
+            r=result,
+            prov=provenance or {},
+            figs=figs,
+            input_units=units,
+            max_plotted=plotted_count(result),
         )
     )
 
