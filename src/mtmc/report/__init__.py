@@ -99,7 +99,7 @@ def at_place(x: Any, u: Any, ndig: int = 2, *, the_u: bool = False) -> str:
 MAX_PLOTTED = 12
 
 
-def plotted_count(result: dict[str, Any]) -> int:
+def plotted_count(result: Mapping[str, Any]) -> int:
     """How many quantities of ``result`` get a histogram and a convergence plot."""
     n = len(result.get("quantities", []))
     return min(n, MAX_PLOTTED) if result.get("kind") == "kinematics" else n
