@@ -7,7 +7,7 @@ import pytest
 
 from mtmc.circular import Ballbar, circular_model, design, evaluate_uncertainty, identify
 from mtmc.errors import InputError
-from mtmc.uncertainty import Normal, Uniform
+from mtmc.uncertainty import Normal, Uniform, conformity
 
 R = 150.0
 T = np.linspace(0.0, 2 * np.pi, 90, endpoint=False)
@@ -78,10 +78,10 @@ def test_conformity_through_the_engine_rule(result) -> None:  # type: ignore[no-
     _, r = result
     mc = r.monte_carlo("G_lsc")
     tol = float(np.quantile(mc.samples, 0.8))
-    c = r.conformity("G_lsc", upper=tol)
+    c = conformity(mc, upper=tol)
     # p_c by the samples: the fraction at or below the limit, recomputed here
     assert c.p_c == pytest.approx(np.mean(mc.samples <= tol), abs=1e-12)
-    guarded = r.conformity("G_lsc", upper=tol, rule="guarded", guard=1.0)
+    guarded = conformity(mc, upper=tol, rule="guarded", guard=1.0)
     assert guarded.acceptance_upper == pytest.approx(tol - 2 * mc.u)
 
 

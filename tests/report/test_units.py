@@ -46,6 +46,9 @@ STUDY_UNITS: dict[str, tuple[set[str], int]] = {
     "positioning_x": ({"µm"}, 400),
     # artefact: "Lengths in um, angles in urad" (positions of the artefact and probe in mm)
     "wang2022": ({"µm"}, 60),
+    # circular: the parameters and the errors in the report's µm, µrad, µm/m and ms
+    "circle_xy": ({"µm", "µrad", "µm/m", "ms"}, 60),
+    "circle_c_axis": ({"µm", "µrad"}, 60),
 }
 
 #: Units of length: within one report each kind of quantity has one of them.
@@ -54,10 +57,10 @@ LENGTHS = {"nm", "µm", "um", "mm", "m"}
 
 def _units_of(label: str) -> str | None:
     """The unit of an axis label or a column head ``what / unit`` (``⁻¹`` and ``²`` dropped)."""
-    m = re.search(r" / \(?([^\s/()]+?)\)?$", label.strip())
+    m = re.search(r" / (?:\(([^\s()]+)\)|([^\s/()]+))$", label.strip())
     if m is None:
         return None
-    return m.group(1).replace("⁻¹", "").replace("²", "")
+    return (m.group(1) or m.group(2)).replace("⁻¹", "").replace("²", "")
 
 
 def _texts(svg: str) -> list[str]:

@@ -26,8 +26,8 @@ the inputs, so there the two agree; ``G``, ``H`` and ``F`` are extremes over the
 where the GUM linearises at the maximising point and misses that the maximum of noisy
 points lies above the maximum of their means (the same argument as for ISO 230-2's A,
 E, R): there the Monte Carlo result stands and the validation says it does not.
-Conformity of any output goes through the engine's one rule
-(:func:`mtmc.uncertainty.conformity`).
+Conformity of any output is decided by the engine's one rule,
+:func:`mtmc.uncertainty.conformity`, on :meth:`CircularUncertainty.monte_carlo`.
 """
 
 from __future__ import annotations
@@ -45,7 +45,6 @@ from mtmc.circular.parameters import SYMBOLS, circular_parameters
 from mtmc.errors import InputError
 from mtmc.uncertainty import (
     IID,
-    Conformity,
     Distribution,
     GumResult,
     MonteCarloResult,
@@ -53,7 +52,6 @@ from mtmc.uncertainty import (
     Uniform,
     Validation,
     as_distribution,
-    conformity,
     gum,
     monte_carlo,
     validate,
@@ -294,12 +292,6 @@ class CircularUncertainty:
     def gum_result(self, name: str) -> GumResult:
         """The scalar GUM result of one output, with its budget."""
         return self.gum.component(self._index(name))
-
-    def conformity(
-        self, name: str, lower: float | None = None, upper: float | None = None, **rule: Any
-    ) -> Conformity:
-        """The decision on one output through :func:`mtmc.uncertainty.conformity` (JCGM 106)."""
-        return conformity(self.monte_carlo(name), lower, upper, **rule)
 
 
 def evaluate_uncertainty(

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.report.plots import _figure, _svg, display_unit
+from mtmc.report.plots import _figure, _svg, display_unit, per_unit
 
 __all__ = ["joint_svg"]
 
@@ -75,6 +75,6 @@ def joint_svg(joint: dict[str, Any]) -> str:
     if units[0] == units[1]:
         ax.set_aspect("equal", adjustable="datalim")
     for axis, name, (_, label) in zip((ax.set_xlabel, ax.set_ylabel), names, shown, strict=True):
-        axis(f"{name} − estimate" + (f" / {label}" if label not in ("", "1") else ""))
+        axis(f"{name} − estimate{per_unit(label)}")
     ax.legend(fontsize=6, loc="upper right")
     return _svg(fig, "joint")

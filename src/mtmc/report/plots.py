@@ -44,6 +44,24 @@ def display_unit(unit: str) -> tuple[float, str]:
     return 1.0, _SYMBOL.get(unit, unit)
 
 
+def per_unit(label: str, power: str = "") -> str:
+    """The `` / unit`` of an axis label (ISO 80000-1: quantity / unit), ``""`` for none.
+
+    A unit written with a solidus or a product is put in parentheses, so that a division
+    of the quantity by it (and a power of it) reads one way only.
+
+    Examples
+    --------
+    >>> per_unit("µm"), per_unit("µm/m"), per_unit("µm/m", "⁻¹"), per_unit("1")
+    (' / µm', ' / (µm/m)', ' / (µm/m)⁻¹', '')
+    """
+    if label in ("", "1"):
+        return ""
+    if any(c in label for c in "/·* "):
+        label = f"({label})"
+    return f" / {label}{power}"
+
+
 #: SI symbols of the units a study file may spell in ASCII.
 _SYMBOL = {"um": "µm", "urad": "µrad"}
 
@@ -122,9 +140,8 @@ def histogram_svg(q: dict[str, Any]) -> str:
         pdf = output_pdf(x, (g["estimate"] - ref) * scale, g["u"] * scale, dof)
         name = "normal PDF" if dof is None else f"t PDF, ν_eff = {dof:.3g}"
         ax.plot(x, pdf, "k-", lw=1.1, label=f"GUM: {name}")
-    unit = f" / {label}" if label not in ("", "1") else ""
-    ax.set_xlabel(f"{q['name']} − estimate{unit}")
-    ax.set_ylabel(f"density{' / ' + label + '⁻¹' if unit else ''}")
+    ax.set_xlabel(f"{q['name']} − estimate{per_unit(label)}")
+    ax.set_ylabel(f"density{per_unit(label, '⁻¹')}")
     ax.legend(fontsize=7, loc="upper right")
     return _svg(fig, f"histogram:{q['name']}")
 
@@ -136,7 +153,7 @@ def convergence_svg(q: dict[str, Any]) -> str:
     m = np.asarray(c["m"])
     est = (np.asarray(c["estimate"]) - q["monte_carlo"]["estimate"]) * scale
     u = np.asarray(c["u"]) * scale
-    unit = f" / {label}" if label not in ("", "1") else ""
+    unit = per_unit(label)
     fig = _figure(5.2, 2.6, left=0.14, right=0.98, bottom=0.18, top=0.96, wspace=0.5)
     a1, a2 = fig.subplots(1, 2)
     a1.semilogx(m, est, "C0.-", ms=3, lw=0.8)
@@ -179,7 +196,7 @@ def region_svg(r: dict[str, Any]) -> str:
     ax.set_xlim(-ext, ext)
     ax.set_ylim(-ext, ext)
     ax.set_aspect("equal")
-    unit = f" / {label}" if label not in ("", "1") else ""
+    unit = per_unit(label)
     ax.set_xlabel(f"{r['labels'][0]}{unit}")
     ax.set_ylabel(f"{r['labels'][1]}{unit}")
     ax.legend(fontsize=6, loc="upper right")
@@ -293,7 +310,7 @@ def field_figure(f: dict[str, Any]) -> Any:
                 pts[:, i], pts[:, j], c=c, cmap="viridis", s=28, edgecolors="k", linewidths=0.3
             )
         a3.scatter(pts[:, 0], pts[:, 1], pts[:, 2], c=c, cmap="viridis", s=20)
-        fig.colorbar(sc, ax=a3, shrink=0.7, pad=0.12, label=f"{f['name']} / {label}")
+        fig.colorbar(sc, ax=a3, shrink=0.7, pad=0.12, label=f"{f['name']}{per_unit(label)}")
     for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
         ax.set_xlabel(f"{names[i]} / mm")
         ax.set_ylabel(f"{names[j]} / mm")
@@ -357,7 +374,7 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         ax.scatter(grid[:, 0], grid[:, 1], u, color="C3", s=12, label="Monte Carlo")
         ax.set_xlabel(f"{names[0]} / {g_unit}", fontsize=8)
         ax.set_ylabel(f"{names[1]} / {g_unit}", fontsize=8)
-        ax.set_zlabel(f"u({sw['output']}) / {label}", fontsize=8)
+        ax.set_zlabel(f"u({sw['output']}){per_unit(label)}", fontsize=8)
         ax.legend(fontsize=7, loc="upper left")
     else:
         fig = _figure(6.0, 3.4, left=0.12, right=0.98, bottom=0.15, top=0.97)
@@ -366,6 +383,6 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         ax.plot(axes[0], u_fit, "k-", lw=1.0, label="surrogate")
         ax.plot(x, u, "C3o", ms=4, label="Monte Carlo")
         ax.set_xlabel(f"{names[0]} / {g_unit}")
-        ax.set_ylabel(f"u({sw['output']}) / {label}")
+        ax.set_ylabel(f"u({sw['output']}){per_unit(label)}")
         ax.legend(fontsize=7)
     return _svg(fig, "sweep")
