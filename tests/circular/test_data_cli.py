@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -144,3 +145,24 @@ def test_reader_more_errors(tmp_path: Path) -> None:
         loads_circular_csv("angle,direction,deviation\n360,ccw,1\n-5,cw,2\n")
     with pytest.raises(InputError, match="cannot read the file"):
         load_circular_csv(tmp_path / "absent.csv")
+
+
+@pytest.mark.parametrize(
+    ("row", "field", "words"),
+    [
+        ("90,ccw,1_0", "deviation", "digits 0-9"),  # Python's float would take it
+        ("90,ccw,nan", "deviation", "digits 0-9"),
+        ("90,ccw,1e400", "deviation", "at most 1.8e+308"),
+        ("90,ccw,2e9", "deviation", "at most 1e+09 in size"),  # µm: a kilometre
+        ("1e5,ccw,2", "angle", "at most 3600 in size"),  # deg: ten turns
+        ("٩٠,ccw,2", "angle", "digits 0-9"),  # Arabic-Indic digits
+    ],
+)
+def test_reader_reads_numbers_as_every_csv_reader_does(row: str, field: str, words: str) -> None:
+    """One number rule for the readings of ISO 230-2 and of ISO 230-4 (mtmc.csvtable)."""
+    ok = "Angle,Dir,Error\n0,ccw,1\n90,ccw,2\n180,ccw,3\n270,ccw,4\n"
+    mapped = {"angle": "Angle", "direction": "Dir", "deviation": "Error"}
+    bad = ok.replace("90,ccw,2", row)
+    name = mapped[field]
+    with pytest.raises(InputError, match=rf"f\.csv:3: field {name}: expected .*{re.escape(words)}"):
+        loads_circular_csv(bad, "f.csv", columns=mapped)

@@ -13,8 +13,6 @@ angle may appear once per direction.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -23,6 +21,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from mtmc.csvtable import read_csv, read_units
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD
 from mtmc.errors import InputError
 
 __all__ = ["COLUMNS", "CircularTrace", "loads_circular_csv", "load_circular_csv", "parse_units"]
@@ -32,6 +32,8 @@ _F = NDArray[np.float64]
 #: The columns of a trace file, as :func:`load_circular_csv` names them.
 COLUMNS = ("angle", "direction", "deviation")
 _ANGLE = {"deg": math.pi / 180.0, "rad": 1.0}
+#: The largest size of an angle and of a deviation, by unit (:mod:`mtmc.document`).
+_LIMITS = {"deg": MAX_DEG, "rad": MAX_RAD, "um": MAX_MM * 1e3, "µm": MAX_MM * 1e3, "mm": MAX_MM}
 _DEVIATION = {"um": 1e-3, "µm": 1e-3, "mm": 1.0}
 _WORDS = {
     "ccw": 1,
@@ -51,16 +53,7 @@ def parse_units(text: str) -> tuple[str, str]:
     >>> parse_units("deg,um"), parse_units("mm")
     (('deg', 'um'), ('deg', 'mm'))
     """
-    parts = [p.strip() for p in str(text).split(",")]
-    if len(parts) == 1:
-        parts = ["deg", parts[0]]
-    if len(parts) == 2 and parts[0] in _ANGLE and parts[1] in _DEVIATION:
-        return parts[0], parts[1]
-    raise InputError(
-        f"expected units ANGLE,DEVIATION with ANGLE deg or rad and DEVIATION um or mm, "
-        f"got {text!r}",
-        field="units",
-    )
+    return read_units(text, {a: tuple(_DEVIATION) for a in _ANGLE}, ("ANGLE", "DEVIATION"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,38 +85,6 @@ class CircularTrace:
         return np.concatenate(parts)
 
 
-def _cells(line: str, delim: str) -> list[str]:
-    return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delim))]
-
-
-def _header(
-    head: tuple[int, str], delim: str, file: str, columns: Mapping[str, str] | None
-) -> tuple[dict[str, str], dict[str, int], int]:
-    """The file's name and index of each of :data:`COLUMNS`, and the number of fields."""
-    names = {c: c for c in COLUMNS}
-    for key, name in (columns or {}).items():
-        if key not in COLUMNS:
-            raise InputError(
-                f"unknown column {key!r}; expected one of {', '.join(COLUMNS)}",
-                file=file,
-                field="columns",
-            )
-        names[key] = str(name)
-    header = _cells(head[1], delim)
-    low = [h.lower() for h in header]
-    where: dict[str, int] = {}
-    for key in COLUMNS:
-        if names[key].lower() not in low:
-            raise InputError(
-                f"no column {names[key]!r} (the {key}) in the header; it has {', '.join(header)}",
-                file=file,
-                line=head[0],
-                field=key,
-            )
-        where[key] = low.index(names[key].lower())
-    return names, where, len(header)
-
-
 def loads_circular_csv(
     text: str,
     file: str = "<csv>",
@@ -142,40 +103,19 @@ def loads_circular_csv(
                 field=f"directions.{word}",
             )
         words[word.strip().lower()] = 1 if meaning.lower() == "ccw" else -1
-    lines = [(k, raw.strip()) for k, raw in enumerate(text.splitlines(), start=1)]
-    lines = [(k, s) for k, s in lines if s and not s.startswith("#")]
-    if not lines:
-        raise InputError("expected a header line and readings, the file has none", file=file)
-    delim = next((d for d in (",", ";", "\t") if d in lines[0][1]), ",")
-    names, where, width = _header(lines[0], delim, file, columns)
+    table = read_csv(text, file, COLUMNS, columns)
+    limits = {"angle": _LIMITS[a_unit], "deviation": _LIMITS[d_unit]}
     seen: dict[int, dict[float, tuple[float, int]]] = {1: {}, -1: {}}
-    for k, line in lines[1:]:
-        cells = _cells(line, delim)
-        if len(cells) < width:
-            raise InputError(f"expected {width} fields, got {len(cells)}", file=file, line=k)
-        values = {}
-        for key in ("angle", "deviation"):
-            txt = cells[where[key]]
-            try:
-                v = float(txt)
-            except ValueError:
-                v = math.nan
-            if not math.isfinite(v):
-                raise InputError(
-                    f"expected a finite number, got {txt!r}",
-                    file=file,
-                    line=k,
-                    field=names[key],
-                )
-            values[key] = v
-        word = cells[where["direction"]].lower()
+    for k, cells in table.rows:
+        values = {key: table.number(cells, key, limits[key], k) for key in ("angle", "deviation")}
+        word = table.cell(cells, "direction").lower()
         if word not in words:
             raise InputError(
                 f"expected a direction among {', '.join(sorted(words))} (map others with "
-                f"directions), got {cells[where['direction']]!r}",
+                f"directions), got {table.cell(cells, 'direction')!r}",
                 file=file,
                 line=k,
-                field=names["direction"],
+                field=table.names["direction"],
             )
         d = words[word]
         theta = values["angle"] * _ANGLE[a_unit]

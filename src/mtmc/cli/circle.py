@@ -33,7 +33,8 @@ from mtmc.cli.common import (
 )
 from mtmc.cli.positioning import parse_columns
 from mtmc.cli.run_options import ADAPTIVE_OPTION, RUN_NAN_POLICY_OPTION, run_lines, run_message
-from mtmc.errors import InputError, MtmcError
+from mtmc.csvtable import read_pairs
+from mtmc.errors import MtmcError
 
 __all__ = ["app", "evaluate_cmd", "simulate_cmd"]
 
@@ -47,15 +48,7 @@ def _directions(text: str | None) -> dict[str, str] | None:
     """``"clockwise=cw,anti=ccw"`` as a mapping of the file's words onto cw/ccw."""
     if not text:
         return None
-    out: dict[str, str] = {}
-    for part in text.split(","):
-        word, sep, meaning = part.partition("=")
-        if not sep or not word.strip() or not meaning.strip():
-            raise InputError(
-                f"expected --directions as WORD=cw|ccw pairs, got {part!r}", field="directions"
-            )
-        out[word.strip()] = meaning.strip()
-    return out
+    return dict(read_pairs(text, "directions", "WORD=cw or WORD=ccw", "clockwise=cw"))
 
 
 @app.command("evaluate")

@@ -39,6 +39,7 @@ from mtmc.cli.run_options import (
     run_lines,
     run_message,
 )
+from mtmc.csvtable import read_pairs
 from mtmc.errors import InputError, MtmcError
 
 __all__ = ["app", "evaluate_cmd", "parse_columns"]
@@ -54,16 +55,7 @@ def parse_columns(text: str | None) -> dict[str, str] | None:
     """``"target=Pos,deviation=Error"`` as ``{"target": "Pos", "deviation": "Error"}``."""
     if not text:
         return None
-    out: dict[str, str] = {}
-    for part in text.split(","):
-        key, sep, name = part.partition("=")
-        if not sep or not key.strip() or not name.strip():
-            raise InputError(
-                f"expected --columns as OURS=THEIRS pairs, e.g. target=Position, got {part!r}",
-                field="columns",
-            )
-        out[key.strip()] = name.strip()
-    return out
+    return dict(read_pairs(text, "columns", "OURS=THEIRS", "target=Position"))
 
 
 def _study(

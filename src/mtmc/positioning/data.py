@@ -20,8 +20,6 @@ comments; the separator is a comma, a semicolon or a tab.
 
 from __future__ import annotations
 
-import csv
-import io
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +27,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, read_number, read_text
+from mtmc.csvtable import CsvTable, read_csv, read_pairs, read_units
+from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, read_text
 from mtmc.errors import InputError
 
 __all__ = [
@@ -115,15 +114,7 @@ def parse_directions(
         return out
     pairs: list[tuple[str, str]]
     if isinstance(mapping, str):
-        pairs = []
-        for part in mapping.split(","):
-            word, sep, side = part.partition("=")
-            if not sep:
-                raise InputError(
-                    f"expected WORD=up or WORD=down pairs, e.g. Forward=up, got {part!r}",
-                    field=field,
-                )
-            pairs.append((word, side))
+        pairs = read_pairs(mapping, field, "WORD=up or WORD=down", "Forward=up")
     else:
         pairs = [(str(k), str(v)) for k, v in mapping.items()]
     for word, side in pairs:
@@ -154,19 +145,7 @@ def parse_units(text: str) -> tuple[str, str]:
     InputError
         On an unknown unit or a deviation unit that does not go with the target unit.
     """
-    parts = [p.strip() for p in str(text).split(",")]
-    known = ", ".join(f"{t},{d}" for t, ds in DEVIATION_UNITS.items() for d in ds)
-    if len(parts) == 1:
-        for t, ds in DEVIATION_UNITS.items():
-            if parts[0] in ds:
-                return t, parts[0]
-    elif len(parts) == 2 and parts[1] in DEVIATION_UNITS.get(parts[0], ()):
-        return parts[0], parts[1]
-    raise InputError(
-        f"expected units TARGET,DEVIATION among {known} (or the deviation unit alone), "
-        f"got {text!r}",
-        field="units",
-    )
+    return read_units(text, DEVIATION_UNITS, ("TARGET", "DEVIATION"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -281,46 +260,6 @@ def reading_times(m: int, n: int) -> NDArray[np.float64]:
     return np.stack([up, down], axis=-1).astype(np.float64) / (2 * m * n - 1)
 
 
-def _delimiter(line: str) -> str:
-    for d in (",", ";", "\t"):
-        if d in line:
-            return d
-    return ","
-
-
-def _cells(line: str, delim: str) -> list[str]:
-    return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delim))]
-
-
-def _header(
-    head: tuple[int, str], delim: str, file: str, columns: Mapping[str, str] | None
-) -> tuple[dict[str, int], int]:
-    """The index of each of :data:`COLUMNS` in the header line, and the number of columns."""
-    names = {c: c for c in COLUMNS}
-    for key, name in (columns or {}).items():
-        if key not in COLUMNS:
-            raise InputError(
-                f"unknown column {key!r}; expected one of {', '.join(COLUMNS)}",
-                file=file,
-                field="columns",
-            )
-        names[key] = str(name)
-    cells = _cells(head[1], delim)
-    header = [h.lower() for h in cells]
-    where: dict[str, int] = {}
-    for key in COLUMNS:
-        want = names[key].lower()
-        if want not in header:
-            raise InputError(
-                f"no column {names[key]!r} (the {key}) in the header; it has {', '.join(cells)}",
-                file=file,
-                line=head[0],
-                field=key,
-            )
-        where[key] = header.index(want)
-    return where, len(header)
-
-
 #: The largest size of a target or a deviation, by its unit (:data:`mtmc.document.MAX_MM`,
 #: :data:`mtmc.document.MAX_DEG`).
 _LIMITS: Mapping[str, float] = {
@@ -333,41 +272,26 @@ _LIMITS: Mapping[str, float] = {
 
 
 def _reading(
-    cells: list[str],
-    where: Mapping[str, int],
-    width: int,
-    file: str,
+    table: CsvTable,
     k: int,
+    cells: list[str],
     units: tuple[str, str] = ("mm", "um"),
     directions: Mapping[str, int] = _DIRECTIONS,
 ) -> tuple[tuple[float, int, int], float]:
     """``((target, run, direction), deviation)`` of one row; errors name line ``k``."""
-    limits = {"target": _LIMITS[units[0]], "deviation": _LIMITS[units[1]]}
-    if len(cells) < width:
-        raise InputError(f"expected {width} fields, got {len(cells)}", file=file, line=k)
-
-    def number(key: str) -> float:
-        text = cells[where[key]]
-        v = read_number(text, lambda m: InputError(m, file=file, line=k, field=key))
-        if abs(v) > limits[key]:
-            raise InputError(
-                f"expected a number at most {limits[key]:g} in size, got {text!r}",
-                file=file,
-                line=k,
-                field=key,
-            )
-        return v
-
-    target = number("target")
-    deviation = number("deviation")
-    run_text = cells[where["run"]]
+    target = table.number(cells, "target", _LIMITS[units[0]], k)
+    deviation = table.number(cells, "deviation", _LIMITS[units[1]], k)
+    run_text = table.cell(cells, "run")
     try:
         run = int(run_text)
     except ValueError:
         raise InputError(
-            f"expected a whole run number, got {run_text!r}", file=file, line=k, field="run"
+            f"expected a whole run number, got {run_text!r}",
+            file=table.file,
+            line=k,
+            field=table.names["run"],
         ) from None
-    d_text = cells[where["direction"]]
+    d_text = table.cell(cells, "direction")
     d = directions.get(d_text.lower())
     if d is None:
         ups = ", ".join(w for w, v in directions.items() if v == 0)
@@ -375,9 +299,9 @@ def _reading(
         raise InputError(
             f"expected a direction, got {d_text!r}: positive {ups}; negative {downs} "
             "(a mapping such as --directions Hin=up,Rück=down names others)",
-            file=file,
+            file=table.file,
             line=k,
-            field="direction",
+            field=table.names["direction"],
         )
     return (target, run, d), deviation
 
@@ -418,21 +342,15 @@ def loads_positioning_csv(
     """Read a positioning test from CSV text (see :func:`load_positioning_csv`)."""
     t_unit, d_unit = parse_units(units if isinstance(units, str) else ",".join(units))
     words = parse_directions(directions)
-    lines = [(k, raw.strip()) for k, raw in enumerate(text.splitlines(), start=1)]
-    lines = [(k, s) for k, s in lines if s and not s.startswith("#")]
-    if not lines:
-        raise InputError("expected a header line and readings, the file has none", file=file)
-    delim = _delimiter(lines[0][1])
-    where, width = _header(lines[0], delim, file, columns)
-    rows = len(lines) - 1
+    table = read_csv(text, file, COLUMNS, columns)
+    lines = table.lines
+    rows = len(lines)
     tgt = np.empty(rows)
     run = np.empty(rows, dtype=np.int64)
     drc = np.empty(rows, dtype=np.intp)
     dev = np.empty(rows)
-    for r, (k, line) in enumerate(lines[1:]):
-        (tgt[r], run[r], drc[r]), dev[r] = _reading(
-            _cells(line, delim), where, width, file, k, (t_unit, d_unit), words
-        )
+    for r, (k, cells) in enumerate(table.rows):
+        (tgt[r], run[r], drc[r]), dev[r] = _reading(table, k, cells, (t_unit, d_unit), words)
     targets, t_idx = np.unique(tgt, return_inverse=True)
     runs, r_idx = np.unique(run, return_inverse=True)
     flat = (t_idx.astype(np.int64) * runs.size + r_idx) * 2 + drc
@@ -444,9 +362,9 @@ def loads_positioning_csv(
         first = int(first_of[np.searchsorted(keys, flat[second])])
         raise InputError(
             f"a second reading at target {tgt[second]:g}, run {run[second]}, direction "
-            f"{_side(int(drc[second]))} (the first is on line {lines[1 + first][0]})",
+            f"{_side(int(drc[second]))} (the first is on line {lines[first][0]})",
             file=file,
-            line=lines[1 + second][0],
+            line=lines[second][0],
         )
     if rows != targets.size * runs.size * 2:
         t, rr, d = _missing(t_idx, r_idx, drc, targets, runs)
