@@ -8,7 +8,6 @@ file, the line and the column, and exit with status 2.
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +27,6 @@ from mtmc.cli.common import (
     parallel_options,
     print_json,
     print_trials_seed,
-    progress_bar,
     seed_option,
 )
 from mtmc.cli.positioning import parse_columns
@@ -134,22 +132,21 @@ def simulate_cmd(
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Simulate STUDY as mtmc run does: the parameters and the identified errors with U."""
-    from mtmc.study import write_result
+    from mtmc.cli.run import command_line, run_study
 
     try:
-        s = load_study_of_kind(study, "circular")
-        with progress_bar(f"{study.name}: Monte Carlo", progress) as bar:
-            result = s.run(
-                trials=trials,
-                seed=seed,
-                progress=bar,
-                adaptive=True if adaptive else None,
-                nan_policy=None if nan is None else nan_policy(nan),
-                **parallel_options(workers, executor, scheduler),
-            )
-        if outdir is not None:
-            argv = (ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]])
-            write_result(result, outdir, study_text=s.source.text, argv=argv)
+        result = run_study(
+            load_study_of_kind(study, "circular"),
+            outdir,
+            label=study.name,
+            trials=trials,
+            seed=seed,
+            progress=progress,
+            argv=command_line(ctx),
+            parallel=parallel_options(workers, executor, scheduler),
+            adaptive=True if adaptive else None,
+            nan_policy=None if nan is None else nan_policy(nan),
+        )
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))
     out: dict[str, Any] = {

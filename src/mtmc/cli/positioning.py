@@ -10,7 +10,6 @@ file, the line and the field, and exit with status 2.
 from __future__ import annotations
 
 import dataclasses
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +29,6 @@ from mtmc.cli.common import (
     nan_policy,
     parallel_options,
     print_json,
-    progress_bar,
     seed_option,
 )
 from mtmc.cli.run_options import (
@@ -135,27 +133,27 @@ def evaluate_cmd(
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Evaluate DATA: the parameters of ISO 230-2, each with U by Monte Carlo and the GUM."""
+    from mtmc.cli.run import command_line, run_study
     from mtmc.positioning import pitch_compensation
-    from mtmc.study import write_result
     from mtmc.study.positioning import summary
     from mtmc.verification.compensation import dump_compensation
 
     try:
         s = _study(data, study_file, units, parse_columns(columns), axis, type_a, directions)
-        with progress_bar(f"{data.name}: Monte Carlo", progress) as bar:
-            result = s.run(
-                trials=trials,
-                seed=seed,
-                progress=bar,
-                adaptive=True if adaptive else None,
-                nan_policy=None if nan is None else nan_policy(nan),
-                **parallel_options(workers, executor, scheduler),
-            )
+        result = run_study(
+            s,
+            outdir,
+            label=data.name,
+            trials=trials,
+            seed=seed,
+            progress=progress,
+            argv=command_line(ctx),
+            parallel=parallel_options(workers, executor, scheduler),
+            adaptive=True if adaptive else None,
+            nan_policy=None if nan is None else nan_policy(nan),
+        )
         if compensation is not None:
             dump_compensation(pitch_compensation(s.test, s.axis, sign=sign), compensation, fmt)
-        if outdir is not None:
-            argv = (ctx.obj or {}).get("argv", ["mtmc", *sys.argv[1:]])
-            write_result(result, outdir, study_text=s.source.text, argv=argv)
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))
     out = summary(result)
