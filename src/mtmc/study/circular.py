@@ -56,7 +56,8 @@ from mtmc.document import Fields
 from mtmc.errors import MtmcError
 from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
 from mtmc.study.conformity import ConformitySpec, assess_quantity, read_output_conformity
-from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.observations import input_record
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.positioning import _distribution
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
@@ -161,28 +162,13 @@ class CircularStudy(Study):
         )
         limits = {k: {"lower": c.lower, "upper": c.upper} for k, c in self.conformity.items()}
         extra = {"circular": {**self.plot, "notes": list(res.notes), "limits": limits}}
-        inputs = []
-        for name, d in self.inputs.items():
-            u = float(np.max(np.asarray(d.std)))
-            inputs.append(
-                {
-                    "name": name,
-                    "distribution": str(d),
-                    "estimate": float(np.asarray(d.mean).ravel()[0]),
-                    "u": u,
-                    "unit": _INPUT_UNITS.get(name) or units.get(name, "mm"),
-                }
-            )
-        mc_all = res.mc
+        inputs = [
+            input_record(name, d, _INPUT_UNITS.get(name) or units.get(name, "mm"))
+            for name, d in self.inputs.items()
+        ]
         return self._result(
             settings,
-            run=run_record(
-                settings,
-                mc_all.trials,
-                mc_all.omitted,
-                blocks=mc_all.blocks,
-                tolerance=mc_all.tolerance,
-            ),
+            run=mc_run_record(settings, res.mc),
             quantities=tuple(quantities),
             tables=tables,
             inputs=tuple(inputs),

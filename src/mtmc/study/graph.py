@@ -43,7 +43,7 @@ from mtmc.study.base import (
     region,
 )
 from mtmc.study.observations import input_record
-from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.gum import gum
@@ -207,9 +207,7 @@ class GraphStudy(Study):
             extra["sweep"] = sweep_d
             tables.append(table)
         in_list = tuple(input_record(n, d) for n, d in random_inputs(plan).items())
-        run = run_record(
-            settings, res.trials, res.omitted, blocks=res.blocks, tolerance=res.tolerance
-        )
+        run = mc_run_record(settings, res)
         return self._result(
             settings,
             run=run,

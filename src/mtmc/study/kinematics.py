@@ -25,7 +25,7 @@ from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import is_rotary
 from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
 from mtmc.study.observations import input_record
-from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.propagate import read_inputs
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
@@ -160,9 +160,7 @@ class KinematicsStudy(Study):
         extra = {"machine": {"name": self.machine_name, "topology": str(self.machine.topology)}}
         return self._result(
             settings,
-            run=run_record(
-                settings, mc.trials, mc.omitted, blocks=mc.blocks, tolerance=mc.tolerance
-            ),
+            run=mc_run_record(settings, mc),
             quantities=tuple(quantities),
             tables=(Table("poses", "Commanded poses", ("pose", *units), pose_rows),),
             fields=(field,),

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from mtmc.document import Fields, KeyPath, check_number, read_number, read_text
 from mtmc.errors import InputError, MtmcError
-from mtmc.uncertainty.distributions import Distribution, StudentT, parse_distribution
+from mtmc.uncertainty.distributions import IID, Distribution, StudentT, parse_distribution
 from mtmc.uncertainty.typea import (
     AutocorrelationWarning,
     TypeA,
@@ -245,7 +245,7 @@ def _cells(line: str, delim: str) -> list[str]:
     return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delim))]
 
 
-def input_record(name: str, dist: Distribution) -> dict[str, Any]:
+def input_record(name: str, dist: Distribution, unit: str | None = None) -> dict[str, Any]:
     """The entry of ``inputs`` in ``result.json`` for one input.
 
     ``name``, ``distribution`` (its text; for a Type A input the t of JCGM 101 §6.4.9 it
@@ -259,15 +259,23 @@ def input_record(name: str, dist: Distribution) -> dict[str, Any]:
     ``pooled_s``, ``pooled_dof`` and ``warning`` (null, or why ``s/√n`` may understate
     ``u``).
 
+    An input of ``k`` identically distributed components (:class:`IID`: the noise of
+    every reading) is described by one of them, with ``components``: ``k``.
+
     Parameters
     ----------
     name : str
     dist : Distribution
+    unit : str, optional
+        The unit of the input, as the study writes it (``unit`` of the entry).
 
     Returns
     -------
     dict
     """
+    if isinstance(dist, IID):
+        one = input_record(name, dist.base, unit)
+        return {**one, "distribution": str(dist), "components": dist.k}
     text = str(dist)
     u: Any = dist.std
     if isinstance(dist, TypeA):
@@ -284,6 +292,8 @@ def input_record(name: str, dist: Distribution) -> dict[str, Any]:
         "u": float(u) if dist.dim == 0 else np.asarray(u).tolist(),
         "dof": float(dist.dof),
     }
+    if unit is not None:
+        record["unit"] = unit
     if dist.dim == 0 and float(dist.std) != float(u):
         record["sd"] = float(dist.std) if math.isfinite(float(dist.std)) else None
     if isinstance(dist, TypeA):

@@ -23,7 +23,7 @@ from typing import Any, ClassVar, Protocol
 
 from mtmc.study.settings import RunSettings
 
-__all__ = ["ADAPTIVE", "NAN_POLICY", "run_record", "unsupported_option"]
+__all__ = ["ADAPTIVE", "NAN_POLICY", "mc_run_record", "run_record", "unsupported_option"]
 
 #: The name of the option of an adaptive run (JCGM 101 §7.9).
 ADAPTIVE = "adaptive"
@@ -72,6 +72,11 @@ def unsupported_option(study: OffersOptions, settings: RunSettings) -> tuple[str
             "not offered for it; expected 'raise'",
         )
     return None
+
+
+def mc_run_record(settings: RunSettings, mc: Any) -> dict[str, Any]:
+    """:func:`run_record` of a Monte Carlo result (its trials, omitted, blocks, tolerance)."""
+    return run_record(settings, mc.trials, mc.omitted, blocks=mc.blocks, tolerance=mc.tolerance)
 
 
 def run_record(

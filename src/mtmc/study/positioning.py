@@ -23,8 +23,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from mtmc.document import Fields, Source
 from mtmc.errors import InputError, MtmcError
 from mtmc.study.base import (
@@ -36,7 +34,8 @@ from mtmc.study.base import (
     Table,
     quantity,
 )
-from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.observations import input_record
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.tolerance import round_to_uncertainty
@@ -188,19 +187,17 @@ class PositioningStudy(Study):
         tables.extend(
             _compensation_tables(test, self.axis, unit, pitch_compensation, apply_compensation)
         )
-        inputs = []
-        for name, d in res.inputs.items():
-            u = float(np.max(np.asarray(d.std)))
-            entry: dict[str, Any] = {
-                "name": name,
-                "distribution": str(d),
-                "estimate": float(np.asarray(d.mean).ravel()[0]),
-                "u": u if math.isfinite(u) else None,
-            }
-            entry["unit"] = INPUT_UNITS.get(
-                name, unit if name in ("drift", "resolution") or name.startswith("typeA") else "1"
+        inputs = [
+            input_record(
+                name,
+                d,
+                INPUT_UNITS.get(
+                    name,
+                    unit if name in ("drift", "resolution") or name.startswith("typeA") else "1",
+                ),
             )
-            inputs.append(entry)
+            for name, d in res.inputs.items()
+        ]
         means = evaluate(test)
         extra = {
             "positioning": {
@@ -222,16 +219,9 @@ class PositioningStudy(Study):
                 "warnings": [o.text(unit_label(test.target_unit), unit) for o in outliers(test)],
             }
         }
-        mc_all = res.mc
         return self._result(
             settings,
-            run=run_record(
-                settings,
-                mc_all.trials,
-                mc_all.omitted,
-                blocks=mc_all.blocks,
-                tolerance=mc_all.tolerance,
-            ),
+            run=mc_run_record(settings, res.mc),
             quantities=tuple(quantities),
             tables=tuple(tables),
             inputs=tuple(inputs),

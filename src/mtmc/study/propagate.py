@@ -24,7 +24,7 @@ from mtmc.study.conformity import (
 )
 from mtmc.study.correlation import CorrelationSpec, correlation_record, read_correlation
 from mtmc.study.observations import input_record, read_input_table
-from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.outputs import check_vector_use, read_outputs_study
 from mtmc.study.sensitivity import SensitivitySettings, read_sensitivity, sensitivity_record
 from mtmc.study.settings import RunSettings
@@ -169,7 +169,7 @@ class PropagateStudy(Study):
                 parallel=settings.parallel,
             )
         samples = {self.output: mc.samples} if settings.samples else {}
-        run = run_record(settings, mc.trials, mc.omitted, blocks=mc.blocks, tolerance=mc.tolerance)
+        run = mc_run_record(settings, mc)
         return self._result(
             settings, run=run, quantities=(q,), inputs=inputs, extra=extra, samples=samples
         )
