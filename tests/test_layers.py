@@ -125,7 +125,7 @@ def _graph(*, typing_too: bool = False) -> dict[str, set[str]]:
     return {m: _imports(m, p, modules, typing_too=typing_too) for m, p in modules.items()}
 
 
-@pytest.mark.parametrize("typing_too", [False], ids=["run time"])
+@pytest.mark.parametrize("typing_too", [False, True], ids=["run time", "with type-only"])
 def test_no_module_imports_in_a_circle(typing_too: bool) -> None:
     """No circle, also counting the imports under ``if TYPE_CHECKING:`` (a type that
     only a circle can name lives in the wrong module)."""

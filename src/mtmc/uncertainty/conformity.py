@@ -49,7 +49,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,9 +57,23 @@ from numpy.typing import NDArray
 from mtmc.errors import InputError
 from mtmc.uncertainty.distributions import Normal
 
-if TYPE_CHECKING:
-    from mtmc.uncertainty.gum import GumResult
-    from mtmc.uncertainty.results import MonteCarloResult
+
+class ScalarResult(Protocol):
+    """What a decision reads of the result of one output.
+
+    A :class:`~mtmc.uncertainty.results.MonteCarloResult` (its values, or its quantile
+    sketch) or a :class:`~mtmc.uncertainty.gum.GumResult` (its estimate, ``u`` and
+    ``ν_eff``). Named here by what is read, so that the results, which decide through
+    :func:`conformity`, and this module import each other neither at run time nor for
+    their types.
+    """
+
+    @property
+    def estimate(self) -> float: ...
+
+    @property
+    def u(self) -> float: ...
+
 
 __all__ = [
     "Conformity",
@@ -272,7 +286,7 @@ def _probability(result: Any, tl: float, tu: float) -> _Probability:
 
 
 def conformance_probability(
-    result: MonteCarloResult | GumResult,
+    result: ScalarResult,
     lower: float | None = None,
     upper: float | None = None,
 ) -> tuple[float, float, str]:
@@ -654,7 +668,7 @@ class Conformity:
 
 
 def conformity(
-    result: MonteCarloResult | GumResult,
+    result: ScalarResult,
     lower: float | None = None,
     upper: float | None = None,
     *,
