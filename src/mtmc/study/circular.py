@@ -56,9 +56,8 @@ from mtmc.document import Fields
 from mtmc.errors import MtmcError
 from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
 from mtmc.study.conformity import ConformitySpec, assess_quantity, read_output_conformity
-from mtmc.study.observations import input_record
+from mtmc.study.observations import input_record, read_distribution
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
-from mtmc.study.positioning import _distribution
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 
@@ -250,14 +249,14 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
             raise errs.error(
                 f"unknown error {key!r}; expected some of {', '.join(truth.names)}", key
             )
-    errors = {k: _distribution(errs, k) for k in errs.data}
+    errors = {k: read_distribution(errs, k) for k in errs.data}
     bb = top.table("ballbar", required=False)
     kw: dict[str, Any] = {}
     if bb is not None:
         bb.only(_BALLBAR_KEYS)
         for key in ("length_error", "alpha", "temperature"):
             if bb.has(key):
-                kw[key] = _distribution(bb, key)
+                kw[key] = read_distribution(bb, key)
         for key in ("resolution", "noise"):
             kw[key] = bb.number(key, 0.0, low=0.0)
     model, inputs = circular_model(identify_with, Ballbar(**kw), errors=errors, simulate_with=truth)
@@ -342,14 +341,14 @@ def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str],
         jac = machine.jacobian(q, None, names=list(names))
     except MtmcError as exc:
         raise errs.error(exc.message, None) from None
-    errors = {k: _distribution(errs, k) for k in names}
+    errors = {k: read_distribution(errs, k) for k in names}
     rt = top.table("rtest", required=False)
     gain: Any = 0.0
     noise = 0.0
     if rt is not None:
         rt.only(("gain", "noise"))
         if rt.has("gain"):
-            gain = _distribution(rt, "gain")
+            gain = read_distribution(rt, "gain")
         noise = rt.number("noise", 0.0, low=0.0)
     ident = top.table("identify", required=False)
     terms = names

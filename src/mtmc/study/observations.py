@@ -42,7 +42,7 @@ from mtmc.uncertainty.typea import (
     with_dof,
 )
 
-__all__ = ["input_record", "load_csv_column", "read_input_table"]
+__all__ = ["input_record", "load_csv_column", "read_distribution", "read_input_table"]
 
 #: The keys of an input given as a table.
 TABLE_KEYS = ("data", "column", "pooled_s", "pooled_dof", "dist", "dof", "u_rel_u")
@@ -243,6 +243,51 @@ def load_csv_column(path: str | Path, column: str) -> NDArray[np.float64]:
 
 def _cells(line: str, delim: str) -> list[str]:
     return [c.strip() for c in next(csv.reader(io.StringIO(line), delimiter=delim))]
+
+
+def read_distribution(fields: Fields, key: str) -> Distribution:
+    """The PDF a study writes as ``key = "normal(0, 1)"`` or ``key = 0.5`` (a constant).
+
+    The one reader of a scalar input of every kind: a distribution text
+    (:func:`mtmc.uncertainty.distributions.parse_distribution`) or a finite number; an
+    error names the file, the line and the key.
+
+    Parameters
+    ----------
+    fields : Fields
+        The table that holds ``key``.
+    key : str
+
+    Returns
+    -------
+    Distribution
+
+    Raises
+    ------
+    InputError, DistributionError
+        A value that is neither a distribution text nor a finite number, or a
+        distribution with bad parameters.
+    """
+    from mtmc.uncertainty.distributions import as_distribution
+
+    value = fields.data[key]
+    where = (*fields.path, key)
+    if isinstance(value, str):
+        try:
+            return parse_distribution(value, field=key)
+        except MtmcError as exc:
+            raise type(exc)(
+                exc.message,
+                file=fields.source.file,
+                line=fields.source.line(where),
+                field=".".join(map(str, where)),
+            ) from None
+
+    def err(msg: str) -> InputError:
+        text = msg.replace("expected a number", "expected a distribution text or a number")
+        return fields.source.error(text, where)
+
+    return as_distribution(check_number(value, err))
 
 
 def input_record(name: str, dist: Distribution, unit: str | None = None) -> dict[str, Any]:

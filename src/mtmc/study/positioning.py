@@ -17,14 +17,13 @@ test flags (kept), and the notes on where the GUM and the Monte Carlo disagree a
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from mtmc.document import Fields, Source
-from mtmc.errors import InputError, MtmcError
+from mtmc.errors import InputError
 from mtmc.study.base import (
     ProgressFn,
     Quantity,
@@ -34,7 +33,7 @@ from mtmc.study.base import (
     Table,
     quantity,
 )
-from mtmc.study.observations import input_record
+from mtmc.study.observations import input_record, read_distribution
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
@@ -344,22 +343,6 @@ def _compensation_tables(test: Any, axis: str, unit: str, pitch: Any, apply: Any
     return [comp, resid]
 
 
-def _distribution(fields: Fields, key: str) -> Any:
-    from mtmc.uncertainty.distributions import as_distribution
-
-    v = fields.data[key]
-    if isinstance(v, bool) or not isinstance(v, str | int | float):
-        raise fields.error(
-            f"expected a distribution text or a number, got {type(v).__name__} {v!r}", key
-        )
-    if isinstance(v, int | float) and not math.isfinite(float(v)):
-        raise fields.error(f"expected a finite number, got {v!r}", key)
-    try:
-        return as_distribution(v if isinstance(v, str) else float(v), field=key)
-    except MtmcError as exc:
-        raise fields.error(exc.message, key) from None
-
-
 def _read_model(top: Fields) -> tuple[dict[str, Any], str]:
     """The keywords of :class:`UncertaintyModel` from the study's tables, and the data units."""
     kw: dict[str, Any] = {}
@@ -368,7 +351,7 @@ def _read_model(top: Fields) -> tuple[dict[str, Any], str]:
         env.only((*_ENV_KEYS, "material_compensated"))
         for key, name in _ENV_KEYS.items():
             if env.has(key):
-                kw[name] = _distribution(env, key)
+                kw[name] = read_distribution(env, key)
         if env.has("material_compensated"):
             kw["material_compensated"] = env.flag("material_compensated")
     ins = top.table("instrument", required=False)
@@ -385,7 +368,7 @@ def _read_model(top: Fields) -> tuple[dict[str, Any], str]:
         )
         for key, name in _INSTRUMENT_KEYS.items():
             if ins.has(key):
-                kw[name] = _distribution(ins, key)
+                kw[name] = read_distribution(ins, key)
         if ins.has("equation"):
             from mtmc.positioning import EQUATIONS
 

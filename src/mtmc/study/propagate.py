@@ -23,13 +23,13 @@ from mtmc.study.conformity import (
     read_output_conformity,
 )
 from mtmc.study.correlation import CorrelationSpec, correlation_record, read_correlation
-from mtmc.study.observations import input_record, read_input_table
+from mtmc.study.observations import input_record, read_distribution, read_input_table
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.outputs import check_vector_use, read_outputs_study
 from mtmc.study.sensitivity import SensitivitySettings, read_sensitivity, sensitivity_record
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
-from mtmc.uncertainty.distributions import Distribution, as_distribution, parse_distribution
+from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.expression import Expression, check_variables, expression
 from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.montecarlo import monte_carlo
@@ -62,35 +62,16 @@ def read_inputs(table: Fields) -> dict[str, Distribution]:
         text nor a finite number, or a distribution with bad parameters (a negative or
         non-finite standard deviation, ``low >= high``...).
     """
-    from mtmc.document import check_number
-
     out: dict[str, Distribution] = {}
     if not table.data:
         raise table.error('expected at least one input, e.g. x = "normal(0, 1)"')
     for name, value in table.data.items():
-        where = (*table.path, name)
-        if isinstance(value, str):
-            try:
-                out[name] = parse_distribution(value, field=name)
-            except MtmcError as exc:
-                raise type(exc)(
-                    exc.message,
-                    file=table.source.file,
-                    line=table.source.line(where),
-                    field=".".join(map(str, where)),
-                ) from None
-        elif isinstance(value, dict):
+        if isinstance(value, dict):
             sub = table.table(name)
             assert sub is not None
             out[name] = read_input_table(sub, name)
         else:
-
-            def err(msg: str, _w: tuple[str | int, ...] = where) -> InputError:
-                text = msg.replace("expected a number", "expected a distribution text or a number")
-                return table.source.error(text, _w)
-
-            num = check_number(value, err)
-            out[name] = as_distribution(num)
+            out[name] = read_distribution(table, name)
     return out
 
 
