@@ -92,13 +92,13 @@ def test_cli_evaluate_json(tmp_path: Path, capsys) -> None:  # type: ignore[no-u
     ref = circular_parameters(theta_ccw=t, ccw=devs["counter"], theta_cw=t, cw=devs["clockwise"])
     for sym in ("F_max", "F_min", "G_lsc", "G_mz", "H", "G_b"):
         assert out["parameters"][sym]["estimate"] == pytest.approx(ref[sym][0] * 1e3, abs=1e-5)
-        assert out["parameters"][sym]["unit"] == "um"
+        assert out["parameters"][sym]["unit"] == "µm"
         assert out["parameters"][sym]["U"] > 0
     # the errors: the identification of the trace, in µm and µrad
     des = design(radius=R, theta_ccw=t, theta_cw=t)
     ident = identify(des, np.concatenate([devs["counter"], devs["clockwise"]]))
     sq = out["errors"]["squareness"]
-    assert sq["unit"] == "urad"
+    assert sq["unit"] == "µrad"
     assert sq["estimate"] == pytest.approx(ident.value("squareness")[0] * 1e6, abs=1e-3)
     # 30 µrad injected, recovered within its U
     assert abs(sq["estimate"] - 30.0) < sq["U"]
@@ -125,8 +125,40 @@ def test_cli_evaluate_table(tmp_path: Path, capsys) -> None:  # type: ignore[no-
     out = capsys.readouterr().out
     assert "G_mz" in out
     assert "squareness" in out
-    assert "urad" in out
+    assert "µrad" in out
     assert "note: radius" in out
+
+
+def test_cli_evaluate_is_a_study_with_the_shared_options(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """circle evaluate runs the circular study of the trace: its folder reruns to the bit."""
+    from mtmc.study import load_result, load_study
+
+    p, _ = _trace(tmp_path, np.random.default_rng(4))
+    study = tmp_path / "s.toml"
+    study.write_text(
+        'kind = "circular"\ncolumns = {angle = "Angle", direction = "Dir", deviation = "Error"}\n'
+        'directions = {counter = "ccw"}\n'
+        f"[path]\nradius = {R}\npoints = 8\n[errors]\nsquareness = 1e-5\n"
+        '[ballbar]\nlength_error = "normal(0, 0.0005)"\n'
+        "[conformity.G_lsc]\nupper = 50\n[run]\ntrials = 300\nseed = 9\n",
+        encoding="utf-8",
+    )
+    out_dir = tmp_path / "res"
+    argv = ["circle", "evaluate", str(p), "--study", str(study), "--json", "-o", str(out_dir)]
+    assert main([*argv, "-w", "2"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert (doc["trials"], doc["seed"]) == (300, 9)  # the study's [run]
+    assert doc["parameters"]["G_lsc"]["conformity"]["decision"] == "conforms"
+    assert "length_error" in {x["name"] for x in load_result(out_dir).inputs}  # its [ballbar]
+    # the folder holds the trace and a study that names it: it reruns to the same numbers
+    assert any((out_dir / "inputs").iterdir())
+    again = load_study(out_dir / "study.toml").run()
+    first = load_result(out_dir)
+    for a, b in zip(first.quantities, again.quantities, strict=True):
+        assert (a.mc.estimate, a.mc.U) == (b.mc.estimate, b.mc.U), a.name
+    # without --radius and without a study: one line naming the option
+    assert main(["circle", "evaluate", str(p)]) == 2
+    assert "--radius" in capsys.readouterr().err
 
 
 def test_reader_more_errors(tmp_path: Path) -> None:

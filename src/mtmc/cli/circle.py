@@ -30,9 +30,15 @@ from mtmc.cli.common import (
     seed_option,
 )
 from mtmc.cli.positioning import parse_columns
-from mtmc.cli.run_options import ADAPTIVE_OPTION, RUN_NAN_POLICY_OPTION, run_lines, run_message
+from mtmc.cli.run_options import (
+    ADAPTIVE_OPTION,
+    RESULT_FOLDER_OPTION,
+    RUN_NAN_POLICY_OPTION,
+    run_lines,
+    run_message,
+)
 from mtmc.csvtable import read_pairs
-from mtmc.errors import MtmcError
+from mtmc.errors import InputError, MtmcError
 
 __all__ = ["app", "evaluate_cmd", "simulate_cmd"]
 
@@ -49,53 +55,129 @@ def _directions(text: str | None) -> dict[str, str] | None:
     return dict(read_pairs(text, "directions", "WORD=cw or WORD=ccw", "clockwise=cw"))
 
 
+def _measured_study(
+    data: Path,
+    study_file: Path | None,
+    overrides: dict[str, Any],
+    path: dict[str, Any],
+) -> Any:
+    """The ``circular`` study of a measured trace: the options over ``--study``'s file."""
+    import tomlkit
+
+    from mtmc.document import read_text
+    from mtmc.study import loads_study
+    from mtmc.study.circular import measured_study_text
+
+    if study_file is None:
+        if path.get("radius") is None:
+            raise InputError(
+                "expected --radius R (mm), or --study with [path] radius", field="radius"
+            )
+        text = measured_study_text(str(data.resolve()), **path, **overrides)
+        return loads_study(text, file=f"{data.name} (circle evaluate)", folder=Path.cwd())
+    load_study_of_kind(study_file, "circular")  # the file checked: its errors name its lines
+    doc = tomlkit.parse(read_text(study_file, "study"))
+    for key in ("errors", "identify", "rotary", "rtest"):
+        doc.pop(key, None)  # the trace's errors are identified from it
+    doc["data"] = str(data.resolve())
+    for key, value in overrides.items():
+        if value is not None:
+            doc[key] = value
+    table = doc.setdefault("path", tomlkit.table())
+    for key in list(table):
+        if key not in ("plane", "radius", "feed"):
+            del table[key]  # the programmed path is the file's
+    for key, value in path.items():
+        if value is not None:
+            table[key] = value
+    text = tomlkit.dumps(doc)
+    return loads_study(text, file=str(study_file), folder=study_file.resolve().parent)
+
+
 @app.command("evaluate")
 def evaluate_cmd(
+    ctx: typer.Context,
     data: Path = typer.Argument(..., help="CSV file: angle,direction,deviation per row."),
-    radius: float = typer.Option(..., "--radius", help="Nominal radius R, mm."),
-    feed: float = typer.Option(1000.0, "--feed", help="Feed, mm/min."),
-    plane: str = typer.Option("XY", "--plane", help="XY, YZ or ZX."),
-    units: str = typer.Option("deg,um", "--units", help="ANGLE,DEVIATION: deg,um  deg,mm  rad,um."),
+    study_file: Path | None = typer.Option(
+        None,
+        "--study",
+        help="A circular study whose [path] radius, plane and feed, [ballbar], [conformity] "
+        "and [run] apply to DATA (its [errors] are identified from DATA instead).",
+    ),
+    radius: float | None = typer.Option(None, "--radius", help="Nominal radius R, mm."),
+    feed: float | None = typer.Option(None, "--feed", help="Feed, mm/min (default 1000)."),
+    plane: str | None = typer.Option(None, "--plane", help="XY, YZ or ZX (default XY)."),
+    units: str | None = typer.Option(
+        None, "--units", help="ANGLE,DEVIATION: deg,um  deg,mm  rad,um (default deg,um)."
+    ),
     columns: str | None = typer.Option(
         None, "--columns", help="The file's column names: angle=Angle,deviation=Error,..."
     ),
     directions: str | None = typer.Option(
         None, "--directions", help="The file's direction words: clockwise=cw,counter=ccw."
     ),
-    trials: int = typer.Option(10_000, "--trials", "-n", min=2, help="Monte Carlo trials."),
-    seed: int | None = seed_option("fresh entropy"),
+    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
+    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     as_json: bool = JSON_OPTION,
+    outdir: Path | None = RESULT_FOLDER_OPTION,
+    workers: int = WORKERS_OPTION,
+    executor: str = EXECUTOR_OPTION,
+    scheduler: str | None = SCHEDULER_OPTION,
+    progress: bool | None = PROGRESS_OPTION,
+    adaptive: bool = ADAPTIVE_OPTION,
+    nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Evaluate DATA: F, G (LSC, MZ), H, G(b) and the identified errors, each with U."""
-    from mtmc.circular import evaluate_trace, load_circular_csv
+    from mtmc.circular.parameters import SYMBOLS
+    from mtmc.cli.run import command_line, run_study
 
     try:
-        tr = load_circular_csv(
-            data, columns=parse_columns(columns), units=units, directions=_directions(directions)
-        )
-        out: dict[str, Any] = evaluate_trace(
-            tr.theta_ccw,
-            tr.ccw,
-            tr.theta_cw,
-            tr.cw,
-            radius=radius,
-            feed=feed / 60.0,
-            plane=plane,
+        overrides = {
+            "units": units,
+            "columns": parse_columns(columns),
+            "directions": _directions(directions),
+        }
+        path = {"radius": radius, "plane": plane, "feed": feed}
+        if study_file is None:
+            overrides = {k: v for k, v in overrides.items() if v is not None}
+            path = {k: v for k, v in path.items() if v is not None or k == "radius"}
+        s = _measured_study(data, study_file, overrides, path)
+        result = run_study(
+            s,
+            outdir,
+            label=data.name,
             trials=trials,
             seed=seed,
-            deviation_unit=tr.unit,
+            progress=progress,
+            argv=command_line(ctx),
+            parallel=parallel_options(workers, executor, scheduler),
+            adaptive=True if adaptive else None,
+            nan_policy=None if nan is None else nan_policy(nan),
         )
     except (MtmcError, OSError) as exc:
-        fail(exc)
-    res = out.pop("result")
-    out["trials"] = int(res.mc.trials)
-    seed_used = res.mc.seed
-    assert seed_used is not None  # a run records the seed it drew
-    out["seed"] = int(seed_used)
+        fail(run_message(exc))
+    circ = result.extra["circular"]
+    out: dict[str, Any] = {"parameters": {}, "errors": {}}
+    for q in result.quantities:
+        group = "parameters" if q.name in SYMBOLS else "errors"
+        out[group][q.name] = {
+            "estimate": q.mc.estimate if q.gum is None else q.gum.estimate,
+            "U": q.mc.U,
+            "U_gum": None if q.gum is None else q.gum.U,
+            "unit": q.unit,
+            "validated": None if q.validation is None else q.validation.passed,
+            "mc_mean": q.mc.estimate,
+            **({"conformity": q.conformity} if q.conformity else {}),
+        }
+    out["notes"] = circ["notes"]
+    out["identifiability"] = circ["identifiability"]
+    out["rms"] = circ["rms_um"]
+    out["trials"] = result.trials
+    out["seed"] = result.seed
     if as_json:
         print_json(out)
         return
-    table = Table(title=f"{data.name}: circular test ({out['trials']} trials)")
+    table = Table(title=f"{data.name}: circular test ({result.trials} trials)")
     for col in ("quantity", "estimate", "U (MC, 95 %)", "U (GUM, 95 %)", "unit", "GUM §8"):
         table.add_column(col, justify="left" if col in ("quantity", "unit") else "right")
     for group in ("parameters", "errors"):
@@ -104,14 +186,18 @@ def evaluate_cmd(
                 name,
                 f"{e['estimate']:.4g}",
                 f"{e['U']:.2g}",
-                f"{e['U_gum']:.2g}",
+                "" if e["U_gum"] is None else f"{e['U_gum']:.2g}",
                 e["unit"],
                 "validated" if e["validated"] else "not validated",
             )
     Console().print(table)
-    print_trials_seed(out["trials"], out["seed"])
+    print_trials_seed(result.trials, result.seed)
+    for line in run_lines(result.extra.get("run")):
+        typer.echo(line)
     for note in out["notes"]:
         typer.echo(f"note: {note}")
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")
 
 
 @app.command("simulate")
@@ -121,9 +207,7 @@ def simulate_cmd(
     trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
     seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     as_json: bool = JSON_OPTION,
-    outdir: Path | None = typer.Option(
-        None, "-o", "--output", help="Also write the result folder with its HTML report."
-    ),
+    outdir: Path | None = RESULT_FOLDER_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,

@@ -33,6 +33,7 @@ from mtmc.cli.common import (
 )
 from mtmc.cli.run_options import (
     ADAPTIVE_OPTION,
+    RESULT_FOLDER_OPTION,
     RUN_NAN_POLICY_OPTION,
     run_lines,
     run_message,
@@ -122,9 +123,7 @@ def evaluate_cmd(
     ),
     fmt: str = typer.Option("isg", "--format", help="Its format: isg, etalon or csv."),
     sign: str = typer.Option("error", "--sign", help="Its values: error or correction."),
-    outdir: Path | None = typer.Option(
-        None, "-o", "--output", help="Also write the result folder with its HTML report."
-    ),
+    outdir: Path | None = RESULT_FOLDER_OPTION,
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,

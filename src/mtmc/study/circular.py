@@ -36,6 +36,24 @@ PDF or a value, and the ballbar::
     [conformity.G_lsc]           # limits per parameter (JCGM 106), µm
     upper = 20.0
 
+A measured trace is evaluated by the same kind: ``data`` names its CSV file (read by
+:func:`mtmc.circular.load_circular_csv`, with ``units``, ``columns`` and ``directions``
+as ``mtmc circle evaluate`` has them), ``[path]`` gives ``radius``, ``plane`` and
+``feed``, and there is no ``[errors]``: the model's errors are identified from the trace,
+and the noise of each reading is the ballbar's ``noise``, or, where it gives none, the
+residual scatter of the identification (a Type A evaluation of the trace)::
+
+    kind = "circular"
+    data = "trace.csv"           # angle,direction,deviation per row
+    units = "deg,um"
+    [path]
+    radius = 150.0
+    [conformity.G_lsc]
+    upper = 20.0
+
+``mtmc circle evaluate DATA`` writes this study and runs it: one route, one result folder
+that reruns from itself (the CSV file copied into ``inputs/``).
+
 The run is :func:`mtmc.circular.evaluate_uncertainty` of
 :func:`mtmc.circular.circular_model`: each trial one whole test (the readings, the
 parameters from their definitions, the identification), the GUM beside it, §8 per
@@ -61,7 +79,7 @@ from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 
-__all__ = ["CircularStudy", "REPORT_UNITS"]
+__all__ = ["CircularStudy", "REPORT_UNITS", "measured_study_text"]
 
 #: The reported unit and its exact factor, by the unit of a model's term.
 REPORT_UNITS: dict[str, tuple[str, float]] = {
@@ -250,16 +268,9 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
                 f"unknown error {key!r}; expected some of {', '.join(truth.names)}", key
             )
     errors = {k: read_distribution(errs, k) for k in errs.data}
-    bb = top.table("ballbar", required=False)
-    kw: dict[str, Any] = {}
-    if bb is not None:
-        bb.only(_BALLBAR_KEYS)
-        for key in ("length_error", "alpha", "temperature"):
-            if bb.has(key):
-                kw[key] = read_distribution(bb, key)
-        for key in ("resolution", "noise"):
-            kw[key] = bb.number(key, 0.0, low=0.0)
-    model, inputs = circular_model(identify_with, Ballbar(**kw), errors=errors, simulate_with=truth)
+    model, inputs = circular_model(
+        identify_with, Ballbar(**_ballbar(top)), errors=errors, simulate_with=truth
+    )
     limits = read_output_conformity(top, model.symbols)
     units = dict(zip(identify_with.names, identify_with.units, strict=True))
     trace = (
@@ -279,6 +290,109 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
         "circles": _circles(th, d, trace),
     }
     return model, inputs, limits, units, plot
+
+
+def _ballbar(top: Fields) -> dict[str, Any]:
+    """The keywords of :class:`mtmc.circular.Ballbar` from ``[ballbar]`` (none: an ideal bar)."""
+    bb = top.table("ballbar", required=False)
+    kw: dict[str, Any] = {}
+    if bb is not None:
+        bb.only(_BALLBAR_KEYS)
+        for key in ("length_error", "alpha", "temperature"):
+            if bb.has(key):
+                kw[key] = read_distribution(bb, key)
+        for key in ("resolution", "noise"):
+            kw[key] = bb.number(key, 0.0, low=0.0)
+    return kw
+
+
+def _mapping(top: Fields, key: str) -> dict[str, str] | None:
+    """A table of texts (``columns``, ``directions``) or None where absent."""
+    t = top.table(key, required=False)
+    if t is None:
+        return None
+    return {k: t.text(k) for k in t.data}
+
+
+def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[str, Any]]:
+    """The model, inputs and limits of a measured trace (``data``; module docstring)."""
+    from mtmc.circular import Ballbar, circular_model, identify, load_circular_csv
+    from mtmc.circular.model import design
+
+    path = top.table("path")
+    assert path is not None
+    path.only(("plane", "radius", "feed"))
+    try:
+        trace = load_circular_csv(
+            top.source.resolve(top.text("data"), ("data",)),
+            columns=_mapping(top, "columns"),
+            units=top.text("units", "deg,um"),
+            directions=_mapping(top, "directions"),
+        )
+    except MtmcError as exc:
+        if exc.file is None:  # an option of the study, not a cell of the file
+            raise top.error(exc.message, exc.field or "data") from None
+        raise
+    des = design(
+        radius=path.number("radius", low=0.0, open_low=True),
+        theta_ccw=trace.theta_ccw,
+        theta_cw=trace.theta_cw,
+        plane=path.text("plane", "XY", choices=("XY", "YZ", "ZX")),
+        feed=path.number("feed", 1000.0, low=0.0, open_low=True) / 60.0,
+    )
+    meas = trace.deviation
+    kw = _ballbar(top)
+    ident = identify(des, meas)
+    if kw.get("noise", 0.0) == 0.0:  # the trace's own scatter about the identified model
+        kw["noise"] = float(ident.rms[0])
+    model, inputs = circular_model(des, Ballbar(**kw), measured=meas)
+    limits = read_output_conformity(top, model.symbols)
+    units = dict(zip(des.names, des.units, strict=True))
+    th, d = des.theta, des.direction
+    plot = {
+        "plane": des.plane,
+        "radius": des.radius,
+        "feed": des.feed,
+        "theta_deg": np.degrees(th),
+        "direction": d,
+        "trace_um": 1e3 * meas,
+        "circles": _circles(th, d, 1e3 * meas),
+        "data": trace.source,
+        "identifiability": ident.identifiability.text(),
+        "rms_um": 1e3 * float(ident.rms[0]),
+    }
+    return model, inputs, limits, units, plot
+
+
+def measured_study_text(
+    data: str,
+    *,
+    radius: float,
+    plane: str = "XY",
+    feed: float = 1000.0,
+    units: str = "deg,um",
+    columns: dict[str, str] | None = None,
+    directions: dict[str, str] | None = None,
+    trials: int | None = None,
+    seed: int | None = None,
+) -> str:
+    """The study file of a measured trace (module docstring), as ``circle evaluate`` writes it."""
+    import tomlkit
+
+    doc = tomlkit.document()
+    doc["kind"] = "circular"
+    doc["title"] = f"Circular test (ISO 230-4): {data}"
+    doc["data"] = data
+    doc["units"] = units
+    if columns:
+        doc["columns"] = columns
+    if directions:
+        doc["directions"] = directions
+    doc["path"] = {"plane": plane, "radius": float(radius), "feed": float(feed)}
+    run = {k: v for k, v in (("trials", trials), ("seed", seed)) if v is not None}
+    if run:
+        doc["run"] = run
+    return tomlkit.dumps(doc)
 
 
 def _parameters(model: Any) -> tuple[str, ...]:
@@ -402,10 +516,23 @@ def read_circular_study(top: Fields) -> CircularStudy:
             "identify",
             "run",
             "conformity",
+            "data",
+            "units",
+            "columns",
+            "directions",
         )
     )
     settings = RunSettings.read(top, default_trials=10_000)
-    model, inputs, limits, units, plot = _read_rotary(top) if top.has("rotary") else _read(top)
+    if top.has("data"):
+        for key in ("errors", "rotary", "rtest", "identify"):
+            if top.has(key):
+                raise top.error(f"a measured trace (data) identifies the errors: no [{key}]", key)
+        read = _read_measured
+    elif top.has("rotary"):
+        read = _read_rotary
+    else:
+        read = _read
+    model, inputs, limits, units, plot = read(top)
     return CircularStudy(
         title=top.text("title", "Circular test"),
         source=top.source,
