@@ -112,6 +112,19 @@ def test_follow_positions_hold_the_tool_on_the_ball() -> None:
         follow_positions(FIVE, {"C": C}, BALL)
 
 
+def _check_second_order_rest(q: np.ndarray, names: list[str], truth: np.ndarray) -> None:
+    """Identified from the exact kinematics, the errors differ from ``truth`` by a second
+    order rest: below 10⁻³ relative, and halved when the errors are halved."""
+    A = rotary_design(FIVE, q, names)
+    rel = []
+    for k in (1.0, 0.5):
+        e = rotary_displacement(FIVE, q, BALL, dict(zip(names, k * truth, strict=True)))
+        est, *_ = linear_identification(A, names, e.reshape(1, -1))
+        rel.append(np.max(np.abs(est[0] / (k * truth) - 1)))
+    assert rel[0] < 1e-3
+    assert rel[0] / rel[1] == pytest.approx(2.0, rel=0.05)
+
+
 def test_rtest_recovers_c_axis_location_errors() -> None:
     q = follow_positions(FIVE, {"B": 0.0, "C": C}, BALL)
     A = rotary_design(FIVE, q, NAMES)
@@ -120,15 +133,8 @@ def test_rtest_recovers_c_axis_location_errors() -> None:
     np.testing.assert_allclose(est[0], TRUTH, rtol=1e-9)
     assert ident.ok
     assert rms[0] < 1e-15
-    # the exact kinematics: the rest is second order, so halving the errors halves the
-    # relative error of what is identified
-    rel = []
-    for k in (1.0, 0.5):
-        e = rotary_displacement(FIVE, q, BALL, dict(zip(NAMES, k * TRUTH, strict=True)))
-        est, *_ = linear_identification(A, NAMES, e.reshape(1, -1))
-        rel.append(np.max(np.abs(est[0] / (k * TRUTH) - 1)))
-    assert rel[0] < 1e-3
-    assert rel[0] / rel[1] == pytest.approx(2.0, rel=0.05)
+    # the exact kinematics: the rest is second order
+    _check_second_order_rest(q, NAMES, TRUTH)
 
 
 def test_ballbar_sees_what_it_can_of_the_c_axis() -> None:
@@ -147,3 +153,24 @@ def test_ballbar_sees_what_it_can_of_the_c_axis() -> None:
     sub = rotary_design(FIVE, q, ["EX0C", "EY0C"], direction=[1, 0, 0])
     est, *_ = linear_identification(sub, ["EX0C", "EY0C"], sub @ TRUTH[:2])
     np.testing.assert_allclose(est[0], TRUTH[:2], rtol=1e-9)
+
+
+B = np.radians(np.linspace(-60.0, 60.0, 25))
+B_NAMES = ["EX0B", "EZ0B", "EA0B", "EC0B", "EXP", "EYP", "EZP"]
+B_TRUTH = np.array([0.01, -0.008, 2e-5, -1.5e-5, 0.003, -0.002, 0.004])
+
+
+def test_rtest_recovers_b_axis_location_errors() -> None:
+    """The B-axis test (B tilting through ±60°, C held, X, Y, Z following): ISO 230-7's
+    EX0B, EZ0B (offsets of the axis) and EA0B, EC0B (its tilts) from the exact kinematics,
+    the rest second order as for the C axis."""
+    q = follow_positions(FIVE, {"B": B, "C": 0.0}, BALL)
+    np.testing.assert_allclose(FIVE.tool_position(q), np.tile(BALL, (B.size, 1)), atol=1e-12)
+    A = rotary_design(FIVE, q, B_NAMES)
+    est, _, _, _, ident = linear_identification(A, B_NAMES, (A @ B_TRUTH)[None])
+    np.testing.assert_allclose(est[0], B_TRUTH, rtol=1e-9)
+    assert ident.ok
+    _check_second_order_rest(q, B_NAMES, B_TRUTH)
+    # along its own direction an axis has no location error: the zero of B is EBB's
+    with pytest.raises(InputError, match="not a location error of rotary axis B"):
+        rotary_design(FIVE, q, [*B_NAMES, "EY0B"])

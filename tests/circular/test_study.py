@@ -256,3 +256,19 @@ def test_bad_rotary_input_is_named_at_its_line(text, field, message):
         loads_study(f'kind = "circular"\n{text}\n[errors]\nEX0C = 0.01\n', file="c.toml")
     assert err.value.field == field
     assert message in str(err.value)
+
+
+def test_the_b_axis_study_identifies_the_location_errors_of_b() -> None:
+    """The shipped B-axis R-test: its GUM estimates of EX0B, EZ0B, EA0B, EC0B are the
+    means of their PDFs (the model is linear in them), in µm and µrad; each U covers the
+    Monte Carlo spread of a parameter known to ±2 µm or ±5 µrad (u = 2, 5)."""
+    result = load_study(study_path("circle_b_axis.toml")).run(trials=TRIALS, seed=SEED)
+    q = {x.name: x for x in result.quantities}
+    means = {"EX0B": 10.0, "EZ0B": -8.0, "EA0B": 20.0, "EC0B": -15.0}
+    for name, mean in means.items():
+        assert q[name].gum is not None
+        assert q[name].gum.estimate == pytest.approx(mean, rel=1e-9), name
+        u = 2.0 if name.startswith(("EX", "EZ")) else 5.0
+        assert q[name].gum.u == pytest.approx(u, rel=0.05), name  # the PDF, plus the noise
+    assert q["EA0B"].unit == "µrad"
+    assert q["range_x"].conformity is not None

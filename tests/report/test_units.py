@@ -49,6 +49,7 @@ STUDY_UNITS: dict[str, tuple[set[str], int]] = {
     # circular: the parameters and the errors in the report's µm, µrad, µm/m and ms
     "circle_xy": ({"µm", "µrad", "µm/m", "ms"}, 60),
     "circle_c_axis": ({"µm", "µrad"}, 60),
+    "circle_b_axis": ({"µm", "µrad"}, 60),
 }
 
 #: Units of length: within one report each kind of quantity has one of them.
