@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -272,3 +273,31 @@ def test_the_b_axis_study_identifies_the_location_errors_of_b() -> None:
         assert q[name].gum.u == pytest.approx(u, rel=0.05), name  # the PDF, plus the noise
     assert q["EA0B"].unit == "µrad"
     assert q["range_x"].conformity is not None
+
+
+@pytest.mark.parametrize(
+    ("body", "where", "words"),
+    [
+        ('data = "absent.csv"', ":2: field data", "expected an existing file"),
+        ('data = "t.csv"\nunits = "deg,inch"', ":3: field units", "expected units ANGLE,DEVIATION"),
+        ('data = "t.csv"\ncolumns = {theta = "x"}', ":3: field columns", "unknown column 'theta'"),
+        ('data = "t.csv"\ndirections = {left = "up"}', ":3: field directions.left", "cw or ccw"),
+        ('data = "t.csv"\n[errors]\nsquareness = 1e-5', ":5: field errors", "identifies"),
+        ('data = "short.csv"', ":2: field data", "4 readings in"),
+    ],
+)
+def test_a_measured_trace_study_names_the_line_of_what_is_wrong(
+    tmp_path: Path, body: str, where: str, words: str
+) -> None:
+    rows = "".join(f"{a},ccw,{np.sin(np.radians(a)):.4f}\n" for a in range(0, 360, 10))
+    (tmp_path / "t.csv").write_text("angle,direction,deviation\n" + rows, encoding="utf-8")
+    short = "angle,direction,deviation\n0,ccw,1\n90,ccw,2\n180,ccw,3\n270,ccw,4\n"
+    (tmp_path / "short.csv").write_text(short, encoding="utf-8")
+    head, _, tables = body.partition("\n[")
+    text = f'kind = "circular"\n{head}\n[path]\nradius = 100\n' + (f"[{tables}\n" if tables else "")
+    study = tmp_path / "s.toml"
+    study.write_text(text, encoding="utf-8")
+    with pytest.raises(InputError) as info:
+        load_study(study)
+    assert f"s.toml{where}" in str(info.value)
+    assert words in str(info.value)

@@ -144,3 +144,20 @@ def test_small_model_docstring_case() -> None:
     meas = lt.to_tracker(m.tool_position(q, {"EXX": PolynomialFunction([0.0, 2e-5]), "EC0Y": 1e-5}))
     r = identify(em, q, meas, lt, pose=False, fixed={"EXX[0]": 0.0})
     assert np.allclose(r.estimate[0], [2e-5, 1e-5], rtol=1e-9)
+
+
+def test_identifiability_with_fewer_readings_than_parameters() -> None:
+    """Two readings of three parameters: the third direction is the null space of J,
+    found from the full SVD (x1 - x2 + 0·x3 does not change these readings; x3 alone
+    is seen)."""
+    from mtmc.verification.identify import identifiability
+
+    J = np.array([[1.0, 1.0, 0.0], [0.0, 0.0, 2.0]])
+    ident = identifiability(J, ["x1", "x2", "x3"])
+    assert not ident.ok
+    assert ident.groups == (("x1", "x2"),)
+    # the combination named is the null vector of J, in the parameters' own units
+    (combo,) = ident.combinations
+    assert combo.replace(" ", "") in ("1·x1-1·x2", "-1·x1+1·x2")
+    # one reading of three parameters: two null directions, none an IndexError
+    assert len(identifiability(J[:1], ["x1", "x2", "x3"]).groups) == 2

@@ -330,8 +330,9 @@ def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str
             directions=_mapping(top, "directions"),
         )
     except MtmcError as exc:
-        if exc.file is None:  # an option of the study, not a cell of the file
-            raise top.error(exc.message, exc.field or "data") from None
+        key = (exc.field or "").split(".")[0]
+        if exc.file is None or key in ("columns", "directions", "units"):  # the study's option
+            raise top.source.error(exc.message, tuple((exc.field or "data").split("."))) from None
         raise
     des = design(
         radius=path.number("radius", low=0.0, open_low=True),
@@ -342,7 +343,10 @@ def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str
     )
     meas = trace.deviation
     kw = _ballbar(top)
-    ident = identify(des, meas)
+    try:
+        ident = identify(des, meas)
+    except MtmcError as exc:
+        raise top.error(f"{exc.message} ({meas.size} readings in {trace.source})", "data") from None
     if kw.get("noise", 0.0) == 0.0:  # the trace's own scatter about the identified model
         kw["noise"] = float(ident.rms[0])
     model, inputs = circular_model(des, Ballbar(**kw), measured=meas)

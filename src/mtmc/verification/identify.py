@@ -211,7 +211,9 @@ def identifiability(
     d = np.linalg.norm(A, axis=0)
     zero = d == 0
     dd = np.where(zero, 1.0, d)
-    _, s, Vt = np.linalg.svd(A / dd, full_matrices=False)
+    # fewer readings than parameters: the full V, whose last rows span the null space the
+    # readings leave (U stays small: n < P)
+    _, s, Vt = np.linalg.svd(A / dd, full_matrices=A.shape[0] < A.shape[1])
     sv = np.zeros(A.shape[1])
     sv[: s.size] = s / (s[0] if s.size and s[0] > 0 else 1.0)
     combos: list[str] = []
