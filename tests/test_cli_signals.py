@@ -140,10 +140,11 @@ def test_signal_while_the_dask_cluster_starts_is_one_line_and_leaves_nothing(tmp
     # before the first worker process exists and at 0, 0.5 and 1.5 s after it appears
     # (the cluster took 3-8 s to start on a loaded 2-core machine), SIGTERM and SIGINT.
     pytest.importorskip("distributed")
-    cases = [("before", signal.SIGTERM), (0.0, signal.SIGINT), (0.5, signal.SIGTERM)]
-    cases += [(1.5, signal.SIGINT)]
-    for when, sig in cases:
-        tmp = tmp_path / f"tmp-{sig.name}-{when}"
+    # and Ctrl-C in a terminal: SIGINT to the whole process group, the workers too
+    cases = [("before", signal.SIGTERM, False), (0.0, signal.SIGINT, False)]
+    cases += [(0.5, signal.SIGTERM, False), (1.5, signal.SIGINT, False), (1.0, signal.SIGINT, True)]
+    for when, sig, group in cases:
+        tmp = tmp_path / f"tmp-{sig.name}-{when}-{'group' if group else 'main'}"
         tmp.mkdir()
         code = (
             "import sys; from mtmc.cli.main import main; print('ready', flush=True); "
@@ -166,7 +167,10 @@ def test_signal_while_the_dask_cluster_starts_is_one_line_and_leaves_nothing(tmp
                     time.sleep(0.02)
                 assert _descendants(proc.pid), "no worker process started in 90 s"
                 time.sleep(float(when))
-            proc.send_signal(sig)
+            if group:
+                os.killpg(proc.pid, sig)
+            else:
+                proc.send_signal(sig)
             _out, err = proc.communicate(timeout=120)
             expected = (
                 (143, "mtmc: terminated\n")

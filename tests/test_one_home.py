@@ -30,6 +30,7 @@ HOMES: dict[str, tuple[str, ...]] = {
     "instruments/laser_tracker.py": ("u_spherical",),
     "artefact/model.py": ("in_axes",),
     "csvtable.py": ("read_csv", "read_pairs", "read_units"),
+    "study/units.py": ("read_unit", "model_unit", "check_model_units"),
 }
 
 

@@ -45,7 +45,7 @@ from mtmc.uncertainty.typea import (
 __all__ = ["input_record", "load_csv_column", "read_distribution", "read_input_table"]
 
 #: The keys of an input given as a table.
-TABLE_KEYS = ("data", "column", "pooled_s", "pooled_dof", "dist", "dof", "u_rel_u")
+TABLE_KEYS = ("data", "column", "pooled_s", "pooled_dof", "dist", "dof", "u_rel_u", "unit")
 
 
 def read_input_table(table: Fields, name: str) -> Distribution:

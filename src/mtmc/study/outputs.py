@@ -144,6 +144,9 @@ class OutputsStudy(Study):
         (JCGM 106), by output name.
     correlation : CorrelationSpec or None
         The ``[correlation]`` table of the inputs, as in a study of one output.
+    input_units : dict of str to str
+        The unit of each input where the file gives them (each output's model checked
+        against them and its unit).
     """
 
     kind = "propagate"
@@ -152,6 +155,7 @@ class OutputsStudy(Study):
     inputs: dict[str, Distribution]
     conformity: Mapping[str, ConformitySpec] = field(default_factory=dict)
     correlation: CorrelationSpec | None = None
+    input_units: Mapping[str, str] = field(default_factory=dict)
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Monte Carlo of the outputs on the same trials, the GUM of the stacked model."""
@@ -176,7 +180,8 @@ class OutputsStudy(Study):
             )
             for i, o in enumerate(self.outputs)
         )
-        inputs = tuple(input_record(n, d) for n, d in self.inputs.items())
+        units = self.input_units
+        inputs = tuple(input_record(n, d, units.get(n)) for n, d in self.inputs.items())
         joint = joint_summary(self.outputs, mc, g, settings.p)
         extra: dict[str, Any] = {
             "model": JointModel(self.outputs).text,

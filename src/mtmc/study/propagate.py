@@ -75,6 +75,72 @@ def read_inputs(table: Fields) -> dict[str, Distribution]:
     return out
 
 
+def read_input_units(table: Fields, names: list[str] | tuple[str, ...]) -> dict[str, str]:
+    """The ``unit`` of each input of ``[inputs]`` that gives one (``{dist = ..., unit = "mm"}``).
+
+    Where some inputs of ``names`` (the model's) have a unit, every one must: a model
+    checked for its units is checked whole (:mod:`mtmc.study.units`).
+
+    Raises
+    ------
+    InputError
+        Naming the line: a unit pint does not know, or inputs of the model without one
+        beside inputs with one.
+    """
+    from mtmc.study.units import read_unit, unit_text
+
+    units: dict[str, str] = {}
+    for name, value in table.data.items():
+        if isinstance(value, dict) and "unit" in value:
+            sub = table.table(name)
+            assert sub is not None
+            text = sub.text("unit")
+
+            def error(message: str, where: Fields = sub) -> InputError:
+                return where.error(message, "unit")
+
+            units[name] = unit_text(read_unit(text, error))
+    missing = [n for n in names if n not in units]
+    if units and missing:
+        raise table.error(
+            f"{', '.join(missing)} {'has' if len(missing) == 1 else 'have'} no unit beside "
+            f"inputs with one ({', '.join(units)}): give every input of the model a unit "
+            '({dist = "...", unit = "mm"}; "1" for a pure number), or none',
+            missing[0],
+        )
+    return units
+
+
+def check_units(top: Fields, model: Expression, units: dict[str, str], key: str) -> None:
+    """The model against its inputs' units and the output's ``unit`` (a located error)."""
+    from mtmc.study.units import check_model_units, model_unit
+
+    if not units:
+        return
+    try:
+        model_unit(model, units)
+    except InputError as exc:
+        raise top.error(f"{exc.message}, in {model.text!r}", key) from None
+    try:
+        check_model_units(model, units, top.text("unit", "1"))
+    except InputError as exc:
+        raise top.error(exc.message, "unit" if top.has("unit") else key) from None
+
+
+def _check_output_units(top: Fields, output: Any, units: dict[str, str]) -> None:
+    """One output of ``[outputs]`` against its inputs' units and its own unit."""
+    from mtmc.study.units import check_model_units
+
+    if not units:
+        return
+    try:
+        check_model_units(output.model, {n: units[n] for n in output.model.names}, output.unit)
+    except InputError as exc:
+        outputs = top.table("outputs")
+        assert outputs is not None
+        raise outputs.error(f"{exc.message}, in {output.model.text!r}", output.name) from None
+
+
 @dataclass(frozen=True)
 class PropagateStudy(Study):
     """A model expression with its input PDFs (kind ``propagate``).
@@ -98,6 +164,9 @@ class PropagateStudy(Study):
     correlation : CorrelationSpec or None
         The ``[correlation]`` table: correlated inputs, joined by a copula in the Monte
         Carlo, ``r`` in the GUM (JCGM 100 eq. (13); ``docs/correlation.md``), or None.
+    input_units : dict of str to str
+        The unit of each input, where the file gives them (then every input has one and
+        the model was checked against them and ``unit``).
     """
 
     kind = "propagate"
@@ -109,6 +178,7 @@ class PropagateStudy(Study):
     sensitivity: SensitivitySettings | None = None
     conformity: ConformitySpec | None = None
     correlation: CorrelationSpec | None = None
+    input_units: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def execute(self, settings: RunSettings, progress: ProgressFn | None) -> StudyResult:
         """Monte Carlo and GUM of the model (see the module docstring)."""
@@ -126,7 +196,8 @@ class PropagateStudy(Study):
         q = assess_quantity(
             quantity(self.output, self.unit, mc, g, settings), self.conformity, mc, g
         )
-        inputs = tuple(input_record(n, d) for n, d in self.inputs.items())
+        units = self.input_units
+        inputs = tuple(input_record(n, d, units.get(n)) for n, d in self.inputs.items())
         extra: dict[str, Any] = {"model": self.model.text}
         if self.correlation is not None:
             assert settings.seed is not None
@@ -190,11 +261,15 @@ def read_propagate_study(top: Fields) -> Study:
         outputs_inputs = top.table("inputs")
         assert outputs_inputs is not None
         study = read_outputs_study(top, outputs_inputs, read_inputs(outputs_inputs))
+        units = read_input_units(outputs_inputs, tuple(study.inputs))
+        for o in study.outputs:
+            _check_output_units(top, o, units)
         # limits per output; the inputs' correlation is that of a study of one output
         return dataclasses.replace(
             study,
             conformity=read_output_conformity(top, [o.name for o in study.outputs]),
             correlation=read_correlation(top, study.inputs),
+            input_units=units,
         )
     text = top.text("model")
     try:
@@ -214,6 +289,8 @@ def read_propagate_study(top: Fields) -> Study:
             ) from None
         raise inputs_t.error(exc.message, str(exc.field)) from None
     check_vector_use(model, inputs, lambda msg: top.error(msg, "model"))
+    units = read_input_units(inputs_t, model.names)
+    check_units(top, model, units, "model")
     return PropagateStudy(
         title=top.text("title", "Propagation of distributions"),
         source=top.source,
@@ -225,4 +302,5 @@ def read_propagate_study(top: Fields) -> Study:
         sensitivity=read_sensitivity(top),
         conformity=read_conformity(top),
         correlation=read_correlation(top, inputs),
+        input_units=units,
     )

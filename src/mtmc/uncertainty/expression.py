@@ -77,6 +77,15 @@ _BINARY: dict[type[ast.operator], Callable[[Any, Any], Any]] = {
     ast.Div: np.true_divide,
     ast.Pow: np.power,
 }
+#: The text of each binary operator, for :meth:`Expression.fold`.
+_SYMBOLS: dict[type[ast.operator], str] = {
+    ast.Add: "+",
+    ast.Sub: "-",
+    ast.Mult: "*",
+    ast.Div: "/",
+    ast.Pow: "**",
+}
+
 _UNARY: dict[type[ast.unaryop], Callable[[Any], Any]] = {
     ast.USub: np.negative,
     ast.UAdd: np.positive,
@@ -307,6 +316,58 @@ class Expression:
         # Dask or process worker has no errstate of the caller's to keep NumPy quiet
         with np.errstate(all="ignore"):
             return np.asarray(self._eval(self._tree.body, values))
+
+    def fold(
+        self,
+        leaf: Callable[[str, int | None], Any],
+        number: Callable[[float], Any],
+        operator: Callable[[str, Any, Any], Any],
+        call: Callable[[str, list[Any]], Any],
+    ) -> Any:
+        """The formula's tree folded bottom-up by the given functions, not by arithmetic.
+
+        For a reading of the formula other than its value: its units and dimension
+        (:mod:`mtmc.study.units`), say.
+
+        Parameters
+        ----------
+        leaf : callable
+            ``leaf(name, index)`` of a variable (``index`` None, or the component of
+            ``x[i]``) or of a constant (``pi``, ``e``).
+        number : callable
+            ``number(value)`` of a number literal.
+        operator : callable
+            ``operator(op, a, b)`` with ``op`` one of ``+ - * / **``, and ``op`` ``neg``
+            or ``pos`` (``b`` None) for the unary ones.
+        call : callable
+            ``call(function_name, arguments)``.
+
+        Examples
+        --------
+        >>> expression("2 * sqrt(x[0])").fold(
+        ...     lambda n, i: f"{n}{i}", str, lambda o, a, b: f"({a}{o}{b})",
+        ...     lambda f, args: f"{f}{args}")
+        "(2.0*sqrt['x0'])"
+        """
+
+        def walk(node: ast.AST) -> Any:
+            if isinstance(node, ast.Constant):
+                return number(float(cast(float, node.value)))
+            if isinstance(node, ast.Name):
+                return leaf(node.id, None)
+            if isinstance(node, ast.Subscript):
+                base = cast(ast.Name, node.value)
+                return leaf(base.id, cast(int, cast(ast.Constant, node.slice).value))
+            if isinstance(node, ast.BinOp):
+                return operator(_SYMBOLS[type(node.op)], walk(node.left), walk(node.right))
+            if isinstance(node, ast.UnaryOp):
+                op = "neg" if isinstance(node.op, ast.USub) else "pos"
+                return operator(op, walk(node.operand), None)
+            if isinstance(node, ast.Call):
+                return call(node.func.id, [walk(a) for a in node.args])  # type: ignore[attr-defined]
+            raise AssertionError(f"unchecked node {type(node).__name__}")  # pragma: no cover
+
+        return walk(self._tree.body)
 
     def _eval(self, node: ast.AST, values: dict[str, NDArray[Any]]) -> Any:
         if isinstance(node, ast.Constant):
