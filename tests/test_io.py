@@ -161,3 +161,23 @@ def test_folder_destination_is_refused_with_a_message(tmp_path):
     with pytest.raises(IsADirectoryError, match="is a folder"):
         write_text_atomic(tmp_path / "d", "x")
     assert (tmp_path / "d").is_dir()
+
+
+def test_a_block_that_fails_after_ctrl_c_reports_the_interrupt() -> None:
+    """Ctrl-C in a terminal reaches every process of the group: what the block waited on
+    (a Dask worker) fails by it, and the interrupt, not that failure, is raised."""
+    import os
+    import signal
+
+    from mtmc.io import deferred_interrupt
+
+    def start(signalled: bool) -> None:
+        with deferred_interrupt():
+            if signalled:
+                os.kill(os.getpid(), signal.SIGINT)
+            raise RuntimeError("Nanny failed to start.")
+
+    with pytest.raises(KeyboardInterrupt):
+        start(True)
+    with pytest.raises(RuntimeError, match="Nanny"):  # no signal: the failure is the error
+        start(False)

@@ -165,7 +165,8 @@ def deferred_interrupt() -> Iterator[None]:
     Raises
     ------
     KeyboardInterrupt
-        After the block, if Ctrl-C was pressed during it.
+        After the block, if Ctrl-C was pressed during it; also where the block then
+        failed (the signal stopped what it waited on), in place of its error.
 
     Examples
     --------
@@ -189,6 +190,12 @@ def deferred_interrupt() -> Iterator[None]:
     previous = {s: signal.signal(s, lambda signum, _frame: seen.append(signum)) for s in held}
     try:
         yield
+    except Exception:
+        # a block that fails after the signal failed by it: Ctrl-C in a terminal reaches
+        # the whole process group, and a Dask worker it stopped fails the cluster's
+        # start; the user asked to stop, and that is what is reported
+        if not seen:
+            raise
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
