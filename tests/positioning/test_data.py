@@ -60,6 +60,9 @@ def test_units():
         (GOOD.replace("100,1,+,1.5", "100,1,+,nan"), 4, "deviation", "expected a finite number"),
         (GOOD.replace("100,1,-,0.5", "100,1,sideways,0.5"), 5, "direction", "direction"),
         (GOOD.replace("0,2,up,0.2", "0,two,up,0.2"), 7, "run", "whole run number"),
+        # a run number past int64 (an OverflowError before)
+        (GOOD.replace("0,2,up,0.2", "0," + "9" * 30 + ",up,0.2"), 7, "run", "at most 1000000000"),
+        (GOOD.replace("0,2,up,0.2", "0,10000000001,up,0.2"), 7, "run", "at most 1000000000"),
         (GOOD.replace("0,2,up,0.2", "0,1,up,0.2"), 7, None, "second reading .* line 3"),
         (GOOD.replace("0,2,up,0.2,20.2", "0,2,up"), 7, None, "expected 5 fields"),
         (GOOD.replace("deviation", "error"), 2, "deviation", "no column 'deviation'"),

@@ -260,6 +260,9 @@ def reading_times(m: int, n: int) -> NDArray[np.float64]:
     return np.stack([up, down], axis=-1).astype(np.float64) / (2 * m * n - 1)
 
 
+#: The largest size of a run number (a test has a handful of runs; this keeps it an int64).
+MAX_RUN = 10**9
+
 #: The largest size of a target or a deviation, by its unit (:data:`mtmc.document.MAX_MM`,
 #: :data:`mtmc.document.MAX_DEG`).
 _LIMITS: Mapping[str, float] = {
@@ -283,14 +286,16 @@ def _reading(
     deviation = table.number(cells, "deviation", _LIMITS[units[1]], k)
     run_text = table.cell(cells, "run")
     try:
-        run = int(run_text)
+        run = int(run_text) if len(run_text) <= 12 else None
     except ValueError:
+        run = None
+    if run is None or abs(run) > MAX_RUN:
         raise InputError(
-            f"expected a whole run number, got {run_text!r}",
+            f"expected a whole run number of at most {MAX_RUN} in size, got {run_text[:40]!r}",
             file=table.file,
             line=k,
             field=table.names["run"],
-        ) from None
+        )
     d_text = table.cell(cells, "direction")
     d = directions.get(d_text.lower())
     if d is None:
