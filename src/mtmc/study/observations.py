@@ -156,17 +156,8 @@ def _stated(table: Fields) -> Distribution:
             "expected one of dof and u_rel_u (ν = ½ u_rel_u⁻², JCGM 100 G.4.2), got both",
             "u_rel_u",
         )
-    text = table.text("dist")
-    where = (*table.path, "dist")
-    try:
-        dist = parse_distribution(text, field="dist")
-    except MtmcError as exc:
-        raise type(exc)(
-            exc.message,
-            file=table.source.file,
-            line=table.source.line(where),
-            field=".".join(map(str, where)),
-        ) from None
+    table.text("dist")  # a distribution text here, not a number
+    dist = read_distribution(table, "dist")
     if not (table.has("dof") or table.has("u_rel_u")):
         return dist
     key = "dof" if table.has("dof") else "u_rel_u"
