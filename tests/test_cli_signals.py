@@ -19,6 +19,18 @@ ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "examples" / "studies" / "axis_c.toml"
 
 
+def _catches(pid: int, sig: signal.Signals) -> bool:
+    """Whether process ``pid`` has a handler of ``sig`` installed (its SigCgt mask, /proc)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    for line in status.splitlines():
+        if line.startswith("SigCgt:"):
+            return bool(int(line.split()[1], 16) >> (int(sig) - 1) & 1)
+    return False
+
+
 def _descendants(pid: int) -> set[int]:
     """The processes below ``pid`` (Linux /proc), children of children included."""
     found: set[int] = set()
@@ -161,7 +173,14 @@ def test_signal_while_the_dask_cluster_starts_is_one_line_and_leaves_nothing(tmp
         try:
             assert proc.stdout is not None
             assert proc.stdout.readline() == b"ready\n"
-            if when != "before":
+            if when == "before":
+                # "before the cluster" is after the command's handlers are in place: a
+                # signal before them ends Python by its default action, whatever mtmc does
+                deadline = time.monotonic() + 60
+                while not _catches(proc.pid, sig) and time.monotonic() < deadline:
+                    time.sleep(0.005)
+                assert _catches(proc.pid, sig), f"no handler of {sig.name} in 60 s"
+            else:
                 deadline = time.monotonic() + 90
                 while not _descendants(proc.pid) and time.monotonic() < deadline:
                     time.sleep(0.02)

@@ -173,8 +173,11 @@ def test_reader_more_errors(tmp_path: Path) -> None:
         loads_circular_csv("# only a comment\n")
     with pytest.raises(InputError, match=r"f.csv:3: expected 3 fields, got 2"):
         loads_circular_csv(ok.replace("90,ccw,2", "90,ccw"), "f.csv")
-    with pytest.raises(InputError, match="within one turn, the file has none"):
-        loads_circular_csv("angle,direction,deviation\n360,ccw,1\n-5,cw,2\n")
+    with pytest.raises(
+        InputError,
+        match=r"at least 4 readings cw within one turn, got 0 \(2 left out as overrun arcs\)",
+    ):
+        loads_circular_csv(ok + "360,cw,1\n-5,cw,2\n")
     with pytest.raises(InputError, match="cannot read the file"):
         load_circular_csv(tmp_path / "absent.csv")
 
@@ -198,3 +201,55 @@ def test_reader_reads_numbers_as_every_csv_reader_does(row: str, field: str, wor
     name = mapped[field]
     with pytest.raises(InputError, match=rf"f\.csv:3: field {name}: expected .*{re.escape(words)}"):
         loads_circular_csv(bad, "f.csv", columns=mapped)
+
+
+def _arc(angles: np.ndarray, direction: str) -> str:
+    """A trace whose deviation is a function of the angle modulo 360°: 2 cos θ + sin 3θ µm."""
+    t = np.radians(angles)
+    dev = 2 * np.cos(t) + np.sin(3 * t)
+    rows = [f"{a:.10g},{direction},{d:.15g}" for a, d in zip(angles, dev, strict=True)]
+    return "angle,direction,deviation\n" + "\n".join(rows) + "\n"
+
+
+ARC_STEP = 2.5
+TURN = np.arange(0.0, 360.0, ARC_STEP)  # the evaluated turn, 144 readings
+WANT = 1e-3 * (2 * np.cos(np.radians(TURN)) + np.sin(3 * np.radians(TURN)))
+
+
+@pytest.mark.parametrize(
+    ("angles", "direction", "overrun", "left"),
+    [
+        # a clockwise path exported through negative angles, 0 down to -357.5°
+        (-TURN, "cw", None, 0),
+        # the closing reading at 360°, the first point read again
+        (np.arange(0.0, 360.0 + ARC_STEP, ARC_STEP), "ccw", None, 1),
+        # overrun arcs of 45° at each end, the default reading of equal arcs
+        (np.arange(-45.0, 405.0 + ARC_STEP, ARC_STEP), "ccw", None, 37),
+        (np.arange(45.0, -405.0 - ARC_STEP, -ARC_STEP), "cw", None, 37),
+        # an overrun of 10° at the start of travel and 30° after
+        (np.arange(-10.0, 390.0, ARC_STEP), "ccw", 10.0, 16),
+        (np.arange(10.0, -390.0, -ARC_STEP), "cw", 10.0, 16),
+    ],
+)
+def test_the_overrun_arcs_are_read_and_left_out(angles, direction, overrun, left) -> None:
+    """The evaluated turn is the same 144 readings whichever way the export writes it."""
+    t = loads_circular_csv(_arc(angles, direction), "o.csv", overrun=overrun)
+    theta = getattr(t, f"theta_{direction}")
+    np.testing.assert_allclose(np.degrees(theta), TURN, atol=1e-9)
+    # the deviations are those of their angle: 1e-15 mm, the rounding of 15 digits
+    np.testing.assert_allclose(getattr(t, direction), WANT, atol=1e-15)
+    assert t.overrun == ({direction: left} if left else {})
+
+
+def test_an_overrun_out_of_range_or_a_repeat_within_the_turn_is_refused() -> None:
+    text = _arc(TURN, "ccw")
+    for bad in (-1.0, 360.0, float("nan")):
+        with pytest.raises(InputError, match=r"overrun arc in \[0, 360\)") as err:
+            loads_circular_csv(text, overrun=bad)
+        assert err.value.field == "overrun"
+    # within one turn an angle is read once: a repeat names both lines
+    twice = _arc(np.array([-10.0, 10.0, 100.0, 200.0, 100.0, 300.0]), "ccw")
+    with pytest.raises(InputError, match="second reading at 100 deg ccw") as err:
+        loads_circular_csv(twice, "t.csv", overrun=20.0)
+    assert err.value.line == 6
+    assert "line 4" in str(err.value)

@@ -5,14 +5,16 @@ The parameters of ISO 230-4 from their definitions on batched traces
 identification of the errors it holds (:mod:`~mtmc.circular.model`), the simulation of a
 test on a :class:`~mtmc.kinematics.Machine` with the effects a static model lacks and the
 instrument (:mod:`~mtmc.circular.simulate`), and the Monte Carlo of a whole test beside
-the GUM (:mod:`~mtmc.circular.uncertainty`). This package knows nothing of study files,
+the GUM (:mod:`~mtmc.circular.uncertainty`; a rotary-axis test's model,
+R-test or ballbar, in :mod:`~mtmc.circular.rotary`). This package knows nothing of study files,
 reports or the command line.
 """
 
-from mtmc.circular import data, model, parameters, simulate, uncertainty
+from mtmc.circular import data, model, parameters, rotary, simulate, uncertainty
 from mtmc.circular.data import *  # noqa: F403
 from mtmc.circular.model import *  # noqa: F403
 from mtmc.circular.parameters import *  # noqa: F403
+from mtmc.circular.rotary import *  # noqa: F403
 from mtmc.circular.simulate import *  # noqa: F403
 from mtmc.circular.uncertainty import *  # noqa: F403
 
@@ -20,6 +22,7 @@ __all__: list[str] = [
     *data.__all__,
     *model.__all__,
     *parameters.__all__,
+    *rotary.__all__,
     *simulate.__all__,
     *uncertainty.__all__,
 ]

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -61,14 +61,22 @@ __all__ = [
     "Ballbar",
     "CircularModel",
     "CircularUncertainty",
-    "RotaryModel",
     "circular_model",
     "evaluate_uncertainty",
     "evaluate_trace",
-    "rotary_model",
 ]
 
 _F = NDArray[np.float64]
+
+
+class WholeTestModel(Protocol):
+    """What :func:`evaluate_uncertainty` takes: a circular or a rotary-axis test's model."""
+
+    outputs: tuple[str, ...]
+    notes: tuple[str, ...]
+    complex_safe: bool
+
+    def __call__(self, **x: Any) -> _F: ...
 
 
 @dataclass(frozen=True)
@@ -101,6 +109,23 @@ class Ballbar:
             if not (np.isfinite(v) and v >= 0):
                 raise InputError(f"expected a number >= 0, got {v!r}", field=name)
             object.__setattr__(self, name, v)
+
+    def inputs(self, n: int) -> dict[str, Distribution]:
+        """The bar's inputs to a test of ``n`` readings, by the names the models read.
+
+        ``length_error``, ``alpha`` and ``temperature``; ``noise`` and ``resolution`` (one
+        draw a reading) where given.
+        """
+        out = {
+            key: as_distribution(getattr(self, key), field=f"ballbar.{key}")
+            for key in ("length_error", "alpha", "temperature")
+        }
+        if self.noise > 0:
+            out["noise"] = IID(Normal(0.0, self.noise), n)
+        if self.resolution > 0:
+            half = 0.5 * self.resolution
+            out["resolution"] = IID(Uniform(-half, half), n)
+        return out
 
 
 class CircularModel:
@@ -135,6 +160,7 @@ class CircularModel:
         syms = [s for s in SYMBOLS if s not in ("H", "G_b") or (self._ccw.size and self._cw.size)]
         self.symbols = tuple(syms)
         self.outputs = (*self.symbols, *identify_with.names)
+        self.notes = structural_notes(identify_with.plane, len(identify_with.directions))
 
     def readings(self, **x: Any) -> _F:
         """The readings ``ΔR`` (m, N) of the trials of ``x``."""
@@ -229,13 +255,7 @@ def circular_model(
         meas = np.asarray(measured, dtype=np.float64).reshape(-1)
         if meas.size != n or not np.all(np.isfinite(meas)):
             raise InputError(f"expected {n} finite readings", field="measured")
-    for key in ("length_error", "alpha", "temperature"):
-        inputs[key] = as_distribution(getattr(ballbar, key), field=f"ballbar.{key}")
-    if ballbar.noise > 0:
-        inputs["noise"] = IID(Normal(0.0, ballbar.noise), n)
-    if ballbar.resolution > 0:
-        half = 0.5 * ballbar.resolution
-        inputs["resolution"] = IID(Uniform(-half, half), n)
+    inputs |= ballbar.inputs(n)
     return CircularModel(identify_with, truth, meas, names), inputs
 
 
@@ -295,7 +315,7 @@ class CircularUncertainty:
 
 
 def evaluate_uncertainty(
-    model: CircularModel | RotaryModel,
+    model: WholeTestModel,
     inputs: Mapping[str, Distribution],
     trials: int | None = 10_000,
     seed: int | None = None,
@@ -310,10 +330,7 @@ def evaluate_uncertainty(
     val = {
         name: validate(g.component(i), mc.component(i), p=p) for i, name in enumerate(model.outputs)
     }
-    notes: tuple[str, ...] = ()
-    if isinstance(model, CircularModel):
-        notes = structural_notes(model.design.plane, len(model.design.directions))
-    return CircularUncertainty(model.outputs, mc, g, val, notes)
+    return CircularUncertainty(model.outputs, mc, g, val, tuple(model.notes))
 
 
 def _report_unit(unit: str, deviation_unit: str) -> tuple[float, str]:
@@ -394,95 +411,3 @@ def evaluate_trace(
     out["rms"] = float(ident.rms[0])
     out["result"] = res
     return out
-
-
-class RotaryModel:
-    """The vectorised model of an R-test of a rotary axis: ``model(**inputs) -> (m, d)``.
-
-    The readings of each step ``k`` are the sensors' ``(1 + g) ⊙ (J_k β) + ε_k``: the
-    first-order displacement of the sphere (``J`` of
-    :func:`~mtmc.circular.simulate.rotary_design`, exact to second order in the errors),
-    each axis' sensor gain error ``g`` and the noise of each reading. The outputs are the
-    range over the steps of the displacement along x, y and z (``range_x``, ...) and the
-    errors identified by least squares.
-
-    Attributes
-    ----------
-    outputs : tuple of str
-    complex_safe : bool
-        False (ranges are extremes).
-    """
-
-    complex_safe = False
-
-    def __init__(self, jacobian: _F, names: tuple[str, ...], identify: tuple[str, ...]) -> None:
-        self.jacobian = jacobian
-        self.error_names = names
-        idx = [names.index(k) for k in identify]
-        flat = jacobian.reshape(-1, jacobian.shape[2])
-        self._truth_t = np.ascontiguousarray(flat.T)
-        self._pinv_t = np.ascontiguousarray(np.linalg.pinv(flat[:, idx]).T)
-        self.outputs = ("range_x", "range_y", "range_z", *identify)
-
-    def __call__(self, **x: Any) -> _F:
-        """The outputs ``(m, d)`` of the trials of ``x``, in the order of :attr:`outputs`."""
-        for v in x.values():
-            if np.iscomplexobj(v):
-                raise TypeError("the R-test model takes real inputs only")
-        beta = np.stack([np.asarray(x[k], dtype=np.float64) for k in self.error_names], axis=1)
-        m, n = beta.shape[0], self.jacobian.shape[0]
-        e = (beta @ self._truth_t).reshape(m, n, 3)
-        gain = np.stack([np.asarray(x[f"gain_{a}"], dtype=np.float64) for a in "xyz"], axis=1)
-        e = e * (1.0 + gain[:, None, :])
-        if "noise" in x:
-            e = e + np.asarray(x["noise"], dtype=np.float64).reshape(m, n, 3)
-        ranges = e.max(axis=1) - e.min(axis=1)
-        est = e.reshape(m, -1) @ self._pinv_t
-        return np.concatenate([ranges, est], axis=1)
-
-
-def rotary_model(
-    jacobian: npt.ArrayLike,
-    errors: Mapping[str, Any],
-    *,
-    identify: tuple[str, ...] | None = None,
-    gain: Any = 0.0,
-    noise: float = 0.0,
-) -> tuple[RotaryModel, dict[str, Distribution]]:
-    """The model of an R-test and its inputs.
-
-    Parameters
-    ----------
-    jacobian : array_like, shape (n, 3, p)
-        ``∂(displacement)/∂(error)`` at each step (:meth:`mtmc.kinematics.Machine.jacobian`
-        at the positions of :func:`~mtmc.circular.simulate.follow_positions`).
-    errors : mapping of str to Distribution or number
-        The ``p`` errors in the column order of ``jacobian``, by their ISO 230-7 names.
-    identify : tuple of str, optional
-        The errors identified (default all).
-    gain : Distribution or number
-        The relative gain error of each sensor (the same PDF for x, y, z, independent).
-    noise : float
-        Standard deviation of each reading, mm.
-
-    Returns
-    -------
-    model : RotaryModel
-    inputs : dict of str to Distribution
-    """
-    J = np.asarray(jacobian, dtype=np.float64)
-    names = tuple(errors)
-    if J.ndim != 3 or J.shape[1] != 3 or J.shape[2] != len(names):
-        raise InputError(
-            f"expected a Jacobian of shape (n, 3, {len(names)}), got {J.shape}", field="jacobian"
-        )
-    ident = names if identify is None else tuple(identify)
-    unknown = [k for k in ident if k not in names]
-    if unknown:
-        raise InputError(f"unknown error {unknown[0]!r} to identify", field="identify")
-    inputs = {k: as_distribution(v, field=f"errors.{k}") for k, v in errors.items()}
-    for a in "xyz":
-        inputs[f"gain_{a}"] = as_distribution(gain, field="gain")
-    if noise > 0:
-        inputs["noise"] = IID(Normal(0.0, float(noise)), 3 * J.shape[0])
-    return RotaryModel(J, names, ident), inputs

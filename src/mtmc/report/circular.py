@@ -90,13 +90,15 @@ def circular_svg(circ: dict[str, Any]) -> str:
 
 
 def rotary_svg(circ: dict[str, Any]) -> str:
-    """The R-test's displacement of the sphere along x, y, z against the rotary angle.
+    """A rotary-axis test's readings against the rotary angle.
 
     Parameters
     ----------
     circ : dict
         ``circular`` of ``result.json`` of a rotary test: ``rotary`` (``machine``,
-        ``axis``, ``angle_deg``) and ``displacement_um`` ``(n, 3)`` at the inputs' estimates.
+        ``axis``, ``angle_deg``, ``instrument``) and the R-test's ``displacement_um``
+        ``(n, 3)`` or the ballbar's ``reading_um`` ``(n,)``: at the inputs' estimates
+        (exact kinematics) or as measured.
 
     Returns
     -------
@@ -105,15 +107,24 @@ def rotary_svg(circ: dict[str, Any]) -> str:
     """
     rot = circ["rotary"]
     a = np.asarray(rot["angle_deg"], dtype=np.float64)
-    e = np.asarray(circ["displacement_um"], dtype=np.float64)
     fig = _figure(8.0, 4.2, left=0.1, right=0.97, bottom=0.13, top=0.92)
     ax = fig.add_subplot(1, 1, 1)
-    for k, (name, colour) in enumerate((("x", "C0"), ("y", "C3"), ("z", "C2"))):
-        ax.plot(a, e[:, k], "o-", color=colour, ms=3.0, lw=1.1, label=f"δ{name}")
+    if "reading_um" in circ:
+        r = np.asarray(circ["reading_um"], dtype=np.float64)
+        ax.plot(a, r, "o-", color="C0", ms=3.0, lw=1.1, label="ballbar reading")
+        ax.set_ylabel("change of the bar's length / µm")
+        what = f"ballbar along {tuple(rot.get('direction', ()))}"
+    else:
+        e = np.asarray(circ["displacement_um"], dtype=np.float64)
+        for k, (name, colour) in enumerate((("x", "C0"), ("y", "C3"), ("z", "C2"))):
+            ax.plot(a, e[:, k], "o-", color=colour, ms=3.0, lw=1.1, label=f"δ{name}")
+        ax.set_ylabel("displacement of the sphere / µm")
+        what = "R-test"
     ax.axhline(0.0, color="0.6", lw=0.6)
     ax.set_xlabel(f"{rot['axis']} / deg")
-    ax.set_ylabel("displacement of the sphere / µm")
-    ax.set_title(f"{rot['machine']}: {rot['axis']}-axis test, {a.size} positions", fontsize=9)
+    ax.set_title(
+        f"{rot['machine']}: {rot['axis']}-axis test, {what}, {a.size} positions", fontsize=9
+    )
     ax.legend(fontsize=7, loc="best")
     ax.grid(True, lw=0.3, alpha=0.5)
     return _svg(fig, "rotary")

@@ -168,17 +168,27 @@ class CircularStudy(Study):
         )
         cols = ("quantity", "unit", "GUM y", "GUM U", "MC y", "MC U", "GUM by JCGM 101 §8")
         n_par = len(_parameters(self.model))
-        title = (
-            "Parameters of ISO 230-4"
-            if "rotary" not in self.plot
-            else "Range of the sphere's displacement along x, y, z (R-test)"
-        )
+        title = "Parameters of ISO 230-4"
+        if "rotary" in self.plot:
+            title = (
+                "Range of the sphere's displacement along x, y, z (R-test)"
+                if self.plot["rotary"]["instrument"] == "rtest"
+                else "Range of the ballbar's reading"
+            )
         tables = (
             Table("parameters", title, cols, rows[:n_par]),
             Table("errors", "Identified errors (first-order model)", cols, rows[n_par:]),
         )
         limits = {k: {"lower": c.lower, "upper": c.upper} for k, c in self.conformity.items()}
-        extra = {"circular": {**self.plot, "notes": list(res.notes), "limits": limits}}
+        notes = [*res.notes, *_overrun_notes(self.plot.get("overrun", {}))]
+        extra = {
+            "circular": {
+                **self.plot,
+                "notes": notes,
+                "limits": limits,
+                "symbols": list(_parameters(self.model)),
+            }
+        }
         inputs = [
             input_record(name, d, _INPUT_UNITS.get(name) or units.get(name, "mm"))
             for name, d in self.inputs.items()
@@ -292,12 +302,12 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
     return model, inputs, limits, units, plot
 
 
-def _ballbar(top: Fields) -> dict[str, Any]:
+def _ballbar(top: Fields, keys: tuple[str, ...] = _BALLBAR_KEYS) -> dict[str, Any]:
     """The keywords of :class:`mtmc.circular.Ballbar` from ``[ballbar]`` (none: an ideal bar)."""
     bb = top.table("ballbar", required=False)
     kw: dict[str, Any] = {}
     if bb is not None:
-        bb.only(_BALLBAR_KEYS)
+        bb.only(keys)
         for key in ("length_error", "alpha", "temperature"):
             if bb.has(key):
                 kw[key] = read_distribution(bb, key)
@@ -314,6 +324,34 @@ def _mapping(top: Fields, key: str) -> dict[str, str] | None:
     return {k: t.text(k) for k in t.data}
 
 
+def _load(top: Fields, load: Any) -> Any:
+    """The trace of ``data``, read by ``load(file, columns=..., units=...)``.
+
+    An error of the study's own options (``columns``, ``directions``, ``units``,
+    ``overrun``) names the study's line; one of the file names the file's.
+    """
+    try:
+        return load(
+            top.source.resolve(top.text("data"), ("data",)),
+            columns=_mapping(top, "columns"),
+            units=top.text("units", "deg,um"),
+        )
+    except MtmcError as exc:
+        key = (exc.field or "").split(".")[0]
+        if exc.file is None or key in ("columns", "directions", "units"):  # the study's option
+            raise top.source.error(exc.message, tuple((exc.field or "data").split("."))) from None
+        raise
+
+
+def _overrun_notes(overrun: dict[str, int]) -> list[str]:
+    """The readings of each direction left out as overrun arcs, in words."""
+    return [
+        f"{n} readings {d.upper()} outside the evaluated turn: read as the overrun arcs of "
+        "ISO 230-4 and left out of the evaluation"
+        for d, n in overrun.items()
+    ]
+
+
 def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[str, Any]]:
     """The model, inputs and limits of a measured trace (``data``; module docstring)."""
     from mtmc.circular import Ballbar, circular_model, identify, load_circular_csv
@@ -321,19 +359,14 @@ def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str
 
     path = top.table("path")
     assert path is not None
-    path.only(("plane", "radius", "feed"))
-    try:
-        trace = load_circular_csv(
-            top.source.resolve(top.text("data"), ("data",)),
-            columns=_mapping(top, "columns"),
-            units=top.text("units", "deg,um"),
-            directions=_mapping(top, "directions"),
-        )
-    except MtmcError as exc:
-        key = (exc.field or "").split(".")[0]
-        if exc.file is None or key in ("columns", "directions", "units"):  # the study's option
-            raise top.source.error(exc.message, tuple((exc.field or "data").split("."))) from None
-        raise
+    path.only(("plane", "radius", "feed", "overrun"))
+    overrun = path.number("overrun", None, low=0.0, high=360.0, open_high=True)
+    trace = _load(
+        top,
+        lambda f, **o: load_circular_csv(
+            f, directions=_mapping(top, "directions"), overrun=overrun, **o
+        ),
+    )
     des = design(
         radius=path.number("radius", low=0.0, open_low=True),
         theta_ccw=trace.theta_ccw,
@@ -364,6 +397,7 @@ def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str
         "data": trace.source,
         "identifiability": ident.identifiability.text(),
         "rms_um": 1e3 * float(ident.rms[0]),
+        "overrun": dict(trace.overrun),
     }
     return model, inputs, limits, units, plot
 
@@ -401,93 +435,205 @@ def measured_study_text(
 
 def _parameters(model: Any) -> tuple[str, ...]:
     """The outputs of a model that are the test's parameters (the rest: identified errors)."""
-    return tuple(getattr(model, "symbols", model.outputs[:3]))
+    return tuple(model.symbols)
 
 
 _ROTARY_KEYS = ("machine", "axis", "start", "stop", "steps", "hold", "ball")
+_ROTARY_BALLBAR_KEYS = (*_BALLBAR_KEYS, "length", "direction")
+
+
+def _vector(t: Fields, key: str, what: str, default: Any = None) -> Any:
+    """Three finite numbers ``[x, y, z]`` at ``key`` (``default`` when absent)."""
+    if default is not None and not t.has(key):
+        return np.asarray(default, dtype=np.float64)
+    v = t.data.get(key)
+    if (
+        not isinstance(v, list)
+        or len(v) != 3
+        or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
+        or not all(np.isfinite(float(x)) for x in v)
+    ):
+        raise t.error(f"expected {what} [x, y, z], got {v!r}", key)
+    return np.asarray(v, dtype=np.float64)
+
+
+def _rotary_instrument(top: Fields) -> tuple[dict[str, Any], str]:
+    """The keywords of :func:`mtmc.circular.rotary_model` for ``[rtest]`` or ``[ballbar]``."""
+    from mtmc.circular import Ballbar
+
+    rt = top.table("rtest", required=False)
+    bb = top.table("ballbar", required=False)
+    if rt is not None and bb is not None:
+        raise top.error("expected one instrument, [rtest] or [ballbar], got both", "ballbar")
+    if bb is not None:
+        return {
+            "ballbar": Ballbar(**_ballbar(top, _ROTARY_BALLBAR_KEYS)),
+            "direction": _vector(bb, "direction", "the bar's direction in the workpiece frame"),
+            "length": bb.number("length", low=0.0, open_low=True),
+        }, "ballbar"
+    out: dict[str, Any] = {"gain": 0.0, "noise": 0.0}
+    if rt is not None:
+        rt.only(("gain", "noise"))
+        if rt.has("gain"):
+            out["gain"] = read_distribution(rt, "gain")
+        out["noise"] = rt.number("noise", 0.0, low=0.0)
+    return out, "rtest"
 
 
 def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[str, Any]]:
-    """The model of an R-test of a rotary axis, the linear axes following (``[rotary]``).
+    """The model of a rotary-axis test, the linear axes following (``[rotary]``).
 
     ``[rotary]``: the machine's topology (``wCBXfYZt``), the rotary ``axis`` turned from
     ``start`` to ``stop`` (deg, ``steps`` positions), the other rotary axes held at
     ``hold`` (deg), the sphere at ``ball`` (mm, workpiece frame); ``[errors]`` by their
-    ISO 230-1 / 230-7 names (mm, rad); ``[rtest]``: ``gain`` (a PDF of each sensor's
-    relative gain error) and ``noise`` (mm); ``[identify] terms`` the errors identified.
+    ISO 230-1 / 230-7 names (mm, rad); the instrument: ``[rtest]`` with ``gain`` (a PDF of
+    each sensor's relative gain error) and ``noise`` (mm), or ``[ballbar]`` with its
+    ``length`` (mm) and ``direction`` in the workpiece frame beside the bar's PDFs;
+    ``[identify] terms`` the errors identified (default: those the test separates).
+
+    A measured test (``data``) reads the positions and readings from its CSV file
+    (:func:`mtmc.circular.load_rotary_csv`; no ``start``, ``stop``, ``steps`` or
+    ``[errors]``): the terms identified are ``[identify] terms`` or the axis' location
+    errors and the set-up's offset, and the noise, where the instrument gives none, the
+    residual scatter of the identification (Type A).
     """
-    from mtmc.circular import follow_positions, rotary_displacement, rotary_model
+    from mtmc.circular import load_rotary_csv, rotary_model
     from mtmc.kinematics import Machine
     from mtmc.verification.identify import parameter_unit
 
+    measured = top.has("data")
     rot = top.table("rotary")
     assert rot is not None
-    rot.only(_ROTARY_KEYS)
+    rot.only(_ROTARY_KEYS if not measured else ("machine", "axis", "hold", "ball"))
     topo = rot.text("machine")
     try:
         machine = Machine.from_topology(topo)
     except MtmcError as exc:
         raise rot.error(exc.message, "machine") from None
-    rotary = [a for a in machine.axes if a in "ABC"]
-    axis = rot.text("axis", choices=rotary)
-    steps = rot.integer("steps", 36, minimum=4, maximum=100_000)
-    angles = np.radians(
-        np.linspace(rot.number("start", 0.0), rot.number("stop", 360.0), steps, endpoint=False)
-    )
-    hold: dict[str, Any] = {a: 0.0 for a in rotary if a != axis}
+    axis = rot.text("axis", choices=[a for a in machine.axes if a in "ABC"])
+    point = _vector(rot, "ball", "the sphere's centre in mm")
+    kw, instrument = _rotary_instrument(top)
+    trace = None
+    if measured:
+        trace = _load(top, lambda f, **o: load_rotary_csv(f, instrument=instrument, **o))
+        angles = trace.angle
+    else:
+        steps = rot.integer("steps", 36, minimum=4, maximum=100_000)
+        angles = np.radians(
+            np.linspace(rot.number("start", 0.0), rot.number("stop", 360.0), steps, endpoint=False)
+        )
+    q = _follow(rot, machine, axis, angles, point)
+    ident = top.table("identify", required=False)
+    terms: tuple[str, ...] | None = None
+    if ident is not None:
+        ident.only(("terms",))
+        terms = tuple(ident.texts("terms"))
+    errors: dict[str, Any] | None = None
+    if measured:
+        names = terms or (
+            *(t for t in machine.error_names if t.endswith("0" + axis)),
+            "EXP",
+            "EYP",
+            "EZP",
+        )
+        where: Fields = ident or rot
+    else:
+        errs = top.table("errors")
+        assert errs is not None
+        names = tuple(errs.data)
+        errors = {k: read_distribution(errs, k) for k in names}
+        where = errs
+    try:
+        jac = machine.jacobian(q, None, names=list(names))
+    except MtmcError as exc:
+        raise where.error(exc.message, "terms" if where is ident else None) from None
+    if terms is not None:
+        for t in terms:
+            if t not in names:
+                raise ident.error(  # type: ignore[union-attr]
+                    f"unknown error {t!r}; expected some of {', '.join(names)}", "terms"
+                )
+    meas = None if trace is None else trace.readings
+    try:
+        model, inputs = rotary_model(jac, errors, names=names, identify=terms, measured=meas, **kw)
+        if meas is not None and kw.get("noise", getattr(kw.get("ballbar"), "noise", 0.0)) == 0.0:
+            rms = model.residual_rms(meas)  # the readings' own scatter (Type A)
+            kw = _with_noise(kw, rms)
+            model, inputs = rotary_model(
+                jac, errors, names=names, identify=terms, measured=meas, **kw
+            )
+    except MtmcError as exc:
+        raise (ident or top).error(exc.message, "terms" if ident else None) from None
+    limits = read_output_conformity(top, model.symbols)
+    units = {k: parameter_unit(machine, k) for k in names}
+    plot = _rotary_plot(topo, machine, axis, angles, point, q, kw, instrument, trace, errors)
+    plot["identifiability"] = model.identifiability.text()
+    if trace is not None:
+        plot["rms_um"] = 1e3 * model.residual_rms(trace.readings)
+    return model, inputs, limits, units, plot
+
+
+def _follow(rot: Fields, machine: Any, axis: str, angles: Any, point: Any) -> Any:
+    """The axis positions of the test: ``axis`` at ``angles``, the others at ``hold``."""
+    from mtmc.circular import follow_positions
+
+    hold: dict[str, Any] = {a: 0.0 for a in machine.axes if a in "ABC" and a != axis}
     ht = rot.table("hold", required=False)
     if ht is not None:
         ht.only(tuple(hold))
         for a in ht.data:
             hold[a] = np.radians(ht.number(a))
-    ball = rot.data.get("ball")
-    if (
-        not isinstance(ball, list)
-        or len(ball) != 3
-        or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in ball)
-    ):
-        raise rot.error(f"expected the sphere's centre [x, y, z] in mm, got {ball!r}", "ball")
-    point = np.asarray(ball, dtype=np.float64)
     try:
-        q = follow_positions(machine, {**hold, axis: angles}, point)
+        return follow_positions(machine, {**hold, axis: angles}, point)
     except MtmcError as exc:
         raise rot.error(exc.message, None) from None
-    errs = top.table("errors")
-    assert errs is not None
-    names = tuple(errs.data)
-    try:
-        jac = machine.jacobian(q, None, names=list(names))
-    except MtmcError as exc:
-        raise errs.error(exc.message, None) from None
-    errors = {k: read_distribution(errs, k) for k in names}
-    rt = top.table("rtest", required=False)
-    gain: Any = 0.0
-    noise = 0.0
-    if rt is not None:
-        rt.only(("gain", "noise"))
-        if rt.has("gain"):
-            gain = read_distribution(rt, "gain")
-        noise = rt.number("noise", 0.0, low=0.0)
-    ident = top.table("identify", required=False)
-    terms = names
-    if ident is not None:
-        ident.only(("terms",))
-        terms = ident.texts("terms")
-        for t in terms:
-            if t not in names:
-                raise ident.error(
-                    f"unknown error {t!r}; expected some of {', '.join(names)}", "terms"
-                )
-    model, inputs = rotary_model(jac, errors, identify=terms, gain=gain, noise=noise)
-    limits = read_output_conformity(top, model.outputs[:3])
-    units = {k: parameter_unit(machine, k) for k in names}
-    means = {k: float(np.mean(np.asarray(d.mean))) for k, d in errors.items()}
-    disp = 1e3 * rotary_displacement(machine, q, point, means)[0]
-    plot = {
-        "rotary": {"machine": topo, "axis": axis, "angle_deg": np.degrees(angles)},
-        "displacement_um": disp,
+
+
+def _rotary_plot(
+    topo: str,
+    machine: Any,
+    axis: str,
+    angles: Any,
+    point: Any,
+    q: Any,
+    kw: dict[str, Any],
+    instrument: str,
+    trace: Any,
+    errors: dict[str, Any] | None,
+) -> dict[str, Any]:
+    """``circular`` of ``result.json`` of a rotary test: the readings at the estimates."""
+    from mtmc.circular import rotary_ballbar, rotary_displacement
+
+    info: dict[str, Any] = {
+        "machine": topo,
+        "axis": axis,
+        "angle_deg": np.degrees(angles),
+        "instrument": instrument,
     }
-    return model, inputs, limits, units, plot
+    plot: dict[str, Any] = {"rotary": info}
+    if trace is not None:
+        plot["data"] = trace.source
+        reading = trace.readings
+    else:
+        means = {k: float(np.mean(np.asarray(d.mean))) for k, d in (errors or {}).items()}
+        if instrument == "rtest":
+            reading = rotary_displacement(machine, q, point, means)[0]
+        else:
+            reading = rotary_ballbar(machine, q, point, kw["direction"], kw["length"], means)[0]
+    plot["displacement_um" if instrument == "rtest" else "reading_um"] = 1e3 * np.asarray(reading)
+    if instrument == "ballbar":
+        info["direction"] = [float(x) for x in kw["direction"]]
+        info["length"] = float(kw["length"])
+    return plot
+
+
+def _with_noise(kw: dict[str, Any], rms: float) -> dict[str, Any]:
+    """The instrument's keywords with the noise of each reading set to ``rms``."""
+    from dataclasses import replace
+
+    if "ballbar" in kw:
+        return {**kw, "ballbar": replace(kw["ballbar"], noise=rms)}
+    return {**kw, "noise": rms}
 
 
 def _pair(t: Fields, key: str, default: Any) -> Any:
@@ -527,13 +673,18 @@ def read_circular_study(top: Fields) -> CircularStudy:
         )
     )
     settings = RunSettings.read(top, default_trials=10_000)
-    if top.has("data"):
-        for key in ("errors", "rotary", "rtest", "identify"):
+    if top.has("data") and top.has("errors"):
+        raise top.error("a measured test (data) identifies the errors: no [errors]", "errors")
+    if top.has("rotary"):
+        for key in ("path", "directions"):
             if top.has(key):
-                raise top.error(f"a measured trace (data) identifies the errors: no [{key}]", key)
-        read = _read_measured
-    elif top.has("rotary"):
+                raise top.error(f"a rotary-axis test ([rotary]) has no {key}", key)
         read = _read_rotary
+    elif top.has("data"):
+        for key in ("rtest", "identify"):
+            if top.has(key):
+                raise top.error(f"a measured circular trace (data) has no [{key}]", key)
+        read = _read_measured
     else:
         read = _read
     model, inputs, limits, units, plot = read(top)
