@@ -18,7 +18,9 @@ in well under a minute, the five-axis story as study files (the package's copies
    et al. 2017, its identified error functions and calibration uncertainty (kind
    ``verification``);
 7. ``wang2022``: the fiducial artefact of Wang, Cheung and Kong (2022), its setup errors
-   and volumetric errors at nine rotary poses (kind ``artefact``).
+   and volumetric errors at nine rotary poses (kind ``artefact``);
+8. ``circle_xy`` and ``circle_c_axis``: an ISO 230-4 circular test in XY and the C-axis
+   R-test of a five-axis machine, each a whole test a trial (kind ``circular``).
 
 Each study writes its result folder (``result.json``, CSV tables, ``provenance.json``,
 ``report.html``) under the output folder, and ``index.html`` links the reports. There is
@@ -50,6 +52,8 @@ STUDIES: tuple[str, ...] = (
     "five_axis.toml",
     "aguado2017.toml",
     "wang2022.toml",
+    "circle_xy.toml",
+    "circle_c_axis.toml",
 )
 
 

@@ -23,6 +23,7 @@ from mtmc.circular import (
     rotary_model,
     separable_terms,
 )
+from mtmc.demo import study_path
 from mtmc.errors import IdentifiabilityError, InputError
 from mtmc.kinematics import Machine
 from mtmc.study import load_study, loads_study, write_result
@@ -273,3 +274,34 @@ def test_an_unseparable_choice_and_bad_rows_are_refused(tmp_path: Path):
         loads_rotary_csv("angle,deviation\n0,1\n10,1\n", instrument="ballbar")
     with pytest.raises(InputError, match=r"r.csv:3: field dz"):
         loads_rotary_csv("angle,dx,dy,dz\n0,1,2,3\n10,1,2,x\n", "r.csv")
+
+
+def test_circle_evaluate_takes_a_rotary_study_and_the_overrun(tmp_path: Path, capsys):
+    from mtmc.cli.main import main
+
+    (tmp_path / "rtest.csv").write_text(_rtest_csv(np.random.default_rng(6), 2e-4), "utf-8")
+    # the shipped C-axis study, simulated, now the template of the measured test: its
+    # machine, sphere, R-test and limits; its [errors] and positions give way to the file's
+    study = study_path("circle_c_axis.toml")
+    argv = ["circle", "evaluate", str(tmp_path / "rtest.csv"), "--study", str(study), "--json"]
+    argv += ["-n", "500"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert list(out["parameters"]) == ["range_x", "range_y", "range_z"]
+    assert out["errors"]["EX0C"]["estimate"] == pytest.approx(10.0, abs=0.5)
+    assert out["errors"]["EA0C"]["unit"] == "µrad"
+    assert out["parameters"]["range_z"]["conformity"]["upper"] == 20.0
+    assert main([*argv, "--radius", "100"]) == 2
+    assert "a rotary-axis test ([rotary] in" in capsys.readouterr().err
+    # an ISO 230-4 trace with 20° of overrun before its turn and none after
+    deg = np.arange(-20.0, 360.0, 2.0)
+    dev = 3 * np.cos(np.radians(deg))
+    rows = "\n".join(f"{a:g},ccw,{d:.9f}" for a, d in zip(deg, dev, strict=True))
+    (tmp_path / "t.csv").write_text(f"angle,direction,deviation\n{rows}\n", encoding="utf-8")
+    base = ["circle", "evaluate", str(tmp_path / "t.csv"), "--radius", "150", "-n", "200"]
+    assert main([*base, "--overrun", "20", "--json", "-o", str(tmp_path / "r")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert "10 readings CCW outside the evaluated turn" in out["notes"][-1]
+    # the centre offset of 3 µm along x, the first harmonic of the trace
+    assert out["errors"]["centre_x"]["estimate"] == pytest.approx(3.0, abs=1e-6)
+    assert "overrun = 20.0" in (tmp_path / "r" / "study.toml").read_text(encoding="utf-8")

@@ -77,15 +77,29 @@ def _measured_study(
         return loads_study(text, file=f"{data.name} (circle evaluate)", folder=Path.cwd())
     load_study_of_kind(study_file, "circular")  # the file checked: its errors name its lines
     doc = tomlkit.parse(read_text(study_file, "study"))
-    for key in ("errors", "identify", "rotary", "rtest"):
-        doc.pop(key, None)  # the trace's errors are identified from it
+    doc.pop("errors", None)  # the test's errors are identified from DATA
     doc["data"] = str(data.resolve())
     for key, value in overrides.items():
         if value is not None:
             doc[key] = value
+    if "rotary" in doc:  # a rotary-axis test: its positions are the file's
+        rotary = doc["rotary"]
+        for key in ("start", "stop", "steps"):
+            rotary.pop(key, None)
+        doc.pop("directions", None)
+        bad = [k for k, v in path.items() if v is not None]
+        if bad:
+            raise InputError(
+                f"a rotary-axis test ([rotary] in {study_file}) has no --{bad[0]}", field=bad[0]
+            )
+        return loads_study(
+            tomlkit.dumps(doc), file=str(study_file), folder=study_file.resolve().parent
+        )
+    for key in ("identify", "rtest"):
+        doc.pop(key, None)
     table = doc.setdefault("path", tomlkit.table())
     for key in list(table):
-        if key not in ("plane", "radius", "feed"):
+        if key not in ("plane", "radius", "feed", "overrun"):
             del table[key]  # the programmed path is the file's
     for key, value in path.items():
         if value is not None:
@@ -97,7 +111,11 @@ def _measured_study(
 @app.command("evaluate")
 def evaluate_cmd(
     ctx: typer.Context,
-    data: Path = typer.Argument(..., help="CSV file: angle,direction,deviation per row."),
+    data: Path = typer.Argument(
+        ...,
+        help="CSV file: angle,direction,deviation per row (with --study of a rotary-axis "
+        "test: angle,dx,dy,dz or angle,deviation).",
+    ),
     study_file: Path | None = typer.Option(
         None,
         "--study",
@@ -105,6 +123,12 @@ def evaluate_cmd(
         "and [run] apply to DATA (its [errors] are identified from DATA instead).",
     ),
     radius: float | None = typer.Option(None, "--radius", help="Nominal radius R, mm."),
+    overrun: float | None = typer.Option(
+        None,
+        "--overrun",
+        help="The overrun arc before the evaluated turn, deg (default: equal arcs at the two "
+        "ends of a path longer than one turn).",
+    ),
     feed: float | None = typer.Option(None, "--feed", help="Feed, mm/min (default 1000)."),
     plane: str | None = typer.Option(None, "--plane", help="XY, YZ or ZX (default XY)."),
     units: str | None = typer.Option(
@@ -128,7 +152,6 @@ def evaluate_cmd(
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Evaluate DATA: F, G (LSC, MZ), H, G(b) and the identified errors, each with U."""
-    from mtmc.circular.parameters import SYMBOLS
     from mtmc.cli.run import command_line, run_study
 
     try:
@@ -137,10 +160,11 @@ def evaluate_cmd(
             "columns": parse_columns(columns),
             "directions": _directions(directions),
         }
-        path = {"radius": radius, "plane": plane, "feed": feed}
+        path = {"radius": radius, "plane": plane, "feed": feed, "overrun": overrun}
         if study_file is None:
             overrides = {k: v for k, v in overrides.items() if v is not None}
             path = {k: v for k, v in path.items() if v is not None or k == "radius"}
+            path.setdefault("overrun", None)
         s = _measured_study(data, study_file, overrides, path)
         result = run_study(
             s,
@@ -159,7 +183,7 @@ def evaluate_cmd(
     circ = result.extra["circular"]
     out: dict[str, Any] = {"parameters": {}, "errors": {}}
     for q in result.quantities:
-        group = "parameters" if q.name in SYMBOLS else "errors"
+        group = "parameters" if q.name in circ["symbols"] else "errors"
         out[group][q.name] = {
             "estimate": q.mc.estimate if q.gum is None else q.gum.estimate,
             "U": q.mc.U,

@@ -38,8 +38,9 @@ PDF or a value, and the ballbar::
 
 A measured trace is evaluated by the same kind: ``data`` names its CSV file (read by
 :func:`mtmc.circular.load_circular_csv`, with ``units``, ``columns`` and ``directions``
-as ``mtmc circle evaluate`` has them), ``[path]`` gives ``radius``, ``plane`` and
-``feed``, and there is no ``[errors]``: the model's errors are identified from the trace,
+as ``mtmc circle evaluate`` has them), ``[path]`` gives ``radius``, ``plane``, ``feed``
+and ``overrun`` (the arc before the evaluated turn, deg: :mod:`mtmc.circular.data`),
+and there is no ``[errors]``: the model's errors are identified from the trace,
 and the noise of each reading is the ballbar's ``noise``, or, where it gives none, the
 residual scatter of the identification (a Type A evaluation of the trace)::
 
@@ -408,6 +409,7 @@ def measured_study_text(
     radius: float,
     plane: str = "XY",
     feed: float = 1000.0,
+    overrun: float | None = None,
     units: str = "deg,um",
     columns: dict[str, str] | None = None,
     directions: dict[str, str] | None = None,
@@ -427,6 +429,8 @@ def measured_study_text(
     if directions:
         doc["directions"] = directions
     doc["path"] = {"plane": plane, "radius": float(radius), "feed": float(feed)}
+    if overrun is not None:
+        doc["path"]["overrun"] = float(overrun)
     run = {k: v for k, v in (("trials", trials), ("seed", seed)) if v is not None}
     if run:
         doc["run"] = run
