@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -95,3 +96,44 @@ def test_artefact_simulate_runs_the_study_as_run_does_and_writes_its_folder(
     assert by_name["setup.dpx"]["u"] == pytest.approx(got["setup_errors"]["dpx"]["u"], rel=1e-14)
     assert main([*argv[:-1], "--no-gum"]) == 2
     assert "not with --no-gum" in capsys.readouterr().err
+
+
+def _trace(tmp_path: Path) -> Path:
+    """A circular trace of 36 points a direction: a centre offset of 2 µm along x."""
+    rows = [
+        f"{a},{d},{2 * math.cos(math.radians(a)):.6f}"
+        for d in ("ccw", "cw")
+        for a in range(0, 360, 10)
+    ]
+    p = tmp_path / "trace.csv"
+    p.write_text("angle,direction,deviation\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    return p
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["circle", "simulate", "examples/studies/circle_c_axis.toml"],
+        ["circle", "evaluate", "TRACE", "--radius", "150"],
+        [
+            "positioning",
+            "evaluate",
+            "examples/studies/positioning_x.csv",
+            "--study",
+            "examples/studies/positioning_x.toml",
+        ],
+        ["artefact", "simulate", "examples/studies/wang2022.toml"],
+    ],
+    ids=lambda a: " ".join(a[:2]),
+)
+def test_every_study_command_takes_quiet(
+    argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """-q means what it means to mtmc run: no table, no bar; the trials, seed and report."""
+    argv = [str(_trace(tmp_path)) if a == "TRACE" else a for a in argv]
+    argv = [str(ROOT / a) if a.startswith("examples/") else a for a in argv]
+    out_dir = tmp_path / "r"
+    assert main([*argv, "-n", "40", "-s", "3", "-o", str(out_dir), "-q", "--progress"]) == 0
+    out, err = capsys.readouterr()
+    assert out.splitlines() == ["trials 40  seed 3", f"report: {out_dir / 'report.html'}"]
+    assert "trials" not in err  # -q turns the bar off, --progress or not

@@ -19,18 +19,18 @@ from rich.table import Table
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     PROGRESS_OPTION,
+    QUIET_OPTION,
     RESULT_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
-    nan_policy,
-    parallel_options,
     print_json,
+    print_trials_seed,
     seed_option,
     with_u,
 )
-from mtmc.cli.run import command_line, run_study
+from mtmc.cli.run import run_with_options
 from mtmc.cli.run_options import (
     ADAPTIVE_OPTION,
     RUN_NAN_POLICY_OPTION,
@@ -92,6 +92,7 @@ def simulate_cmd(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
@@ -104,17 +105,20 @@ def simulate_cmd(
     try:
         kind = load_study_of_kind(study, "artefact")  # the study as ``mtmc run`` reads it
         kind = dataclasses.replace(kind, noise=noise, gum=not no_gum, on_simulated=simulated.append)
-        result = run_study(
+        result = run_with_options(
+            ctx,
             kind,
             outdir,
-            label=study.name,
+            study.name,
             trials=trials,
             seed=seed,
             progress=progress,
-            argv=command_line(ctx),
-            parallel=parallel_options(workers, executor, scheduler),
-            adaptive=True if adaptive else None,
-            nan_policy=None if nan is None else nan_policy(nan),
+            quiet=quiet,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            adaptive=adaptive,
+            nan=nan,
         )
         res = simulated[0]
         if figure is not None:
@@ -143,6 +147,11 @@ def simulate_cmd(
                 "output": output,
             }
         )
+        return
+    if quiet:
+        print_trials_seed(result.trials, result.seed)
+        if outdir is not None:
+            typer.echo(f"report: {outdir / 'report.html'}")
         return
     con = Console()
     t = Table(

@@ -19,12 +19,11 @@ from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
     PROGRESS_OPTION,
+    QUIET_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
-    nan_policy,
-    parallel_options,
     print_json,
     print_trials_seed,
     seed_option,
@@ -148,11 +147,12 @@ def evaluate_cmd(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Evaluate DATA: F, G (LSC, MZ), H, G(b) and the identified errors, each with U."""
-    from mtmc.cli.run import command_line, run_study
+    from mtmc.cli.run import run_with_options
 
     try:
         overrides = {
@@ -166,17 +166,20 @@ def evaluate_cmd(
             path = {k: v for k, v in path.items() if v is not None or k == "radius"}
             path.setdefault("overrun", None)
         s = _measured_study(data, study_file, overrides, path)
-        result = run_study(
+        result = run_with_options(
+            ctx,
             s,
             outdir,
-            label=data.name,
+            data.name,
             trials=trials,
             seed=seed,
             progress=progress,
-            argv=command_line(ctx),
-            parallel=parallel_options(workers, executor, scheduler),
-            adaptive=True if adaptive else None,
-            nan_policy=None if nan is None else nan_policy(nan),
+            quiet=quiet,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            adaptive=adaptive,
+            nan=nan,
         )
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))
@@ -200,6 +203,11 @@ def evaluate_cmd(
     out["seed"] = result.seed
     if as_json:
         print_json(out)
+        return
+    if quiet:
+        print_trials_seed(result.trials, result.seed)
+        if outdir is not None:
+            typer.echo(f"report: {outdir / 'report.html'}")
         return
     table = Table(title=f"{data.name}: circular test ({result.trials} trials)")
     for col in ("quantity", "estimate", "U (MC, 95 %)", "U (GUM, 95 %)", "unit", "GUM §8"):
@@ -236,24 +244,28 @@ def simulate_cmd(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Simulate STUDY as mtmc run does: the parameters and the identified errors with U."""
-    from mtmc.cli.run import command_line, run_study
+    from mtmc.cli.run import run_with_options
 
     try:
-        result = run_study(
+        result = run_with_options(
+            ctx,
             load_study_of_kind(study, "circular"),
             outdir,
-            label=study.name,
+            study.name,
             trials=trials,
             seed=seed,
             progress=progress,
-            argv=command_line(ctx),
-            parallel=parallel_options(workers, executor, scheduler),
-            adaptive=True if adaptive else None,
-            nan_policy=None if nan is None else nan_policy(nan),
+            quiet=quiet,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            adaptive=adaptive,
+            nan=nan,
         )
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))
@@ -275,6 +287,11 @@ def simulate_cmd(
     }
     if as_json:
         print_json(out)
+        return
+    if quiet:
+        print_trials_seed(result.trials, result.seed)
+        if outdir is not None:
+            typer.echo(f"report: {outdir / 'report.html'}")
         return
     table = Table(title=f"{result.title} ({result.trials} trials)")
     for col in ("quantity", "estimate", "U (MC)", "U (GUM)", "unit", "GUM §8"):

@@ -22,13 +22,13 @@ from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
     PROGRESS_OPTION,
+    QUIET_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
-    nan_policy,
-    parallel_options,
     print_json,
+    print_trials_seed,
     seed_option,
 )
 from mtmc.cli.run_options import (
@@ -128,28 +128,32 @@ def evaluate_cmd(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
 ) -> None:
     """Evaluate DATA: the parameters of ISO 230-2, each with U by Monte Carlo and the GUM."""
-    from mtmc.cli.run import command_line, run_study
+    from mtmc.cli.run import run_with_options
     from mtmc.positioning import pitch_compensation
     from mtmc.study.positioning import summary
     from mtmc.verification.compensation import dump_compensation
 
     try:
         s = _study(data, study_file, units, parse_columns(columns), axis, type_a, directions)
-        result = run_study(
+        result = run_with_options(
+            ctx,
             s,
             outdir,
-            label=data.name,
+            data.name,
             trials=trials,
             seed=seed,
             progress=progress,
-            argv=command_line(ctx),
-            parallel=parallel_options(workers, executor, scheduler),
-            adaptive=True if adaptive else None,
-            nan_policy=None if nan is None else nan_policy(nan),
+            quiet=quiet,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            adaptive=adaptive,
+            nan=nan,
         )
         if compensation is not None:
             dump_compensation(pitch_compensation(s.test, s.axis, sign=sign), compensation, fmt)
@@ -159,7 +163,10 @@ def evaluate_cmd(
     if as_json:
         print_json(out)
         return
-    _print(result, out)
+    if quiet:
+        print_trials_seed(result.trials, result.seed)
+    else:
+        _print(result, out)
     if compensation is not None:
         typer.echo(f"compensation table: {compensation}")
     if outdir is not None:

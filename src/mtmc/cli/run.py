@@ -196,6 +196,42 @@ def run_study(
     return result
 
 
+def run_with_options(
+    ctx: typer.Context,
+    study: Any,
+    outdir: Path | None,
+    label: str,
+    *,
+    trials: int | None,
+    seed: int | None,
+    progress: bool | None,
+    quiet: bool,
+    workers: int,
+    executor: str,
+    scheduler: str | None,
+    adaptive: bool,
+    nan: str | None,
+) -> Any:
+    """:func:`run_study` with the shared options as typer gives them.
+
+    The one reading of ``-q``, ``-w``, ``--executor``, ``--scheduler``, ``--adaptive`` and
+    ``--nan-policy`` for the commands that run a study they build or load (``circle
+    simulate``, ``circle evaluate``, ``positioning evaluate``, ``artefact simulate``).
+    """
+    return run_study(
+        study,
+        outdir,
+        label=label,
+        trials=trials,
+        seed=seed,
+        progress=progress_flag(progress, quiet),
+        argv=command_line(ctx),
+        parallel=parallel_options(workers, executor, scheduler),
+        adaptive=True if adaptive else None,
+        nan_policy=None if nan is None else nan_policy(nan),
+    )
+
+
 def run_study_file(
     study: Path,
     outdir: Path,
