@@ -23,7 +23,7 @@ SRC = ROOT / "src" / "mtmc"
 #: The names of each shared rule and the one module that defines them.
 HOMES: dict[str, tuple[str, ...]] = {
     "uncertainty/conformity.py": ("conformity", "Conformity"),
-    "uncertainty/results.py": ("expanded_uncertainty", "coverage_factor"),
+    "uncertainty/results.py": ("expanded_uncertainty", "coverage_factor", "Histogram"),
     "uncertainty/gum.py": ("output_pdf",),
     "graph/values.py": ("normal_plane_parts",),
     "graph/ops.py": ("accepts_prefix", "max_inputs"),

@@ -30,7 +30,7 @@ from mtmc.report.folder import RESULT_FORMAT  # the ``format`` of result.json: i
 from mtmc.study.options import unsupported_option
 from mtmc.study.settings import RunSettings
 from mtmc.uncertainty.gum import GumResult, endpoint_std_error, one_value, validate
-from mtmc.uncertainty.results import IntervalKind, MonteCarloResult
+from mtmc.uncertainty.results import Histogram, IntervalKind, MonteCarloResult
 from mtmc.uncertainty.sampling import resolve_seed
 from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
 
@@ -325,35 +325,6 @@ class _ArrayFields:
         return _same_fields(self, other)
 
     __hash__ = None  # type: ignore[assignment]
-
-
-@dataclass(frozen=True, eq=False)
-class Histogram(_ArrayFields):
-    """The histogram of the Monte Carlo values of a quantity.
-
-    Attributes
-    ----------
-    edges : ndarray
-        The bin edges (read-only float64; empty where ``u = 0``).
-    density : ndarray
-        The probability density of each bin (read-only float64; empty where ``u = 0``).
-    """
-
-    edges: NDArray[np.float64]
-    density: NDArray[np.float64]
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "edges", frozen_floats(self.edges))
-        object.__setattr__(self, "density", frozen_floats(self.density))
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready form (``histogram`` of a quantity)."""
-        return _plain_dict({"edges": self.edges, "density": self.density})
-
-    @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> Histogram:
-        """The histogram that :meth:`to_dict` wrote."""
-        return cls(edges=d["edges"], density=d["density"])
 
 
 @dataclass(frozen=True, eq=False)

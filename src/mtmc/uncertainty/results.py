@@ -176,23 +176,66 @@ def require_trials(m: int, p: float) -> None:
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Histogram:
-    """Histogram data of a scalar output: bin edges, counts and density.
+    """Histogram data of a scalar output: bin edges, density and counts (arrays read-only).
+
+    The one histogram type: :meth:`MonteCarloResult.histogram` makes it, a study's
+    quantity keeps it (``histogram`` of ``result.json``: the edges and the density) and
+    the report draws it.
 
     Attributes
     ----------
     edges : ndarray, shape (nbins + 1,)
-        Bin edges, in the unit of the output.
-    counts : ndarray of int, shape (nbins,)
-        Values per bin.
+        Bin edges, in the unit of the output (empty where the values are one value).
     density : ndarray, shape (nbins,)
         ``counts / (M · width)``: an estimate of the PDF of the output.
+    counts : ndarray of int, shape (nbins,), or None
+        Values per bin; None where only the density is kept (a study's quantity, a
+        histogram read back from ``result.json``).
     """
 
     edges: NDArray[np.float64]
-    counts: NDArray[np.int64]
     density: NDArray[np.float64]
+    counts: NDArray[np.int64] | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("edges", "density"):
+            a = np.array(getattr(self, name), dtype=np.float64)
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+        if self.counts is not None:
+            c = np.array(self.counts, dtype=np.int64)
+            c.setflags(write=False)
+            object.__setattr__(self, "counts", c)
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        assert isinstance(other, Histogram)
+        same = np.array_equal(self.edges, other.edges) and np.array_equal(
+            self.density, other.density
+        )
+        if self.counts is None or other.counts is None:
+            return same and self.counts is other.counts
+        return same and np.array_equal(self.counts, other.counts)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (``histogram`` of a quantity): the edges and the density."""
+        return {
+            name: [float(x) if math.isfinite(x) else None for x in getattr(self, name).tolist()]
+            for name in ("edges", "density")
+        }
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> Histogram:
+        """The histogram that :meth:`to_dict` wrote."""
+        return cls(
+            edges=np.array(d["edges"], dtype=np.float64),
+            density=np.array(d["density"], dtype=np.float64),
+        )
 
 
 @dataclass(frozen=True)
