@@ -176,6 +176,25 @@ def require_trials(m: int, p: float) -> None:
         )
 
 
+def _constant_rows(xt: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Which rows of ``xt`` ``(d, n)`` hold one value ``n`` times (NaN never counts as one)."""
+    if xt.shape[1] == 0:
+        return np.zeros(xt.shape[0], dtype=bool)
+    return np.asarray((xt == xt[:, :1]).all(axis=1), dtype=bool)
+
+
+def _exact_constants(xt: NDArray[np.float64], mean: NDArray[np.float64]) -> None:
+    """Set ``mean`` (in place) to the value itself where a row of ``xt`` is one value.
+
+    The sum of ``n`` copies of ``c`` divided by ``n`` can miss ``c`` by an ulp
+    (``(0.1 + 0.1 + 0.1) / 3``); the deviations from it would then give a constant a
+    ``u`` of 1e-17 instead of 0. A constant's mean is the constant, and its ``u`` 0.
+    """
+    const = _constant_rows(xt)
+    if const.any():
+        mean[const] = xt[const, 0]
+
+
 @dataclass(frozen=True, eq=False)
 class Histogram:
     """Histogram data of a scalar output: bin edges, density and counts (arrays read-only).
@@ -464,6 +483,7 @@ class Moments:
             return cls._new(n, both.mean[0], both.m2[0])
         mean = np.add.reduce(xt, axis=1)  # = xt.mean(axis=1), bit for bit
         mean /= n
+        _exact_constants(xt, mean)
         dev = xt - mean[:, None]
         if d <= MAX_COV_DIM:
             m2 = dev @ dev.T
@@ -504,6 +524,7 @@ class Moments:
         mean = sums / n
         dev = np.empty((p, d, n))
         for i, x in enumerate(xts):
+            _exact_constants(x, mean[i])
             np.subtract(x, mean[i][:, None], out=dev[i])
         m2 = np.empty((p, d, d))
         flat = m2.reshape(p, d * d)
@@ -740,6 +761,7 @@ class MonteCarloResult:
             mean = np.array(self.moments.mean)
         else:
             mean = np.atleast_1d(self.samples.mean(axis=0))
+            _exact_constants(np.atleast_2d(self.samples.T), mean)
         mean.setflags(write=False)
         return mean
 
@@ -756,6 +778,7 @@ class MonteCarloResult:
             sd = np.sqrt(np.clip(np.diag(c) if c.ndim == 2 else c, 0.0, None))
         else:
             sd = np.atleast_1d(self.samples.std(axis=0, ddof=1))
+            sd[_constant_rows(np.atleast_2d(self.samples.T))] = 0.0
         sd.setflags(write=False)
         return sd
 
