@@ -260,6 +260,19 @@ def test_a_study_without_input_rows_points_to_its_file_in_the_folder(tmp_path):
     assert "<code>study.toml</code> of this result folder" in page
     assert "in the provenance" not in page
     assert (folder / "study.toml").read_text(encoding="utf-8") == study.source.text
+    # the summary says why its GUM columns are empty, and marks, where it stands, each u
+    # that has not settled over the last half of the trials (JCGM 101 §7.9.2)
+    summary = page[page.index('<section id="summary">') :]
+    summary = summary[: summary.index("</section>")]
+    assert "— in the GUM columns: the volumetric errors are the largest" in summary
+    for i, q in enumerate(doc["quantities"]):
+        cv = q["convergence"]
+        mark = f'data-key="quantities[{i}].monte_carlo.u" data-value="{q["monte_carlo"]["u"]!r}">'
+        cell = summary[summary.index(mark) :].split("</td>", 1)[0]
+        assert ("not settled" in cell) == (cv["last_half"]["u"] > cv["delta"]), q["name"]
+    assert any(
+        q["convergence"]["last_half"]["u"] > q["convergence"]["delta"] for q in doc["quantities"]
+    )
 
 
 def test_the_histogram_draws_the_pdf_the_gum_interval_is_of():
