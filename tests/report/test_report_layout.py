@@ -170,6 +170,15 @@ def test_the_verification_and_artefact_results_list_their_inputs(artefact, verif
         page = (folder / "report.html").read_text(encoding="utf-8")
         assert "The study names its inputs in its file" not in page
         assert 'data-key="inputs[0].u"' in page
+    # the identified setup errors differ from the injected ones (dpx 1 µm, identified
+    # about -3.1 µm): the report says why where the table stands
+    doc = json.loads((artefact / "result.json").read_text(encoding="utf-8"))
+    setup = next(t for t in doc["tables"] if t["name"] == "setup_errors")
+    dpx = next(r for r in setup["rows"] if r[0] == "dpx")
+    assert dpx[1] == pytest.approx(1.0)
+    assert dpx[2] == pytest.approx(-3.13, abs=0.01)  # noise-free, docs/artefact.md
+    page = (artefact / "report.html").read_text(encoding="utf-8")
+    assert "They are not the injected ones where the machine has errors" in page
 
 
 # ---------------------------------------------------------------------------------------

@@ -103,7 +103,10 @@ class ArtefactKindStudy(Study):
             Table("poses", "Distance errors per pose (Table 2)", tuple(cols), tuple(rows)),
             Table(
                 "setup_errors",
-                "Identified setup errors (eq. 18)",
+                "Identified setup errors (eq. 18). They are not the injected ones where the "
+                "machine has errors: the fiducials' setup errors take up the mean of the "
+                "volumetric errors over the poses, the probe's the part common to all balls; "
+                "with no machine error the injected values come back (docs/artefact.md)",
                 (
                     "error",
                     "injected / µm",
