@@ -314,3 +314,23 @@ def test_the_histogram_draws_lengths_in_the_studys_unit_about_the_estimate():
     assert ticks
     assert max(abs(t) for t in ticks) <= 10.0
     assert max(abs(t) for t in ticks) >= 4.0
+
+
+def test_the_budget_gives_the_unit_of_each_sensitivity_coefficient():
+    # c = ∂y/∂x has the unit of y over that of x: mg/mg is 1, mg over kg/m³ is
+    # mg/(kg/m³); the air-buoyancy inputs' c are 0 or the rounding of the estimates
+    # (ρ_a's estimate (1.1 + 1.3)/2 is 1.2000000000000002, one ulp from 1.2, so
+    # c(ρ_w) = 1e5 mg · 2.2e-16 / (8000 kg/m³)² ≈ 3.5e-19), and the text says so
+    study = load_study(STUDIES / "mass_calibration.toml")
+    page = html(study.run(trials=2000, seed=1).to_dict())
+    budget = page[page.index("Uncertainty budget (JCGM 100 §5.1.3)") :]
+    budget = budget[: budget.index("</table>")]
+    assert "<th>unit of c</th>" in budget
+    cells = {
+        name: re.findall(r"<td>([^<]*)</td>", row)
+        for name, row in re.findall(r"<tr><td>(\w+)</td>(.*?)</tr>", budget)
+    }
+    assert cells["m_rc"] == ["mg", "1"]
+    assert cells["rho_a"] == ["kg/m³", "mg/(kg/m³)"]
+    assert "or no more than the rounding of the estimates (|c| u(x) below 10⁻⁶ u(y))" in page
+    assert 1.2 != 0.5 * (1.1 + 1.3)  # the premise of the rounding
