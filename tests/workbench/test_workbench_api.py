@@ -8,6 +8,7 @@ import difflib
 import json
 import shutil
 import subprocess
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -636,3 +637,32 @@ def test_the_summary_gives_the_coverage_ellipsoid_of_a_point(ball):
     assert region["k"] == pytest.approx(k, abs=1e-3)
     # through an eigendecomposition: to the conditioning of the covariance (κ ≈ 2 here)
     np.testing.assert_allclose(region["semi_axes_value"], want, rtol=1e-9)
+
+
+def test_a_key_added_to_a_table_goes_above_the_comment_of_the_next():
+    """A position added on save goes into its own table, above the comment lines that
+    introduce the next table (it went below them, where it read as the next table's)."""
+    text = (
+        'title = "t"\n'
+        "[[place]]\n"
+        'name = "a"\n'
+        'type = "real"\n'
+        "value = 1.0\n"
+        "\n"
+        "# --- the second place: b, the one this comment is about\n"
+        "[[place]]\n"
+        'name = "b"\n'
+        'type = "real"\n'
+        "value = 2.0\n"
+    )
+    doc = GraphDocument(text, "g.toml")
+    view = copy.deepcopy(doc.view)
+    view["places"][0]["pos"] = [10.0, 20.0]
+    out = doc.render(view)
+    first, second = out.split("# --- the second place", 1)
+    assert "pos = [10.0, 20.0]" in first
+    assert "pos" not in second
+    # nothing else moved: the one line added
+    added = [ln for ln in difflib.ndiff(text.splitlines(), out.splitlines()) if ln[0] in "+-"]
+    assert added == ["+ pos = [10.0, 20.0]"]
+    assert tomllib.loads(out)["place"][0]["pos"] == [10.0, 20.0]

@@ -347,12 +347,28 @@ def _edit(text: str, path: tuple[str | int, ...], old: dict[str, Any], new: dict
     """One table's piece with the keys that changed set (in its own tomlkit tree)."""
     if all(k in new and _same(old[k], new[k]) for k in old) and set(new) <= set(old):
         return text
-    doc = tomlkit.parse(text)
+    body, trailer = _trailer(text)
+    doc = tomlkit.parse(body)
     table: Any = doc[str(path[0])]
     if len(path) > 1:
         table = table[0]
     _update(table, old, new)
-    return doc.as_string()
+    out = doc.as_string()
+    return out + trailer if not trailer or out.endswith("\n") else out + "\n" + trailer
+
+
+def _trailer(text: str) -> tuple[str, str]:
+    """A piece cut before the comment and blank lines that end it.
+
+    Those lines introduce the next table (``# the probe's offset`` above ``[[place]]``): a
+    key added to this table goes above them, not below, where it would read as the next
+    table's.
+    """
+    lines = text.splitlines(keepends=True)
+    cut = len(lines)
+    while cut > 0 and (not lines[cut - 1].strip() or lines[cut - 1].lstrip().startswith("#")):
+        cut -= 1
+    return "".join(lines[:cut]), "".join(lines[cut:])
 
 
 def _edit_top(text: str, base: dict[str, Any], view: dict[str, Any]) -> str:
