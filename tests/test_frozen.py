@@ -14,7 +14,7 @@ from mtmc.graph.structure import LENGTH_UNITS
 from mtmc.kinematics import Machine
 from mtmc.kinematics.topology import AXIS_DIRECTION
 from mtmc.uncertainty import Normal, gum
-from mtmc.uncertainty.expression import ALLOWED_CONSTANTS, ALLOWED_FUNCTIONS
+from mtmc.uncertainty.formula import ALLOWED_CONSTANTS, ALLOWED_FUNCTIONS
 
 
 def _writes_refused(*arrays: np.ndarray) -> None:

@@ -40,7 +40,7 @@ def test_import_leaves_heavy_modules_unimported(code):
 
 def test_heavy_module_is_imported_when_used():
     # the probe sees a module that is imported: the check above can fail
-    code = "from mtmc.uncertainty.gum import coverage_factor\ncoverage_factor(0.95, 10)"
+    code = "from mtmc.uncertainty.propagation import coverage_factor\ncoverage_factor(0.95, 10)"
     loaded = _loaded_after(code)
     assert "scipy.stats" in loaded
     assert "sympy" not in loaded

@@ -22,9 +22,9 @@ SRC = ROOT / "src" / "mtmc"
 
 #: The names of each shared rule and the one module that defines them.
 HOMES: dict[str, tuple[str, ...]] = {
-    "uncertainty/conformity.py": ("conformity", "Conformity"),
+    "uncertainty/decision.py": ("conformity", "Conformity"),
     "uncertainty/results.py": ("expanded_uncertainty", "coverage_factor", "Histogram"),
-    "uncertainty/gum.py": ("output_pdf",),
+    "uncertainty/propagation.py": ("output_pdf",),
     "graph/values.py": ("normal_plane_parts",),
     "graph/ops.py": ("accepts_prefix", "max_inputs"),
     "instruments/laser_tracker.py": ("u_spherical",),
@@ -67,3 +67,23 @@ def test_the_architecture_guide_names_each_home() -> None:
         assert rows, home
         for name in names:
             assert any(re.search(rf"[`.]{name}[`,]", r) for r in rows), (home, name)
+
+
+def test_no_module_of_a_package_shares_its_name_with_a_function_of_it() -> None:
+    """``import mtmc.uncertainty.gum as g`` gave the function, not the module: a module and
+    a function of one name in one namespace. Every package's submodules are named for what
+    they hold, apart from its functions and classes."""
+    import importlib
+    import pkgutil
+
+    import mtmc
+
+    clashes = []
+    names = ["mtmc"] + [i.name for i in pkgutil.walk_packages(mtmc.__path__, "mtmc.") if i.ispkg]
+    for name in names:
+        pkg = importlib.import_module(name)
+        for sub in pkgutil.iter_modules(pkg.__path__):
+            value = getattr(pkg, sub.name, None)
+            if value is not None and not hasattr(value, "__path__") and callable(value):
+                clashes.append(f"{name}.{sub.name}")
+    assert not clashes, clashes

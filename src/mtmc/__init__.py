@@ -157,8 +157,8 @@ if TYPE_CHECKING:
     from mtmc.study.spec import load_study as load_study
     from mtmc.study.spec import loads_study as loads_study
     from mtmc.study.write import write_result as write_result
-    from mtmc.uncertainty.conformity import Conformity as Conformity
-    from mtmc.uncertainty.conformity import conformity as conformity
+    from mtmc.uncertainty.decision import Conformity as Conformity
+    from mtmc.uncertainty.decision import conformity as conformity
     from mtmc.uncertainty.distributions import IID as IID
     from mtmc.uncertainty.distributions import Arcsine as Arcsine
     from mtmc.uncertainty.distributions import Constant as Constant
@@ -172,11 +172,11 @@ if TYPE_CHECKING:
     from mtmc.uncertainty.distributions import Triangular as Triangular
     from mtmc.uncertainty.distributions import Uniform as Uniform
     from mtmc.uncertainty.distributions import parse_distribution as parse_distribution
-    from mtmc.uncertainty.expression import expression as expression
-    from mtmc.uncertainty.gum import GumResult as GumResult
-    from mtmc.uncertainty.gum import gum as gum
-    from mtmc.uncertainty.gum import validate as validate
+    from mtmc.uncertainty.formula import expression as expression
     from mtmc.uncertainty.montecarlo import monte_carlo as monte_carlo
+    from mtmc.uncertainty.propagation import GumResult as GumResult
+    from mtmc.uncertainty.propagation import gum as gum
+    from mtmc.uncertainty.propagation import validate as validate
     from mtmc.uncertainty.results import MonteCarloResult as MonteCarloResult
     from mtmc.uncertainty.results import MonteCarloResults as MonteCarloResults
     from mtmc.uncertainty.sensitivity import monte_carlo_budget as monte_carlo_budget

@@ -1,7 +1,7 @@
 """Result folders read back, plain Monte Carlo results written, and ``[conformity]`` in studies.
 
 The references: the :class:`StudyResult` that was written (every field, bit for bit),
-the engine's :func:`mtmc.uncertainty.conformity.conformity` on a Monte Carlo run of the
+the engine's :func:`mtmc.uncertainty.decision.conformity` on a Monte Carlo run of the
 same seed, and :func:`mtmc.study.base.quantity` of the same values.
 """
 

@@ -22,7 +22,7 @@ from mtmc import (
 )
 from mtmc.geometry.constructions import normal_plane_basis
 from mtmc.study import load_study
-from mtmc.uncertainty.gum import endpoint_std_error
+from mtmc.uncertainty.propagation import endpoint_std_error
 from mtmc.uncertainty.results import convergence
 
 ROOT = Path(__file__).resolve().parents[2]

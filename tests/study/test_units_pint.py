@@ -16,7 +16,7 @@ import pytest
 from mtmc.errors import InputError
 from mtmc.study import loads_study, write_result
 from mtmc.study.units import model_unit, read_unit, unit_text
-from mtmc.uncertainty.expression import expression
+from mtmc.uncertainty.formula import expression
 
 MASS = """\
 kind = "propagate"

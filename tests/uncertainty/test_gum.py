@@ -26,7 +26,7 @@ from mtmc import (
     validate,
 )
 from mtmc.uncertainty.distributions import Distribution
-from mtmc.uncertainty.gum import GumResult, coverage_factor, gum, welch_satterthwaite
+from mtmc.uncertainty.propagation import GumResult, coverage_factor, gum, welch_satterthwaite
 
 REFERENCE = Path(__file__).resolve().parents[1] / "reference"
 
@@ -442,7 +442,7 @@ def test_options_are_keyword_only():
 def test_output_pdf_is_the_normal_or_the_scaled_t() -> None:
     """The GUM's PDF of the output: the normal density, and for ν = 1 the Cauchy density
     ``1 / (π u (1 + z²))`` (both closed forms; 1e-15 relative, a few roundings)."""
-    from mtmc.uncertainty.gum import output_pdf
+    from mtmc.uncertainty.propagation import output_pdf
 
     x = np.linspace(-3.0, 5.0, 17)
     z = (x - 1.0) / 0.5

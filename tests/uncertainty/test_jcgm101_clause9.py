@@ -30,7 +30,7 @@ from mtmc import (
     parse_distribution,
 )
 from mtmc.uncertainty.distributions import Distribution
-from mtmc.uncertainty.gum import gum, validate
+from mtmc.uncertainty.propagation import gum, validate
 
 REFERENCE = Path(__file__).resolve().parents[1] / "reference"
 

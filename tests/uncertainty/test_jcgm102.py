@@ -23,7 +23,7 @@ import pytest
 from scipy import integrate, stats
 
 from mtmc import MultivariateNormal, monte_carlo
-from mtmc.uncertainty.gum import gum
+from mtmc.uncertainty.propagation import gum
 from mtmc.uncertainty.results import MonteCarloResult
 
 

@@ -10,7 +10,7 @@ import pytest
 from scipy import stats
 
 from mtmc import InputError, MonteCarloResult, Normal, Uniform, expression, monte_carlo
-from mtmc.uncertainty.gum import NOISE_MARGIN, Validation, endpoint_std_error, gum, validate
+from mtmc.uncertainty.propagation import NOISE_MARGIN, Validation, endpoint_std_error, gum, validate
 
 
 def _normal_quantile_samples(mu, sigma, m):

@@ -18,7 +18,7 @@ pytest.importorskip("starlette")
 from starlette.testclient import TestClient
 
 from mtmc.graph import check_graph, graph_model, load_graph, loads_graph
-from mtmc.uncertainty.gum import gum
+from mtmc.uncertainty.propagation import gum
 from mtmc.workbench import Session, create_app
 from mtmc.workbench.compute import arc_refusal, live_run
 from mtmc.workbench.view import GraphDocument, check_payload, graph_json

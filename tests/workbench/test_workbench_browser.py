@@ -22,7 +22,7 @@ import pytest
 
 from conftest import absent
 from mtmc.graph import check_graph, graph_model, load_graph, loads_graph
-from mtmc.uncertainty.gum import gum
+from mtmc.uncertainty.propagation import gum
 
 ROOT = Path(__file__).resolve().parents[2]
 GRAPH = ROOT / "examples" / "graphs" / "ball_centre.toml"

@@ -386,7 +386,7 @@ def gum_outputs(study: ArtefactStudy, pr: _Prepared | None = None) -> dict[str, 
         Output name to ``(estimate, u)`` arrays, shapes ``(d,)``.
     """
     from mtmc.uncertainty.distributions import MultivariateNormal
-    from mtmc.uncertainty.gum import gum
+    from mtmc.uncertainty.propagation import gum
 
     pr = _prepare(study) if pr is None else pr
     P, N = pr.meas.centres.shape[:2]
@@ -425,7 +425,7 @@ class GumOutput:
 
     Unpacks as ``(estimate, u)``. Attributes: ``estimate``, ``u``, ``dof``, shapes ``(d,)``
     (mm, mm, effective degrees of freedom), cut from the
-    :class:`~mtmc.uncertainty.gum.GumResult` ``result`` of all outputs at ``start``.
+    :class:`~mtmc.uncertainty.propagation.GumResult` ``result`` of all outputs at ``start``.
     """
 
     estimate: _F
@@ -441,7 +441,7 @@ class GumOutput:
         return (self.estimate, self.u)[i]
 
     def component(self, i: int) -> Any:
-        """Component ``i`` as a scalar :class:`~mtmc.uncertainty.gum.GumResult`."""
+        """Component ``i`` as a scalar :class:`~mtmc.uncertainty.propagation.GumResult`."""
         return self.result.component(self.start + i)
 
 

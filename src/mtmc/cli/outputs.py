@@ -44,7 +44,7 @@ def parse_outputs(text: str) -> tuple[ModelOutput, ...]:
         Naming the part (``field`` ``EXPR``): a part without ``NAME =``, a name that is not
         an identifier or is given twice, or a model that does not parse.
     """
-    from mtmc.uncertainty.expression import expression
+    from mtmc.uncertainty.formula import expression
     from mtmc.uncertainty.joint import ModelOutput
 
     outputs: list[ModelOutput] = []

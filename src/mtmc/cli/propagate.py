@@ -45,7 +45,7 @@ from mtmc.errors import InputError, MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
     from mtmc.uncertainty.distributions import Distribution
-    from mtmc.uncertainty.expression import Expression
+    from mtmc.uncertainty.formula import Expression
 
 
 def parse_inputs(expr: Expression, specs: list[str]) -> dict[str, Distribution]:
@@ -72,7 +72,7 @@ def parse_inputs(expr: Expression, specs: list[str]) -> dict[str, Distribution]:
     DistributionError
         On a distribution that does not parse (the message names the input).
     """
-    from mtmc.uncertainty.expression import check_components
+    from mtmc.uncertainty.formula import check_components
 
     dists = input_specs(specs)
     extra = [n for n in dists if n not in expr.names]
@@ -340,7 +340,7 @@ def propagate(
         print_outputs,
     )
     from mtmc.study import loads_study
-    from mtmc.uncertainty.expression import expression
+    from mtmc.uncertainty.formula import expression
 
     check_trials(trials, None if adaptive else p)
     if adaptive and trials is not None:

@@ -73,8 +73,8 @@ from mtmc.uncertainty.distributions import (
     Uniform,
     as_distribution,
 )
-from mtmc.uncertainty.gum import GumResult, gum
 from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.propagation import GumResult, gum
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = [

@@ -133,7 +133,7 @@ def histogram_svg(q: dict[str, Any]) -> str:
     ax.plot([], [], color="C3", ls="--", label=f"{other} interval")
     g = q.get("gum")
     if g and g["u"] > 0:
-        from mtmc.uncertainty.gum import output_pdf
+        from mtmc.uncertainty.propagation import output_pdf
 
         x = np.linspace(edges[0], edges[-1], 400)
         dof = g.get("dof")

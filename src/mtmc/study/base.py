@@ -29,7 +29,7 @@ from mtmc.io import to_jsonable
 from mtmc.report.folder import RESULT_FORMAT  # the ``format`` of result.json: its reader's
 from mtmc.study.options import unsupported_option
 from mtmc.study.settings import RunSettings
-from mtmc.uncertainty.gum import GumResult, endpoint_std_error, one_value, validate
+from mtmc.uncertainty.propagation import GumResult, endpoint_std_error, one_value, validate
 from mtmc.uncertainty.results import Histogram, IntervalKind, MonteCarloResult
 from mtmc.uncertainty.sampling import resolve_seed
 from mtmc.uncertainty.tolerance import numerical_tolerance, round_to_uncertainty
@@ -61,7 +61,7 @@ CONVERGENCE_POINTS = 60
 #: Trials drawn as dots in the plots of a coverage region.
 SCATTER_POINTS = 400
 #: The JCGM 101 §8 verdict of an output that both methods give as one value
-#: (:func:`mtmc.uncertainty.gum.one_value`).
+#: (:func:`mtmc.uncertainty.propagation.one_value`).
 NOT_APPLICABLE = "not applicable"
 
 ProgressFn = Callable[[int, int | None], None]
@@ -253,12 +253,12 @@ class ValidationSummary(_Written):
         Significant digits of ``u``.
     endpoint_std_error : float
         The standard error of a Monte Carlo interval end
-        (:func:`~mtmc.uncertainty.gum.endpoint_std_error`).
+        (:func:`~mtmc.uncertainty.propagation.endpoint_std_error`).
     verdict : str
         "validated", "not validated", or "not validated within Monte Carlo noise" (a
         ``d`` above δ by less than three endpoint standard errors); "not applicable"
         where both methods give one value: ``u = 0``, or the Monte Carlo's at the rounding
-        of the estimate (:func:`~mtmc.uncertainty.gum.one_value`).
+        of the estimate (:func:`~mtmc.uncertainty.propagation.one_value`).
     """
 
     d_low: float
@@ -443,7 +443,7 @@ class Quantity:
         digits on ``U``, the estimate to the same decimal place).
     conformity : dict or None
         Where the study gives tolerance limits: the JCGM 106 decision on the Monte Carlo
-        PDF (:meth:`mtmc.uncertainty.conformity.Conformity.to_dict`) with ``gum_p_c``,
+        PDF (:meth:`mtmc.uncertainty.decision.Conformity.to_dict`) with ``gum_p_c``,
         the conformance probability of the GUM's PDF beside it.
     """
 

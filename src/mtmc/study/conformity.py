@@ -34,8 +34,8 @@ from typing import Any
 from mtmc.document import Fields, KeyPath, Source
 from mtmc.errors import InputError
 from mtmc.study.base import Quantity
-from mtmc.uncertainty.conformity import conformance_probability, conformity
-from mtmc.uncertainty.gum import GumResult
+from mtmc.uncertainty.decision import conformance_probability, conformity
+from mtmc.uncertainty.propagation import GumResult
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = [
@@ -207,7 +207,7 @@ def assess(
     spec : ConformitySpec
     mc : MonteCarloResult
         The scalar Monte Carlo result of the output (the decision is made on it,
-        :func:`mtmc.uncertainty.conformity.conformity`).
+        :func:`mtmc.uncertainty.decision.conformity`).
     gum_result : GumResult or None
         The GUM result of the same output: ``gum_p_c`` and ``gum_basis`` beside.
 

@@ -39,7 +39,7 @@ from mtmc.uncertainty.copula import (
     spearman_rho,
 )
 from mtmc.uncertainty.distributions import Distribution
-from mtmc.uncertainty.gum import GumResult
+from mtmc.uncertainty.propagation import GumResult
 
 __all__ = ["CorrelationSpec", "correlation_record", "read_correlation"]
 

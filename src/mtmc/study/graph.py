@@ -46,7 +46,7 @@ from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
-from mtmc.uncertainty.gum import gum
+from mtmc.uncertainty.propagation import gum
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = ["GraphStudy", "SweepSpec", "SweepStudy", "component_names"]

@@ -30,8 +30,8 @@ from mtmc.study.propagate import read_inputs
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.distributions import Distribution
-from mtmc.uncertainty.gum import gum
 from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.propagation import gum
 from mtmc.uncertainty.results import MonteCarloResult
 
 __all__ = ["KinematicsStudy", "tool_positions_model"]

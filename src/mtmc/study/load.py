@@ -42,7 +42,7 @@ from mtmc.study.base import (
     region,
 )
 from mtmc.study.settings import RunSettings
-from mtmc.uncertainty.gum import GumResult
+from mtmc.uncertainty.propagation import GumResult
 from mtmc.uncertainty.results import MonteCarloResult, MonteCarloResults
 
 __all__ = ["load_result", "study_result"]

@@ -18,7 +18,7 @@ single-output study: its Monte Carlo values are those a study of that output alo
 bit for bit.
 
 A vector input (``mvnormal(...)``, ``iid(..., k)``) is used in a model by its components,
-``x[0]`` to ``x[k-1]`` (:class:`mtmc.uncertainty.expression.Expression`); the checks of
+``x[0]`` to ``x[k-1]`` (:class:`mtmc.uncertainty.formula.Expression`); the checks of
 that use against the ``[inputs]`` are here, for both forms of the study.
 """
 
@@ -40,8 +40,7 @@ from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
 from mtmc.study.settings import RunSettings
 from mtmc.uncertainty.distributions import Distribution
-from mtmc.uncertainty.expression import Expression, check_components, expression
-from mtmc.uncertainty.gum import GumResult, gum
+from mtmc.uncertainty.formula import Expression, check_components, expression
 from mtmc.uncertainty.joint import (
     JointModel,
     ModelOutput,
@@ -50,6 +49,7 @@ from mtmc.uncertainty.joint import (
     gum_coverage_ellipsoid,
 )
 from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.propagation import GumResult, gum
 from mtmc.uncertainty.results import CoverageEllipsoid, MonteCarloResult, MonteCarloResults
 
 __all__ = [

@@ -8,7 +8,7 @@ material in ``[environment]``, the laser in ``[instrument]``, the Type A evaluat
 (``A`` … ``B_mean``) becomes a quantity with its Monte Carlo values, the GUM beside them
 and its budget, headed by its estimate from the readings (ISO 230-2's definition) and, where
 ``[tolerances]`` gives a limit, the decision by the engine's JCGM 106 rule
-(:mod:`mtmc.uncertainty.conformity`); the tables give the parameters (the estimate, the Monte
+(:mod:`mtmc.uncertainty.decision`); the tables give the parameters (the estimate, the Monte
 Carlo's U, interval and mean, the GUM's U, what U covers), the statistics at each target, and
 the pitch-error compensation table with the residual it leaves; ``positioning`` in
 ``result.json`` holds the readings for the report's plot, what U covers, the runs Grubbs'
@@ -237,7 +237,7 @@ class PositioningStudy(Study):
         rule guarded acceptance with ``w`` the band (``"U"``: the parameter's Monte
         Carlo U).
         """
-        from mtmc.uncertainty.conformity import conformance_probability, conformity
+        from mtmc.uncertainty.decision import conformance_probability, conformity
 
         tol = self.tolerances[sym]
         w = q.mc.U if self.guard_band == "U" else float(self.guard_band)

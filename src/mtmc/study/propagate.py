@@ -30,9 +30,9 @@ from mtmc.study.sensitivity import SensitivitySettings, read_sensitivity, sensit
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.distributions import Distribution
-from mtmc.uncertainty.expression import Expression, check_variables, expression
-from mtmc.uncertainty.gum import gum
+from mtmc.uncertainty.formula import Expression, check_variables, expression
 from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.propagation import gum
 
 __all__ = ["PropagateStudy", "read_inputs"]
 

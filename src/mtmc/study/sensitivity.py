@@ -19,7 +19,7 @@ from typing import Any, cast
 
 from mtmc.document import Fields
 from mtmc.uncertainty.distributions import Distribution
-from mtmc.uncertainty.gum import GumResult
+from mtmc.uncertainty.propagation import GumResult
 from mtmc.uncertainty.sampling import SEED_BLOCK_SIZE, Sampling
 from mtmc.uncertainty.sensitivity import (
     agreement_factor,

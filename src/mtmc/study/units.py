@@ -17,7 +17,7 @@ The unit texts are pint's (``mm``, ``um``, ``µm``, ``kg/m^3``, ``1/K``, ``ppm``
 
 Examples
 --------
->>> from mtmc.uncertainty.expression import expression
+>>> from mtmc.uncertainty.formula import expression
 >>> str(model_unit(expression("(m + dm) * (1 + (rho - 1.2) / rho_w)"),
 ...     {"m": "mg", "dm": "mg", "rho": "kg/m^3", "rho_w": "kg/m^3"}))
 'milligram'

@@ -10,7 +10,7 @@ marginal PDFs by a copula, as the NIST Uncertainty Machine does (Lafarge and Pos
 
 * :class:`Correlation` is the matrix ``R`` over named scalar inputs, checked to be a
   correlation matrix (symmetric, unit diagonal, entries in [-1, 1], positive
-  semi-definite). The GUM (:func:`~mtmc.uncertainty.gum.gum`) takes its entries as the
+  semi-definite). The GUM (:func:`~mtmc.uncertainty.propagation.gum`) takes its entries as the
   ``r(x_i, x_j)`` of JCGM 100 eq. (13).
 * :class:`Copula` says how the Monte Carlo (:func:`~mtmc.uncertainty.montecarlo.
   monte_carlo`) joins the marginals with that ``R``: ``Copula("gaussian")`` or

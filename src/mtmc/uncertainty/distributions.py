@@ -44,7 +44,7 @@ from numpy.typing import NDArray
 
 from mtmc.document import read_number
 from mtmc.errors import DistributionError, MtmcError
-from mtmc.uncertainty.expression import parse_tree
+from mtmc.uncertainty.formula import parse_tree
 
 __all__ = [
     "Arcsine",
@@ -1272,7 +1272,7 @@ class _Reader:
     The text is cut into tokens (numbers with their sign, names, ``( ) [ ] , =``) and their
     order checked, so that a text that is not a distribution is refused at the first token
     out of place, saying what was expected there. Python's parser
-    (:func:`~mtmc.uncertainty.expression.parse_tree`, as for a model expression) then
+    (:func:`~mtmc.uncertainty.formula.parse_tree`, as for a model expression) then
     reads the structure, with each name written ``_`` and each number ``0`` so that it sees
     nothing but the structure, and the tree is read back into PDFs: a call is a PDF, a number
     the float of its text, a bracketed list a list.

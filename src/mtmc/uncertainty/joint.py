@@ -9,7 +9,7 @@ the region of the GUM (JCGM 102 §6.5.2.3: the ellipsoid of ``U_y = C U_x Cᵀ``
 ``k_p² = χ²_d(p)``, exact for a Gaussian output) and the correlation matrix, and the
 vector model itself: outputs of expression models (:class:`ModelOutput`) as one model
 with named outputs for :func:`~mtmc.uncertainty.montecarlo.monte_carlo`
-(:class:`NamedOutputs`) and as one vector model for :func:`~mtmc.uncertainty.gum.gum`
+(:class:`NamedOutputs`) and as one vector model for :func:`~mtmc.uncertainty.propagation.gum`
 (:class:`JointModel`, whose sensitivity matrix is the ``C`` of JCGM 102 §6.2.1.3).
 
 Examples
@@ -32,8 +32,8 @@ from numpy.typing import NDArray
 
 from mtmc.errors import InputError
 from mtmc.uncertainty.checks import check_probability
-from mtmc.uncertainty.expression import Expression
-from mtmc.uncertainty.gum import GumResult
+from mtmc.uncertainty.formula import Expression
+from mtmc.uncertainty.propagation import GumResult
 from mtmc.uncertainty.results import CoverageEllipsoid
 
 __all__ = ["JointModel", "ModelOutput", "NamedOutputs", "correlation", "gum_coverage_ellipsoid"]
@@ -101,7 +101,7 @@ def gum_coverage_ellipsoid(result: GumResult, p: float | None = None) -> Coverag
 
     Examples
     --------
-    >>> from mtmc.uncertainty.gum import gum
+    >>> from mtmc.uncertainty.propagation import gum
     >>> class Pair:
     ...     names = ("a", "b")
     ...     def __call__(self, a, b):
@@ -187,8 +187,8 @@ class JointModel:
 
     Its sensitivity matrix is the ``C`` of ``U_y = C U_x Cᵀ`` (JCGM 102 §6.2.1.3). It is
     complex-safe where every output is, and has the variables and components of all of
-    them (:func:`~mtmc.uncertainty.expression.check_variables`,
-    :func:`~mtmc.uncertainty.expression.check_components`).
+    them (:func:`~mtmc.uncertainty.formula.check_variables`,
+    :func:`~mtmc.uncertainty.formula.check_components`).
 
     Parameters
     ----------

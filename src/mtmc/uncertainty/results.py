@@ -43,7 +43,7 @@ from mtmc.uncertainty.checks import check_probability
 from mtmc.uncertainty.sketch import QuantileSketch
 
 if TYPE_CHECKING:
-    from mtmc.uncertainty.conformity import Conformity
+    from mtmc.uncertainty.decision import Conformity
 
 __all__ = [
     "convergence",
@@ -976,7 +976,7 @@ class MonteCarloResult:
     def coverage_factor(self, p: float = 0.95, kind: IntervalKind = "symmetric") -> float:
         """The coverage factor ``k_p`` with ``U_p = k_p u(y)``: here ``U_p / u(y)``.
 
-        The same quantity as :meth:`mtmc.uncertainty.gum.GumResult.coverage_factor`, there
+        The same quantity as :meth:`mtmc.uncertainty.propagation.GumResult.coverage_factor`, there
         the t-quantile of the GUM for ``ν_eff`` degrees of freedom, here implied by the
         Monte Carlo interval: for a Gaussian output the two agree.
 
@@ -1162,7 +1162,7 @@ class MonteCarloResult:
     ) -> Conformity:
         """The conformity decision for tolerance limits (JCGM 106:2012).
 
-        :func:`mtmc.uncertainty.conformity.conformity` of this result: ``p_c`` is the
+        :func:`mtmc.uncertainty.decision.conformity` of this result: ``p_c`` is the
         fraction of the values in ``[lower, upper]`` (or read from the sketch, or from
         the normal of ``estimate`` and ``u`` where neither was kept).
 
@@ -1170,7 +1170,7 @@ class MonteCarloResult:
         -------
         Conformity
         """
-        from mtmc.uncertainty.conformity import conformity
+        from mtmc.uncertainty.decision import conformity
 
         return conformity(
             self,

@@ -77,9 +77,9 @@ from numpy.typing import NDArray
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_value
 from mtmc.uncertainty.distributions import Constant, Distribution, StudentT, as_distribution
-from mtmc.uncertainty.expression import check_variables
-from mtmc.uncertainty.gum import GumResult
+from mtmc.uncertainty.formula import check_variables
 from mtmc.uncertainty.montecarlo import ProgressFn, monte_carlo
+from mtmc.uncertainty.propagation import GumResult
 from mtmc.uncertainty.results import MonteCarloResult
 from mtmc.uncertainty.sampling import (
     DEFAULT_BLOCK_SIZE,
@@ -168,7 +168,7 @@ class BudgetShare:
         in ``X_i``).
     gum_contribution : float or None
         The GUM's ``|c_i| u(x_i)`` (JCGM 100 §5.1.3; for a multivariate input
-        ``sqrt(c V cᵀ)``), where a :class:`~mtmc.uncertainty.gum.GumResult` was given.
+        ``sqrt(c V cᵀ)``), where a :class:`~mtmc.uncertainty.propagation.GumResult` was given.
     linear_reference : float or None
         What ``u`` is for a model linear in ``X_i``: ``|c_i|`` times the standard
         deviation of the PDF that the Monte Carlo draws. It equals

@@ -17,7 +17,7 @@ The two differ for a small series: the t of JCGM 101 has the standard deviation
 ``(s/√n)·√(ν/(ν - 2))`` for ``ν > 2`` and none for ``ν <= 2`` (and no expectation for
 ``ν <= 1``), while the GUM's ``u`` is ``s/√n`` whatever ``n``; the GUM carries the
 smallness of ``n`` in ``ν`` and so in its coverage factor ``t_p(ν_eff)`` (G.3, G.4). The
-``std`` of a :class:`TypeA` is the first, what :func:`~mtmc.uncertainty.gum.gum` takes is
+``std`` of a :class:`TypeA` is the first, what :func:`~mtmc.uncertainty.propagation.gum` takes is
 the second (:func:`stated_moments`).
 
 :func:`with_dof` gives any other input the degrees of freedom ``ν`` of its standard
@@ -715,7 +715,7 @@ def stated_moments(dist: Distribution) -> tuple[NDArray[np.float64], NDArray[np.
     For a :class:`TypeA` input ``x̄`` and ``u² = s²/n`` (JCGM 100 §4.2), for a
     :class:`WithDof` input the base PDF's expectation and variance (G.4), and for ``k``
     independent copies of one of these (:class:`IID`) the same ``k`` times. (A
-    :class:`StudentT` given as such is read by :func:`~mtmc.uncertainty.gum.gum` itself:
+    :class:`StudentT` given as such is read by :func:`~mtmc.uncertainty.propagation.gum` itself:
     its location and ``scale``, where it has an expectation.)
 
     Parameters

@@ -97,8 +97,8 @@ from mtmc.instruments.laser_tracker import LaserTracker, NoiseAt
 from mtmc.kinematics.parameters import ErrorModel
 from mtmc.parallel import one_blas_thread
 from mtmc.uncertainty.distributions import IID, Normal
-from mtmc.uncertainty.gum import Validation, gum, validate
 from mtmc.uncertainty.montecarlo import monte_carlo
+from mtmc.uncertainty.propagation import Validation, gum, validate
 from mtmc.uncertainty.results import MonteCarloResult
 from mtmc.verification.identify import (
     POSE_NAMES,

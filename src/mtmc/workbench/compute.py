@@ -29,7 +29,7 @@ from mtmc.graph.places import PLACE_TYPES, VALUE_TYPES
 from mtmc.graph.run import GraphModel
 from mtmc.graph.units import file_unit
 from mtmc.report import at_place
-from mtmc.uncertainty.gum import GumResult, gum, validate
+from mtmc.uncertainty.propagation import GumResult, gum, validate
 from mtmc.workbench.view import node_of_error
 
 __all__ = [

@@ -7,7 +7,7 @@ JCGM 106). Given the PDF of ``Y`` after a measurement, this module computes
 * the *conformance probability* ``p_c = Pr(T_L <= Y <= T_U)`` (JCGM 106 §7):
   from the Monte Carlo values of a :class:`~mtmc.uncertainty.results.MonteCarloResult`
   (the fraction of them in ``C``, JCGM 101 §7.5 PDF), or from the GUM's normal or scaled
-  and shifted t distribution of a :class:`~mtmc.uncertainty.gum.GumResult`
+  and shifted t distribution of a :class:`~mtmc.uncertainty.propagation.GumResult`
   (``p_c = F_ν((T_U - y)/u) - F_ν((T_L - y)/u)``, JCGM 106 §7 for the normal
   ``F_∞ = Φ``; JCGM 100 G.3 for t);
 * a decision by a *decision rule* (JCGM 106 §8): *simple acceptance* (accept when the
@@ -33,7 +33,7 @@ Examples
 --------
 A measured value 0.3 mm below the upper tolerance limit with ``u = 0.1`` mm:
 
->>> from mtmc.uncertainty.gum import GumResult
+>>> from mtmc.uncertainty.propagation import GumResult
 >>> g = GumResult(estimate_vector=[9.7], u_vector=[0.1], cov=[[0.01]],
 ...               dof_vector=[float("inf")], p=0.95, sensitivities={}, budget=(),
 ...               method="complex-step")
@@ -62,7 +62,7 @@ class ScalarResult(Protocol):
     """What a decision reads of the result of one output.
 
     A :class:`~mtmc.uncertainty.results.MonteCarloResult` (its values, or its quantile
-    sketch) or a :class:`~mtmc.uncertainty.gum.GumResult` (its estimate, ``u`` and
+    sketch) or a :class:`~mtmc.uncertainty.propagation.GumResult` (its estimate, ``u`` and
     ``ν_eff``). Named here by what is read, so that the results, which decide through
     :func:`conformity`, and this module import each other neither at run time nor for
     their types.

@@ -40,11 +40,11 @@ from mtmc.uncertainty import distributions as _distributions
 from mtmc.uncertainty import tolerance as _tolerance
 from mtmc.uncertainty import typea as _typea
 from mtmc.uncertainty.checks import check_probability
-from mtmc.uncertainty.expression import check_components, check_variables
+from mtmc.uncertainty.formula import check_components, check_variables
 from mtmc.uncertainty.results import MonteCarloResult
 
 if TYPE_CHECKING:
-    from mtmc.uncertainty.conformity import Conformity
+    from mtmc.uncertainty.decision import Conformity
 
 __all__ = [
     "BudgetEntry",
@@ -343,7 +343,7 @@ class GumResult:
     ) -> Conformity:
         """The conformity decision for tolerance limits (JCGM 106:2012).
 
-        :func:`mtmc.uncertainty.conformity.conformity` of this result: ``p_c`` from the
+        :func:`mtmc.uncertainty.decision.conformity` of this result: ``p_c`` from the
         normal PDF of ``estimate`` and ``u``, or the t PDF scaled by ``u`` for a finite
         ``ν_eff`` (JCGM 100 G.3).
 
@@ -351,7 +351,7 @@ class GumResult:
         -------
         Conformity
         """
-        from mtmc.uncertainty.conformity import conformity
+        from mtmc.uncertainty.decision import conformity
 
         return conformity(
             self,
@@ -667,7 +667,7 @@ def gum(
     ``(f(x + h e_j) - f(x - h e_j)) / 2h`` (``h = 10⁻³ u_j``) evaluated in the same call.
     If the model refuses complex input, or the two disagree by more than 10⁻⁵ u(y)
     (``abs``, ``hypot``, ``arctan2``, a cast to real), the central differences are used
-    and ``method`` says so. An :class:`~mtmc.uncertainty.expression.Expression` states
+    and ``method`` says so. An :class:`~mtmc.uncertainty.formula.Expression` states
     whether it is complex-safe, and is not checked: its complex step is used as is, or
     it is evaluated once with the central differences only. (The check can reject a
     correct complex step where a callable is strongly non-linear on the scale of
@@ -678,7 +678,7 @@ def gum(
     model : callable
         Vectorised model ``model(**arrays)``: each input by name, trial axis first
         (``(m,)`` or ``(m, k)``), returning ``(m,)`` or ``(m, d)``. An
-        :class:`~mtmc.uncertainty.expression.Expression` works, as does any NumPy code.
+        :class:`~mtmc.uncertainty.formula.Expression` works, as does any NumPy code.
     inputs : mapping of str to Distribution, number or str
         The input quantities (anything :func:`~mtmc.uncertainty.distributions.as_distribution`
         accepts). Estimate = the PDF's expectation; standard uncertainty = its standard
