@@ -63,3 +63,31 @@ def test_rotary_axes_title_and_inputs() -> None:
 def test_a_bad_topology_string_is_refused() -> None:
     with pytest.raises(TopologyError):
         draw_chain("XYZ")
+
+
+@pytest.mark.parametrize(
+    "poses",
+    [
+        "[[150.0, 0.0, -100.0, -30.0, 3600.0]]",  # C at the documented limit of 3600°
+        "[[0.0, 0.0, 0.0, 3600.0, -3600.0], [0.0, 0.0, 0.0, 3600.0, -3600.0]]",
+        "[[0.0, 0.0, 0.0, 0.0, 0.0]]",  # every axis at zero: the plots' ranges from the errors
+    ],
+)
+def test_a_kinematics_report_at_the_angle_limit_warns_nothing(poses, tmp_path):
+    """A pose at 3600° (ten turns, the largest angle a study takes) printed a Matplotlib
+    UserWarning (identical xlims) while its report was drawn: every warning is an error here."""
+    import warnings
+
+    from mtmc.study import loads_study, write_result
+
+    text = (
+        'kind = "kinematics"\nmachine = "table-table"\nangles = "deg"\n'
+        f"poses = {poses}\n"
+        '[errors]\nEX0C = "normal(0, 0.003)"\nEA0C = "uniform(-10e-6, 10e-6)"\n'
+        'EC0Y = "normal(0, 4e-6)"\n'
+    )
+    study = loads_study(text, file="k.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        write_result(study.run(trials=300, seed=1), tmp_path / "r", study_text=text)
+    assert (tmp_path / "r" / "report.html").is_file()
