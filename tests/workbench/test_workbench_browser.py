@@ -228,3 +228,20 @@ def test_the_workbench_end_to_end(page, tmp_path):
         assert _u(pg, name) == pytest.approx(u, rel=1e-12)
     assert int(pg.get_attribute("#cy", "data-places")) == 11
     assert errors == []
+
+
+def test_every_label_is_within_the_canvas_once_the_results_are_shown(page):
+    """A place's label grows by its result line (``-12.70000 ± 0.00086 mm``) after the
+    first run; fitted before it, a label at the edge lost its first characters."""
+    pg, (_path, url), errors = page
+    pg.goto(url)
+    _settled(pg)
+    pg.wait_for_function("() => Object.keys(window.workbench.state.results).length > 0")
+    pg.wait_for_timeout(300)  # the labels drawn
+    outside = pg.evaluate(
+        """() => { const cy = window.workbench.cy; const w = cy.width(), h = cy.height();
+        return cy.nodes().filter((n) => { const b = n.renderedBoundingBox({includeLabels: true});
+        return b.x1 < 0 || b.y1 < 0 || b.x2 > w || b.y2 > h; }).map((n) => n.id()); }"""
+    )
+    assert outside == []
+    assert errors == []

@@ -25,6 +25,7 @@ const state = {
   client: Math.random().toString(36).slice(2),  // this page's requests, numbered by seq
   timer: null,
   arcFrom: null,
+  fitted: false,       // the view fitted to the first results' labels
 };
 let cy = null;
 
@@ -296,6 +297,12 @@ async function runNow() {
   state.results = out.places || {};
   drawMessages();
   draw();
+  if (!state.fitted && Object.keys(state.results).length) {
+    // the first results lengthen the places' labels: fit the view to them once, so that
+    // none starts beyond the canvas' edge (later ones leave the user's view as it is)
+    cy.fit(undefined, 30);
+    state.fitted = true;
+  }
   showSummary(out.summary);
   if (state.errors.length) {
     setStatus(`${state.errors.length} error`, "error");
