@@ -240,9 +240,9 @@ def test_the_study_result_folder_writes(tmp_path):
 
 def test_parameters_of_the_readings_alone_are_one_value_not_validated(capsys):
     # the Type A evaluation of the readings alone: the ranges R↑ and R↓ are those of the
-    # readings in every trial; the Monte Carlo's u of R↑ is the rounding of its
-    # arithmetic (4.4e-16 µm at 3.05 µm, seed 7), and the GUM's is 0: nothing to compare
-    # by JCGM 101 §8, whichever of the two the rounding gives
+    # readings in every trial, one value: the Monte Carlo's u is exactly 0 (it was the
+    # rounding of the mean's arithmetic, 4.4e-16 µm at 3.05 µm, before a constant's mean
+    # was taken as the constant), and the GUM's is 0: nothing to compare by JCGM 101 §8
     assert main(["positioning", "evaluate", str(DATA), "-n", "50000", "-s", "7", "--json"]) == 0
     params = json.loads(capsys.readouterr().out)["parameters"]
     for name in ("R_up", "R_down"):
@@ -252,7 +252,7 @@ def test_parameters_of_the_readings_alone_are_one_value_not_validated(capsys):
         assert (p["verdict"], p["validated"]) == ("not applicable", None), name
         # its U covers nothing: said so, with the reason, never a bare 0
         assert p["covers"].startswith(f"not evaluated: {name} is a function of the standard")
-    assert params["R_up"]["u"] > 0  # the rounding: the case the rule is for
+    assert params["R_up"]["u"] == 0.0  # one value in every trial: its u, exactly
     assert (params["A"]["verdict"], params["A"]["validated"]) == ("not validated", False)
 
 
