@@ -305,3 +305,34 @@ def test_circle_evaluate_takes_a_rotary_study_and_the_overrun(tmp_path: Path, ca
     # the centre offset of 3 µm along x, the first harmonic of the trace
     assert out["errors"]["centre_x"]["estimate"] == pytest.approx(3.0, abs=1e-6)
     assert "overrun = 20.0" in (tmp_path / "r" / "study.toml").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "field", "words"),
+    [
+        # found by make fuzz: a sphere at 1e308 mm ended in LinAlgError (SVD did not converge)
+        ("ball = [150.0, 0.0, 80.0]", "ball = [150.0, 1e308, 80.0]", "rotary.ball", "1e+06"),
+        ("steps = 72", "steps = 72\nstart = 1e5", "rotary.start", "3600"),
+        ("length = 100.0", "length = 1e9", "ballbar.length", "1e+06"),
+        ("direction = [1.0, 0.0, 0.0]", "direction = [1e300, 1e300, 0]", "ballbar.direction", ""),
+    ],
+)
+def test_sizes_past_the_limits_are_refused_at_their_line(old, new, field, words):
+    assert old in BALLBAR
+    with pytest.raises(InputError) as err:
+        loads_study(BALLBAR.replace(old, new), file="bb.toml")
+    assert err.value.field == field
+    assert words in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "words"),
+    [("radius", "1e9", "1e+06"), ("feed", "1e9", "600000"), ("start", "-1e5", "3600")],
+)
+def test_a_circle_path_past_the_limits_is_refused(key, value, words):
+    path = "\n".join(f"{k} = {v}" for k, v in {"radius": "150.0", key: value}.items())
+    text = f'kind = "circular"\n[path]\n{path}\n[errors]\nsquareness = 1e-5\n'
+    with pytest.raises(InputError) as err:
+        loads_study(text, file="c.toml")
+    assert err.value.field == f"path.{key}"
+    assert words in str(err.value)

@@ -71,7 +71,7 @@ from typing import Any
 
 import numpy as np
 
-from mtmc.document import Fields
+from mtmc.document import MAX_DEG, MAX_MM, Fields
 from mtmc.errors import MtmcError
 from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
 from mtmc.study.conformity import ConformitySpec, assess_quantity, read_output_conformity
@@ -89,6 +89,9 @@ REPORT_UNITS: dict[str, tuple[str, float]] = {
     "1": ("µm/m", 1e6),
     "s": ("ms", 1e3),
 }
+
+#: The largest feed a path takes, mm/min: ten times the 60 m/min rapid of a fast machine.
+MAX_FEED = 600_000.0
 
 _PATH_KEYS = (
     "plane",
@@ -243,16 +246,16 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
     assert path is not None
     path.only(_PATH_KEYS)
     plane = path.text("plane", "XY", choices=("XY", "YZ", "ZX"))
-    radius = path.number("radius", low=0.0, open_low=True)
+    radius = path.number("radius", low=0.0, open_low=True, high=MAX_MM)
     centre = _pair(path, "centre", (0.0, 0.0))
     n = path.integer("points", 720, minimum=8, maximum=100_000)
-    start = np.radians(path.number("start", 0.0))
-    feed = path.number("feed", 1000.0, low=0.0, open_low=True) / 60.0
+    start = np.radians(path.number("start", 0.0, low=-MAX_DEG, high=MAX_DEG))
+    feed = path.number("feed", 1000.0, low=0.0, open_low=True, high=MAX_FEED) / 60.0
     dirs = path.texts("directions", ("ccw", "cw"))
     for d in dirs:
         if d not in ("ccw", "cw"):
             raise path.error(f"expected 'ccw' and/or 'cw', got {d!r}", "directions")
-    decay = np.radians(path.number("spike_decay", 3.0, low=0.0, open_low=True))
+    decay = np.radians(path.number("spike_decay", 3.0, low=0.0, open_low=True, high=MAX_DEG))
     period = _pair(path, "cyclic_period", None)
     theta = start + 2.0 * np.pi * np.arange(n) / n
     angles = {"theta_ccw": theta if "ccw" in dirs else None}
@@ -313,7 +316,7 @@ def _ballbar(top: Fields, keys: tuple[str, ...] = _BALLBAR_KEYS) -> dict[str, An
             if bb.has(key):
                 kw[key] = read_distribution(bb, key)
         for key in ("resolution", "noise"):
-            kw[key] = bb.number(key, 0.0, low=0.0)
+            kw[key] = bb.number(key, 0.0, low=0.0, high=MAX_MM)
     return kw
 
 
@@ -369,11 +372,11 @@ def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str
         ),
     )
     des = design(
-        radius=path.number("radius", low=0.0, open_low=True),
+        radius=path.number("radius", low=0.0, open_low=True, high=MAX_MM),
         theta_ccw=trace.theta_ccw,
         theta_cw=trace.theta_cw,
         plane=path.text("plane", "XY", choices=("XY", "YZ", "ZX")),
-        feed=path.number("feed", 1000.0, low=0.0, open_low=True) / 60.0,
+        feed=path.number("feed", 1000.0, low=0.0, open_low=True, high=MAX_FEED) / 60.0,
     )
     meas = trace.deviation
     kw = _ballbar(top)
@@ -447,7 +450,10 @@ _ROTARY_BALLBAR_KEYS = (*_BALLBAR_KEYS, "length", "direction")
 
 
 def _vector(t: Fields, key: str, what: str, default: Any = None) -> Any:
-    """Three finite numbers ``[x, y, z]`` at ``key`` (``default`` when absent)."""
+    """Three finite numbers ``[x, y, z]`` of at most :data:`MAX_MM` in size at ``key``.
+
+    ``default`` where absent.
+    """
     if default is not None and not t.has(key):
         return np.asarray(default, dtype=np.float64)
     v = t.data.get(key)
@@ -455,9 +461,9 @@ def _vector(t: Fields, key: str, what: str, default: Any = None) -> Any:
         not isinstance(v, list)
         or len(v) != 3
         or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
-        or not all(np.isfinite(float(x)) for x in v)
+        or not all(np.isfinite(float(x)) and abs(x) <= MAX_MM for x in v)
     ):
-        raise t.error(f"expected {what} [x, y, z], got {v!r}", key)
+        raise t.error(f"expected {what} [x, y, z], each at most {MAX_MM:g} in size, got {v!r}", key)
     return np.asarray(v, dtype=np.float64)
 
 
@@ -473,14 +479,14 @@ def _rotary_instrument(top: Fields) -> tuple[dict[str, Any], str]:
         return {
             "ballbar": Ballbar(**_ballbar(top, _ROTARY_BALLBAR_KEYS)),
             "direction": _vector(bb, "direction", "the bar's direction in the workpiece frame"),
-            "length": bb.number("length", low=0.0, open_low=True),
+            "length": bb.number("length", low=0.0, open_low=True, high=MAX_MM),
         }, "ballbar"
     out: dict[str, Any] = {"gain": 0.0, "noise": 0.0}
     if rt is not None:
         rt.only(("gain", "noise"))
         if rt.has("gain"):
             out["gain"] = read_distribution(rt, "gain")
-        out["noise"] = rt.number("noise", 0.0, low=0.0)
+        out["noise"] = rt.number("noise", 0.0, low=0.0, high=MAX_MM)
     return out, "rtest"
 
 
@@ -524,7 +530,12 @@ def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str],
     else:
         steps = rot.integer("steps", 36, minimum=4, maximum=100_000)
         angles = np.radians(
-            np.linspace(rot.number("start", 0.0), rot.number("stop", 360.0), steps, endpoint=False)
+            np.linspace(
+                rot.number("start", 0.0, low=-MAX_DEG, high=MAX_DEG),
+                rot.number("stop", 360.0, low=-MAX_DEG, high=MAX_DEG),
+                steps,
+                endpoint=False,
+            )
         )
     q = _follow(rot, machine, axis, angles, point)
     ident = top.table("identify", required=False)
@@ -586,7 +597,7 @@ def _follow(rot: Fields, machine: Any, axis: str, angles: Any, point: Any) -> An
     if ht is not None:
         ht.only(tuple(hold))
         for a in ht.data:
-            hold[a] = np.radians(ht.number(a))
+            hold[a] = np.radians(ht.number(a, low=-MAX_DEG, high=MAX_DEG))
     try:
         return follow_positions(machine, {**hold, axis: angles}, point)
     except MtmcError as exc:
@@ -649,9 +660,11 @@ def _pair(t: Fields, key: str, default: Any) -> Any:
         not isinstance(v, list)
         or len(v) != 2
         or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
-        or not all(np.isfinite(float(x)) for x in v)
+        or not all(np.isfinite(float(x)) and abs(x) <= MAX_MM for x in v)
     ):
-        raise t.error(f"expected two finite numbers [a, b], got {v!r}", key)
+        raise t.error(
+            f"expected two finite numbers [a, b], each at most {MAX_MM:g} in size, got {v!r}", key
+        )
     return (float(v[0]), float(v[1]))
 
 
