@@ -26,7 +26,7 @@ from mtmc.cli.common import (
     fail,
     load_study_of_kind,
     print_json,
-    print_trials_seed,
+    print_quiet,
     seed_option,
     with_u,
 )
@@ -149,9 +149,7 @@ def simulate_cmd(
         )
         return
     if quiet:
-        print_trials_seed(result.trials, result.seed)
-        if outdir is not None:
-            typer.echo(f"report: {outdir / 'report.html'}")
+        print_quiet(result, outdir)
         return
     con = Console()
     t = Table(

@@ -25,6 +25,7 @@ from mtmc.cli.common import (
     fail,
     load_study_of_kind,
     print_json,
+    print_quiet,
     print_trials_seed,
     seed_option,
 )
@@ -205,9 +206,7 @@ def evaluate_cmd(
         print_json(out)
         return
     if quiet:
-        print_trials_seed(result.trials, result.seed)
-        if outdir is not None:
-            typer.echo(f"report: {outdir / 'report.html'}")
+        print_quiet(result, outdir)
         return
     table = Table(title=f"{data.name}: circular test ({result.trials} trials)")
     for col in ("quantity", "estimate", "U (MC, 95 %)", "U (GUM, 95 %)", "unit", "GUM §8"):
@@ -289,9 +288,7 @@ def simulate_cmd(
         print_json(out)
         return
     if quiet:
-        print_trials_seed(result.trials, result.seed)
-        if outdir is not None:
-            typer.echo(f"report: {outdir / 'report.html'}")
+        print_quiet(result, outdir)
         return
     table = Table(title=f"{result.title} ({result.trials} trials)")
     for col in ("quantity", "estimate", "U (MC)", "U (GUM)", "unit", "GUM §8"):

@@ -154,6 +154,13 @@ def print_trials_seed(trials: int, seed: int) -> None:
     typer.echo(f"trials {trials}  seed {seed}")
 
 
+def print_quiet(result: Any, outdir: Path | None) -> None:
+    """What ``-q`` leaves of a study command's output: the trials and seed, the report."""
+    print_trials_seed(result.trials, result.seed)
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")
+
+
 #: ``--workers N``: blocks of trials (or grid points) evaluated at once.
 WORKERS_OPTION: Any = typer.Option(
     1, "--workers", "-w", min=1, help="Workers that evaluate blocks of trials at once."

@@ -90,6 +90,8 @@ REPORT_UNITS: dict[str, tuple[str, float]] = {
     "s": ("ms", 1e3),
 }
 
+_PAIR = "two finite numbers [a, b]"
+
 #: The largest feed a path takes, mm/min: ten times the 60 m/min rapid of a fast machine.
 MAX_FEED = 600_000.0
 
@@ -247,7 +249,7 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
     path.only(_PATH_KEYS)
     plane = path.text("plane", "XY", choices=("XY", "YZ", "ZX"))
     radius = path.number("radius", low=0.0, open_low=True, high=MAX_MM)
-    centre = _pair(path, "centre", (0.0, 0.0))
+    centre = _numbers(path, "centre", _PAIR, 2, (0.0, 0.0))
     n = path.integer("points", 720, minimum=8, maximum=100_000)
     start = np.radians(path.number("start", 0.0, low=-MAX_DEG, high=MAX_DEG))
     feed = path.number("feed", 1000.0, low=0.0, open_low=True, high=MAX_FEED) / 60.0
@@ -256,7 +258,7 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
         if d not in ("ccw", "cw"):
             raise path.error(f"expected 'ccw' and/or 'cw', got {d!r}", "directions")
     decay = np.radians(path.number("spike_decay", 3.0, low=0.0, open_low=True, high=MAX_DEG))
-    period = _pair(path, "cyclic_period", None)
+    period = _numbers(path, "cyclic_period", _PAIR, 2) if path.has("cyclic_period") else None
     theta = start + 2.0 * np.pi * np.arange(n) / n
     angles = {"theta_ccw": theta if "ccw" in dirs else None}
     angles["theta_cw"] = (start - 2.0 * np.pi * np.arange(n) / n) if "cw" in dirs else None
@@ -449,24 +451,6 @@ _ROTARY_KEYS = ("machine", "axis", "start", "stop", "steps", "hold", "ball")
 _ROTARY_BALLBAR_KEYS = (*_BALLBAR_KEYS, "length", "direction")
 
 
-def _vector(t: Fields, key: str, what: str, default: Any = None) -> Any:
-    """Three finite numbers ``[x, y, z]`` of at most :data:`MAX_MM` in size at ``key``.
-
-    ``default`` where absent.
-    """
-    if default is not None and not t.has(key):
-        return np.asarray(default, dtype=np.float64)
-    v = t.data.get(key)
-    if (
-        not isinstance(v, list)
-        or len(v) != 3
-        or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
-        or not all(np.isfinite(float(x)) and abs(x) <= MAX_MM for x in v)
-    ):
-        raise t.error(f"expected {what} [x, y, z], each at most {MAX_MM:g} in size, got {v!r}", key)
-    return np.asarray(v, dtype=np.float64)
-
-
 def _rotary_instrument(top: Fields) -> tuple[dict[str, Any], str]:
     """The keywords of :func:`mtmc.circular.rotary_model` for ``[rtest]`` or ``[ballbar]``."""
     from mtmc.circular import Ballbar
@@ -478,7 +462,9 @@ def _rotary_instrument(top: Fields) -> tuple[dict[str, Any], str]:
     if bb is not None:
         return {
             "ballbar": Ballbar(**_ballbar(top, _ROTARY_BALLBAR_KEYS)),
-            "direction": _vector(bb, "direction", "the bar's direction in the workpiece frame"),
+            "direction": _numbers(
+                bb, "direction", "the bar's direction in the workpiece frame [x, y, z]", 3
+            ),
             "length": bb.number("length", low=0.0, open_low=True, high=MAX_MM),
         }, "ballbar"
     out: dict[str, Any] = {"gain": 0.0, "noise": 0.0}
@@ -521,7 +507,7 @@ def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str],
     except MtmcError as exc:
         raise rot.error(exc.message, "machine") from None
     axis = rot.text("axis", choices=[a for a in machine.axes if a in "ABC"])
-    point = _vector(rot, "ball", "the sphere's centre in mm")
+    point = _numbers(rot, "ball", "the sphere's centre in mm [x, y, z]", 3)
     kw, instrument = _rotary_instrument(top)
     trace = None
     if measured:
@@ -651,21 +637,23 @@ def _with_noise(kw: dict[str, Any], rms: float) -> dict[str, Any]:
     return {**kw, "noise": rms}
 
 
-def _pair(t: Fields, key: str, default: Any) -> Any:
-    """Two finite numbers ``[a, b]`` at ``key`` (``default`` when absent)."""
-    if not t.has(key):
+def _numbers(t: Fields, key: str, what: str, n: int, default: Any = None) -> Any:
+    """``n`` finite numbers of at most :data:`MAX_MM` in size at ``key``, as a tuple.
+
+    ``what`` names them in an error (``"two finite numbers [a, b]"``); ``default`` where
+    absent, or an error where it is None.
+    """
+    if default is not None and not t.has(key):
         return default
-    v = t.data[key]
+    v = t.data.get(key)
     if (
         not isinstance(v, list)
-        or len(v) != 2
+        or len(v) != n
         or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
         or not all(np.isfinite(float(x)) and abs(x) <= MAX_MM for x in v)
     ):
-        raise t.error(
-            f"expected two finite numbers [a, b], each at most {MAX_MM:g} in size, got {v!r}", key
-        )
-    return (float(v[0]), float(v[1]))
+        raise t.error(f"expected {what}, each at most {MAX_MM:g} in size, got {v!r}", key)
+    return tuple(float(x) for x in v)
 
 
 @register_kind("circular", "an ISO 230-4 circular test (ballbar) simulated with its uncertainty")
