@@ -50,6 +50,35 @@ def test_a_chain_of_1000_displacements_is_checked_without_recursion() -> None:
     assert len(g.transitions) == 1000
 
 
+def test_the_dimensions_of_a_chain_are_found_in_linear_time(monkeypatch) -> None:
+    # every place of a chain of n displacements asked in turn (as reading the graph does):
+    # each link's rule is looked up a bounded number of times, not once per place above it
+    # (n²/2 = 500,000 lookups at n = 1000 took a minute). Reference: the count of lookups.
+    from mtmc.graph import units
+
+    n = 1000
+    lines = ['[[place]]\nname = "p0"\ntype = "real"\nvalue = 1.0\nunit = "deg"']
+    for i in range(n):
+        lines.append(
+            f'[[transition]]\nname = "t{i}"\nop = "displace"\nin = ["p{i}", "p{i}"]\n'
+            f'out = "p{i + 1}"'
+        )
+    plan = check_graph(loads_graph("\n".join(lines), file="chain.toml"))
+    calls = 0
+    rule = units._rule
+
+    def counted(plan_, name):
+        nonlocal calls
+        calls += 1
+        return rule(plan_, name)
+
+    monkeypatch.setattr(units, "_rule", counted)
+    plan.dimensions.clear()
+    dims = [units.place_dimension(plan, f"p{i}") for i in range(n, -1, -1)]
+    assert dims == [(0, 1)] * (n + 1)  # an angle all the way down
+    assert calls <= 2 * (n + 1)
+
+
 NAMES = st.text(min_size=1, max_size=12)
 
 

@@ -94,3 +94,40 @@ def test_dimensions_follow_the_ops():
     }
     got = {key: place_dimension(plan, *key) for key in expected}
     assert got == expected
+
+
+def test_a_place_written_in_degrees_is_shown_in_degrees():
+    # file_unit: phi is written "30 deg" and shown so; a produced angle (theta) in rad,
+    # a length in the file's unit. Reference: the numbers as written in TEXT.
+    import math
+
+    import pytest
+
+    from mtmc.graph.units import file_unit
+
+    plan = check_graph(loads_graph(TEXT))
+    scale, unit = file_unit(plan, "phi")
+    assert unit == "deg"
+    # two roundings (to rad on reading, back to deg on showing): an ulp or two of 30
+    assert math.radians(30.0) / scale == pytest.approx(30.0, rel=1e-15)
+    assert file_unit(plan, "theta") == (1.0, "rad")
+    assert file_unit(plan, "phi_plus") == (1.0, "rad")
+    assert file_unit(plan, "d") == (1.0, "mm")
+
+
+def test_graph_run_prints_a_constant_as_written():
+    # `graph run`: alpha_a = 30 deg (axis_a.toml) printed as 30 deg with u 0, not
+    # 0.523599 rad. Reference: the graph file's own value.
+    from pathlib import Path
+
+    from typer.testing import CliRunner
+
+    from mtmc.cli.main import app
+
+    graph = Path(__file__).parents[2] / "examples" / "graphs" / "axis_a.toml"
+    args = ["graph", "run", str(graph), "-n", "200", "-s", "1", "--place", "alpha_a"]
+    out = CliRunner().invoke(app, args, terminal_width=120)
+    assert out.exit_code == 0, out.output
+    row = next(line for line in out.output.splitlines() if "alpha_a" in line)
+    cells = [c.strip() for c in row.strip("│ ").split("│")]
+    assert cells[-3:] == ["30", "0", "deg"], row

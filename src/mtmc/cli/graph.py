@@ -167,7 +167,8 @@ def run_cmd(
 ) -> None:
     """Run FILE by Monte Carlo and print each place's estimate and standard uncertainty.
 
-    The table gives lengths in the graph's units (the file's units), angles in rad;
+    The table gives lengths in the graph's units (the file's units), angles in rad (a
+    real place written in deg, in deg);
     --json gives the library's result as it is, in mm and rad (its "units").
     """
     from mtmc.graph.model import check_graph

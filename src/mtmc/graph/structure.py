@@ -131,6 +131,12 @@ class Plan:
     steps: tuple[Step, ...]
     producer: Mapping[str, str]
     warnings: tuple[str, ...] = field(default=(), compare=False)
+    #: The dimension of the value of each place met so far (:mod:`mtmc.graph.units`
+    #: fills it as it is asked): a place's dimension follows from those of its
+    #: producer's inputs, so that asking for every place of a chain is linear in its length.
+    dimensions: dict[str, tuple[int, int]] = field(
+        default_factory=dict, init=False, compare=False, repr=False
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "types", frozen_mapping(self.types))

@@ -3,10 +3,13 @@
 A graph file states its length unit once (``units = "mm"`` or ``"um"``) and marked real
 places may say ``unit = "1"``, ``"rad"`` or ``"deg"``; the dimension of a produced place
 follows from the op that produces it. Reports and the CLI use this to print every value
-in the file's unit, and the library's results stay in mm and rad.
+in the file's unit (a place written in deg in deg), and the library's results stay in mm
+and rad.
 """
 
 from __future__ import annotations
+
+import math
 
 from mtmc.graph.structure import Plan
 
@@ -57,12 +60,16 @@ def _scalar_dimension(plan: Plan, name: str) -> tuple[int, int]:
     dimension of their first input; ``meas`` and the coordinates of points are lengths.
     Walked with a stack of its own, not recursion: a chain of thousands of
     ``displace`` transitions is as good as a short one. A place met again on the way (a
-    cycle, which a checked graph has not) counts as marked.
+    cycle, which a checked graph has not) counts as marked. What it finds is kept in
+    ``plan.dimensions``, for the next place asked.
     """
-    memo: dict[str, tuple[int, int]] = {}
+    memo = plan.dimensions
     stack, path = [name], set()
     while stack:
         n = stack[-1]
+        if n in memo:
+            stack.pop()
+            continue
         rule = _rule(plan, n)
         if isinstance(rule[0], int):
             memo[n] = rule
@@ -158,9 +165,14 @@ def file_unit(plan: Plan, name: str, part: str = "value") -> tuple[float, str]:
     Returns
     -------
     scale : float
-        ``factor ** (power of length)``: divide a library value by it.
+        ``factor ** (power of length)``: divide a library value by it; ``π/180`` for a
+        marked place written in degrees.
     unit : str
-        :func:`unit_of` the dimension, in the file's unit of length.
+        :func:`unit_of` the dimension, in the file's unit of length; ``"deg"`` for a
+        marked place written in degrees, so that ``alpha = 30 deg`` shows as 30 deg.
     """
+    place = plan.graph.place(name)
+    if part == "value" and place is not None and place.unit == "deg":
+        return math.pi / 180.0, "deg"
     length, angle = place_dimension(plan, name, part)
     return plan.graph.factor**length, unit_of((length, angle), plan.graph.units)
