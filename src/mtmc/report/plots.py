@@ -10,6 +10,7 @@ distributions of a quantity as deviations from its estimate.
 from __future__ import annotations
 
 import io
+import itertools
 import re
 from typing import Any
 
@@ -75,9 +76,111 @@ def _vectors_mm(f: dict[str, Any]) -> Any:
     return vec / _PER_MM.get(str(f.get("unit", "mm")), 1.0)
 
 
+#: The least gap between two tick labels of an axis, and between a text and the figure's
+#: edge, in points.
+_GAP = 2.0
+
+
+def _ticks_touch(axis: Any, renderer: Any) -> bool:
+    """Whether two neighbouring tick labels of a linear ``axis`` come closer than ``_GAP``.
+
+    The labels are those its locator and formatter give for the view, measured in the
+    font of tick labels where the axis puts them; no tick is drawn.
+    """
+    from matplotlib import rcParams
+    from matplotlib.font_manager import FontProperties
+
+    lo, hi = sorted(axis.get_view_interval())
+    eps = 1e-9 * max(abs(lo), abs(hi), hi - lo)
+    locs = [v for v in axis.get_major_locator()() if lo - eps <= v <= hi + eps]
+    texts = axis.get_major_formatter().format_ticks(locs)
+    x = axis.axis_name == "x"
+    prop = FontProperties(size=rcParams["xtick.labelsize" if x else "ytick.labelsize"])
+    xy = [(v, 0.0) if x else (0.0, v) for v in locs]
+    at = axis.axes.transData.transform(xy)[:, 0 if x else 1]
+    ends = []
+    for c, text in zip(at, texts, strict=True):
+        w, h, _ = renderer.get_text_width_height_descent(text, prop, ismath=False)
+        half = (w if x else h) / 2.0
+        ends.append((c - half, c + half))
+    ends.sort()
+    gap = _GAP * renderer.points_to_pixels(1.0)
+    return any(b[0] - a[1] < gap for a, b in itertools.pairwise(ends))
+
+
+def _thin(fig: Any, renderer: Any) -> None:
+    """Fewer ticks on each linear axis of ``fig`` whose tick labels touch, until none do."""
+    from matplotlib.ticker import MaxNLocator
+
+    for ax in fig.axes:
+        if ax.name != "rectilinear":
+            continue
+        ax.apply_aspect()  # an axes of equal aspect takes its drawn size
+        for axis in (ax.xaxis, ax.yaxis):
+            if axis.get_scale() != "linear":
+                continue
+            bins = len(axis.get_major_locator()())
+            while bins > 2 and _ticks_touch(axis, renderer):
+                bins -= 1
+                axis.set_major_locator(MaxNLocator(nbins=bins, steps=[1, 2, 2.5, 5, 10]))
+
+
+def _view_3d(ax: Any, labels: tuple[str, str, str], size: float) -> None:
+    """Ticks and labels of a 3-D view that leave each other room at ``size`` points.
+
+    The labels of a 3-D view move with its projection, where :func:`_fit` does not measure
+    them: at most four intervals an axis, the tick labels a point smaller than the axis'
+    labels, and those set off from them.
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    for axis, text in zip((ax.xaxis, ax.yaxis, ax.zaxis), labels, strict=True):
+        axis.set_major_locator(MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]))
+        axis.set_label_text(text, fontsize=size)
+        axis.labelpad = size
+    ax.tick_params(labelsize=size - 1.0, pad=0.0)
+
+
+def _fit(fig: Any) -> None:
+    """Make every text of ``fig`` legible and keep it inside the figure, at its size.
+
+    Measured on the figure (Agg's metrics of DejaVu Sans, the font the SVG names): a
+    linear axis whose tick labels touch (``-0.0075`` beside ``-0.0050``) takes fewer
+    ticks until they do not, and the margins grow by what sticks out of the figure (an
+    axis label, the ``1e8`` of an offset), after which the ticks are looked at again.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.transforms import Bbox
+
+    canvas: Any = FigureCanvasAgg(fig)
+    renderer = canvas.get_renderer()
+    _thin(fig, renderer)
+    # what can stick out: the axes' ticks, labels and offsets, a 3-D view, a colour bar
+    # (a legend stays inside its axes)
+    parts = [
+        part.get_tightbbox(renderer)
+        for ax in fig.axes
+        for part in ((ax.xaxis, ax.yaxis, ax.title) if ax.name == "rectilinear" else (ax,))
+    ]
+    box = Bbox.union([b for b in parts if b is not None and b.width > 0])
+    w, h = fig.get_size_inches() * fig.dpi  # pixels, as the boxes
+    pad = _GAP * renderer.points_to_pixels(1.0)
+    out = (pad - box.x0, box.x1 - w + pad, pad - box.y0, box.y1 - h + pad)
+    if max(out) > 0.0:
+        sp = fig.subplotpars
+        fig.subplots_adjust(
+            left=sp.left + max(out[0], 0.0) / w,
+            right=sp.right - max(out[1], 0.0) / w,
+            bottom=sp.bottom + max(out[2], 0.0) / h,
+            top=sp.top - max(out[3], 0.0) / h,
+        )
+        _thin(fig, renderer)
+
+
 def _svg(fig: Any, salt: str) -> str:
     import matplotlib
 
+    _fit(fig)
     buf = io.StringIO()
     # a salt per plot of a page keeps the ids of its clip paths apart from the other
     # SVGs of the page, and the same from one rendering to the next
@@ -331,15 +434,13 @@ def field_figure(f: dict[str, Any]) -> Any:
                 pts[:, i], pts[:, j], c=c, cmap="viridis", s=28, edgecolors="k", linewidths=0.3
             )
         a3.scatter(pts[:, 0], pts[:, 1], pts[:, 2], c=c, cmap="viridis", s=20)
-        fig.colorbar(sc, ax=a3, shrink=0.7, pad=0.12, label=f"{f['name']}{per_unit(label)}")
+        fig.colorbar(sc, ax=a3, shrink=0.7, pad=0.3, label=f"{f['name']}{per_unit(label)}")
     for ax, (i, j) in ((a1, (0, 1)), (a2, (0, 2))):
         ax.set_xlabel(f"{names[i]} / mm")
         ax.set_ylabel(f"{names[j]} / mm")
         if f["kind"] != "vectors":
             ax.set_aspect("equal", adjustable="datalim")
-    a3.set_xlabel(f"{names[0]} / mm", fontsize=7)
-    a3.set_ylabel(f"{names[1]} / mm", fontsize=7)
-    a3.set_zlabel(f"{names[2]} / mm", fontsize=7)
+    _view_3d(a3, (f"{names[0]} / mm", f"{names[1]} / mm", f"{names[2]} / mm"), 7.0)
     return fig
 
 
@@ -393,9 +494,8 @@ def sweep_svg(sw: dict[str, Any]) -> str:
         aa, bb = np.meshgrid(axes[0], axes[1], indexing="ij")
         ax.plot_surface(aa, bb, u_fit, cmap="viridis", alpha=0.55, linewidth=0)
         ax.scatter(grid[:, 0], grid[:, 1], u, color="C3", s=12, label="Monte Carlo")
-        ax.set_xlabel(f"{names[0]} / {g_unit}", fontsize=8)
-        ax.set_ylabel(f"{names[1]} / {g_unit}", fontsize=8)
-        ax.set_zlabel(f"u({sw['output']}){per_unit(label)}", fontsize=8)
+        z = f"u({sw['output']}){per_unit(label)}"
+        _view_3d(ax, (f"{names[0]} / {g_unit}", f"{names[1]} / {g_unit}", z), 8.0)
         ax.legend(fontsize=7, loc="upper left")
     else:
         fig = _figure(6.0, 3.4, left=0.12, right=0.98, bottom=0.15, top=0.97)
