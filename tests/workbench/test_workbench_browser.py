@@ -245,3 +245,37 @@ def test_every_label_is_within_the_canvas_once_the_results_are_shown(page):
     )
     assert outside == []
     assert errors == []
+
+
+def test_a_new_node_is_placed_clear_of_every_node_and_label(page):
+    """A node added from the palette lands where its box and its label's meet no box of a
+    node or its label as drawn at that moment (Cytoscape's bounding boxes, labels
+    included; a place's label holds its result line, ``-12.70000 ± 0.00050 mm``). It was
+    placed 60 units from the other nodes' centres: on the labels under them."""
+    pg, (_path, url), errors = page
+    boxes_js = """() => Object.fromEntries(window.workbench.cy.nodes().map((n) => {
+        const b = n.boundingBox({includeLabels: true});
+        return [n.id(), [b.x1, b.y1, b.x2, b.y2]]; }))"""
+    centre_js = "(n) => { const cy = window.workbench.cy; cy.center(cy.getElementById(n)); }"
+    hits = []
+    for centre in ("neg_r1", "x1", "cx", "p"):
+        pg.goto(url)
+        _settled(pg)
+        pg.wait_for_function("() => Object.keys(window.workbench.state.results).length > 0")
+        pg.wait_for_timeout(300)  # the labels drawn with their result lines
+        # the view centred on a node (a person pans there), where a new node is tried first
+        pg.evaluate(centre_js, centre)
+        before = pg.evaluate(boxes_js)
+        pg.click('#place-types button[data-place-type="point"]')
+        pg.wait_for_function(f"() => window.workbench.cy.nodes().length === {len(before) + 1}")
+        pg.wait_for_timeout(100)
+        after = pg.evaluate(boxes_js)
+        (new,) = set(after) - set(before)
+        a = after[new]
+        hits += [
+            (new, centre, b)
+            for b, box in before.items()
+            if min(a[2], box[2]) > max(a[0], box[0]) and min(a[3], box[3]) > max(a[1], box[1])
+        ]
+    assert hits == []
+    assert errors == []

@@ -527,16 +527,19 @@ function rename(old, name) {
 }
 
 function freeSpot() {
-  // the first point from the middle of the view, on a spiral of 70-unit steps, with no node near
+  // the first point from the middle of the view, on a spiral of 70-unit steps, where a new
+  // node and the two lines of its label (a box of 120 × 70 units) meet no node and no label
   const ext = cy.extent();
   const cx = (ext.x1 + ext.x2) / 2, cyy = (ext.y1 + ext.y2) / 2;
-  const taken = cy.nodes().map((n) => n.position());
-  for (let i = 0; i < 400; i++) {
+  const gap = 8;
+  const boxes = cy.nodes().map((n) => n.boundingBox({ includeLabels: true }));
+  const clear = (b) => boxes.every((o) => b.x2 + gap < o.x1 || b.x1 - gap > o.x2 || b.y2 + gap < o.y1 || b.y1 - gap > o.y2);
+  for (let i = 0; i < 2000; i++) {
     const r = 70 * Math.ceil(Math.sqrt(i)), a = i * 2.4;
     const at = { x: cx + r * Math.cos(a), y: cyy + r * Math.sin(a) };
-    if (taken.every((p) => Math.hypot(p.x - at.x, p.y - at.y) > 60)) return at;
+    if (clear({ x1: at.x - 60, x2: at.x + 60, y1: at.y - 20, y2: at.y + 50 })) return at;
   }
-  return { x: cx, y: cyy };
+  return { x: ext.x2 + 120, y: cyy };
 }
 
 function addNode(kind, what) {
