@@ -151,9 +151,9 @@ if TYPE_CHECKING:
     from mtmc.kinematics.library import library_names as library_names
     from mtmc.kinematics.machine import Machine as Machine
     from mtmc.kinematics.topology import parse_topology as parse_topology
-    from mtmc.study.base import StudyResult as StudyResult
     from mtmc.study.load import load_result as load_result
     from mtmc.study.render import render_report as render_report
+    from mtmc.study.result import StudyResult as StudyResult
     from mtmc.study.spec import load_study as load_study
     from mtmc.study.spec import loads_study as loads_study
     from mtmc.study.write import write_result as write_result

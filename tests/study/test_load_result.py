@@ -2,7 +2,7 @@
 
 The references: the :class:`StudyResult` that was written (every field, bit for bit),
 the engine's :func:`mtmc.uncertainty.decision.conformity` on a Monte Carlo run of the
-same seed, and :func:`mtmc.study.base.quantity` of the same values.
+same seed, and :func:`mtmc.study.result.quantity` of the same values.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import pytest
 import mtmc
 from mtmc.errors import InputError
 from mtmc.study import load_result, loads_study, study_result, write_result
-from mtmc.study.base import Quantity, StudyResult, quantity
+from mtmc.study.result import Quantity, StudyResult, quantity
 from mtmc.study.settings import RunSettings
 
 STUDY = """\

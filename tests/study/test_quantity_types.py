@@ -1,4 +1,4 @@
-"""The typed parts of a :class:`~mtmc.study.base.Quantity`: frozen, read back, in another unit.
+"""The typed parts of a :class:`~mtmc.study.result.Quantity`: frozen, read back, in another unit.
 
 The references: the ``result.json`` that :func:`mtmc.write_result` wrote from the same run
 (the entry of the quantity, byte for byte as JSON), and the values of the quantity in mm

@@ -9,7 +9,7 @@ folder where a file belongs is refused, never opened), reads JSON within limits
 than its file holds), and checks ``result.json`` against ``docs/results-format.md``: the
 format version, the keys every result has and their types, ``u ≥ 0``, ``trials ≥ 1``,
 ``0 < p < 1``, and arrays of the lengths they must have. Whatever it returns can be turned
-into a :class:`~mtmc.study.base.StudyResult` and drawn as a report; whatever it refuses is
+into a :class:`~mtmc.study.result.StudyResult` and drawn as a report; whatever it refuses is
 one :class:`~mtmc.errors.InputError` naming the file and the field.
 """
 

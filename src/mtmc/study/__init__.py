@@ -16,7 +16,10 @@ from mtmc.study import kinematics as _kinematics  # noqa: F401  (registers kinem
 from mtmc.study import positioning as _positioning  # noqa: F401  (registers positioning)
 from mtmc.study import propagate as _propagate  # noqa: F401  (registers propagate)
 from mtmc.study import verification as _verification  # noqa: F401  (registers verification)
-from mtmc.study.base import (
+from mtmc.study.base import Study
+from mtmc.study.load import load_result, study_result
+from mtmc.study.render import render_report
+from mtmc.study.result import (
     BudgetLine,
     Convergence,
     GumSummary,
@@ -25,13 +28,10 @@ from mtmc.study.base import (
     Quantity,
     Region,
     Reported,
-    Study,
     StudyResult,
     Table,
     ValidationSummary,
 )
-from mtmc.study.load import load_result, study_result
-from mtmc.study.render import render_report
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import (
     StudyKind,

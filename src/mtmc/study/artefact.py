@@ -18,8 +18,9 @@ from typing import Any
 import numpy as np
 
 from mtmc.document import Fields
-from mtmc.study.base import PointField, ProgressFn, Quantity, Study, StudyResult, Table, quantity
+from mtmc.study.base import ProgressFn, Study
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.result import PointField, Quantity, StudyResult, Table, quantity
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.montecarlo import adaptive_block_size

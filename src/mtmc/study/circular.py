@@ -73,10 +73,11 @@ import numpy as np
 
 from mtmc.document import MAX_DEG, MAX_MM, Fields
 from mtmc.errors import MtmcError
-from mtmc.study.base import ProgressFn, Quantity, Study, StudyResult, Table, quantity
+from mtmc.study.base import ProgressFn, Study
 from mtmc.study.conformity import ConformitySpec, assess_quantity, read_output_conformity
 from mtmc.study.observations import input_record, read_distribution
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
+from mtmc.study.result import Quantity, StudyResult, Table, quantity
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 
@@ -555,11 +556,13 @@ def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str],
                     f"unknown error {t!r}; expected some of {', '.join(names)}", "terms"
                 )
     meas = None if trace is None else trace.readings
+    rms = None
     try:
         model, inputs = rotary_model(jac, errors, names=names, identify=terms, measured=meas, **kw)
-        if meas is not None and kw.get("noise", getattr(kw.get("ballbar"), "noise", 0.0)) == 0.0:
+        if meas is not None:
             rms = model.residual_rms(meas)  # the readings' own scatter (Type A)
-            kw = _with_noise(kw, rms)
+        if rms is not None and kw.get("noise", getattr(kw.get("ballbar"), "noise", 0.0)) == 0.0:
+            kw = _with_noise(kw, rms)  # the same design: the same residuals
             model, inputs = rotary_model(
                 jac, errors, names=names, identify=terms, measured=meas, **kw
             )
@@ -569,8 +572,8 @@ def _read_rotary(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str],
     units = {k: parameter_unit(machine, k) for k in names}
     plot = _rotary_plot(topo, machine, axis, angles, point, q, kw, instrument, trace, errors)
     plot["identifiability"] = model.identifiability.text()
-    if trace is not None:
-        plot["rms_um"] = 1e3 * model.residual_rms(trace.readings)
+    if rms is not None:
+        plot["rms_um"] = 1e3 * rms
     return model, inputs, limits, units, plot
 
 

@@ -33,7 +33,7 @@ from typing import Any
 
 from mtmc.document import Fields, KeyPath, Source
 from mtmc.errors import InputError
-from mtmc.study.base import Quantity
+from mtmc.study.result import Quantity
 from mtmc.uncertainty.decision import conformance_probability, conformity
 from mtmc.uncertainty.propagation import GumResult
 from mtmc.uncertainty.results import MonteCarloResult

@@ -32,18 +32,10 @@ from mtmc.graph.structure import Graph, Plan
 from mtmc.graph.sweep import Surrogate, apply_setting, sweep_graph
 from mtmc.graph.units import file_unit, place_dimension, unit_of
 from mtmc.graph.values import PARTS, normal_plane_parts
-from mtmc.study.base import (
-    ProgressFn,
-    Quantity,
-    Region,
-    Study,
-    StudyResult,
-    Table,
-    quantity,
-    region,
-)
+from mtmc.study.base import ProgressFn, Study
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
+from mtmc.study.result import Quantity, Region, StudyResult, Table, quantity, region
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.propagation import gum

@@ -23,10 +23,11 @@ from mtmc.errors import InputError, MtmcError
 from mtmc.kinematics.library import library_machine, library_names
 from mtmc.kinematics.machine import Machine
 from mtmc.kinematics.topology import is_rotary
-from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
+from mtmc.study.base import ProgressFn, Study
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.propagate import read_inputs
+from mtmc.study.result import PointField, StudyResult, Table, quantity
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.distributions import Distribution

@@ -2,13 +2,13 @@
 
 :func:`load_result` reads the ``result.json`` (and ``samples/*.npy``) of a result folder
 that :func:`mtmc.write_result` or ``mtmc run`` wrote and returns the frozen
-:class:`~mtmc.study.base.StudyResult` that was written: the same summaries, bit for bit
+:class:`~mtmc.study.result.StudyResult` that was written: the same summaries, bit for bit
 (JSON floats are written with ``repr`` and read back exactly), with the arrays of the
 histograms, convergence curves, regions and fields as arrays again.
 
 :func:`study_result` turns the result of :func:`mtmc.monte_carlo` (one output, or
 named outputs), with the :func:`mtmc.gum` result of the same model where there is one,
-into a :class:`~mtmc.study.base.StudyResult` of kind ``monte_carlo``, so that
+into a :class:`~mtmc.study.result.StudyResult` of kind ``monte_carlo``, so that
 :func:`mtmc.write_result` and :func:`mtmc.render_report` take it as they take a study's.
 """
 
@@ -25,7 +25,7 @@ from mtmc.document import InputFile
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_floats
 from mtmc.report.folder import read_folder
-from mtmc.study.base import (
+from mtmc.study.result import (
     BudgetLine,
     Convergence,
     GumSummary,

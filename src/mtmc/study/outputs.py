@@ -33,11 +33,12 @@ from numpy.typing import NDArray
 
 from mtmc.document import MAX_NAMES, Fields, check_length
 from mtmc.errors import InputError, MtmcError
-from mtmc.study.base import SCATTER_POINTS, ProgressFn, Study, StudyResult, quantity
+from mtmc.study.base import ProgressFn, Study
 from mtmc.study.conformity import ConformitySpec, assess_quantity
 from mtmc.study.correlation import CorrelationSpec, correlation_record
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, run_record
+from mtmc.study.result import SCATTER_POINTS, StudyResult, quantity
 from mtmc.study.settings import RunSettings
 from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.formula import Expression, check_components, expression

@@ -24,17 +24,10 @@ from typing import Any
 
 from mtmc.document import Fields, Source
 from mtmc.errors import InputError
-from mtmc.study.base import (
-    ProgressFn,
-    Quantity,
-    Reported,
-    Study,
-    StudyResult,
-    Table,
-    quantity,
-)
+from mtmc.study.base import ProgressFn, Study
 from mtmc.study.observations import input_record, read_distribution
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
+from mtmc.study.result import Quantity, Reported, StudyResult, Table, quantity
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.tolerance import round_to_uncertainty

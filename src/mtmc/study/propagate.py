@@ -15,7 +15,7 @@ from typing import Any
 
 from mtmc.document import Fields
 from mtmc.errors import InputError, MtmcError
-from mtmc.study.base import ProgressFn, Study, StudyResult, quantity
+from mtmc.study.base import ProgressFn, Study
 from mtmc.study.conformity import (
     ConformitySpec,
     assess_quantity,
@@ -26,6 +26,7 @@ from mtmc.study.correlation import CorrelationSpec, correlation_record, read_cor
 from mtmc.study.observations import input_record, read_distribution, read_input_table
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.outputs import check_vector_use, read_outputs_study
+from mtmc.study.result import StudyResult, quantity
 from mtmc.study.sensitivity import SensitivitySettings, read_sensitivity, sensitivity_record
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind

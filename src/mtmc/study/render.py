@@ -52,7 +52,7 @@ def render_report(source: str | Path | _Source, path: str | Path | None = None) 
     source : path-like, mapping or result
         A result folder (its ``report.html`` is written), the content of a
         ``result.json``, a result whose ``to_dict()`` gives it (a
-        :class:`~mtmc.study.base.StudyResult`), or the result of :func:`mtmc.monte_carlo`
+        :class:`~mtmc.study.result.StudyResult`), or the result of :func:`mtmc.monte_carlo`
         (made a study result of kind ``monte_carlo`` by
         :func:`mtmc.study.load.study_result`).
     path : path-like, optional

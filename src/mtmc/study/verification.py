@@ -20,7 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mtmc.document import Fields
-from mtmc.study.base import PointField, ProgressFn, Study, StudyResult, Table, quantity
+from mtmc.study.base import ProgressFn, Study
+from mtmc.study.result import PointField, StudyResult, Table, quantity
 from mtmc.study.settings import RunSettings
 from mtmc.study.spec import register_kind
 

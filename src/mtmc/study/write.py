@@ -44,7 +44,7 @@ from mtmc._version import __version__
 from mtmc.document import InputFile
 from mtmc.errors import InputError
 from mtmc.io import _umask, deferred_interrupt, naming_os_errors
-from mtmc.study.base import StudyResult
+from mtmc.study.result import StudyResult
 from mtmc.uncertainty.results import MonteCarloResult, MonteCarloResults
 
 __all__ = ["INPUTS", "LIBRARIES", "copy_names", "now", "provenance", "study_copy", "write_result"]
