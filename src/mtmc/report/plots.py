@@ -154,9 +154,10 @@ def _fit(fig: Any) -> None:
     """Make every text of ``fig`` legible and keep it inside the figure, at its size.
 
     Measured on the figure (Agg's metrics of DejaVu Sans, the font the SVG names): a
-    linear axis whose tick labels touch (``-0.0075`` beside ``-0.0050``) takes fewer
-    ticks until they do not, and the margins grow by what sticks out of the figure (an
-    axis label, the ``1e8`` of an offset), after which the ticks are looked at again.
+    linear axis takes at most ``_BINS`` intervals, and fewer where its tick labels touch
+    (``-0.0075`` beside ``-0.0050``) until they do not; the margins grow by what sticks
+    out of the figure (an axis label, the ``1e8`` of an offset), after which the ticks
+    are looked at again. A browser test holds every report of the demo to it.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.transforms import Bbox
