@@ -228,7 +228,9 @@ def test_run_table_in_graph_units(tmp_path, capsys):
     _check_rounded(*row("twice")[3:5], t.estimate * 1e3, t.u * 1e3)
     assert row("k")[3:] == ["2", "0", "1"]
     tilt = lib.places["tilt"]
-    assert row("tilt")[3:] == [*round_to_uncertainty(tilt.estimate, tilt.u), "rad"]
+    # tilt is written in deg: shown in deg, the library's rad divided by π/180
+    deg = np.pi / 180.0
+    assert row("tilt")[3:] == [*round_to_uncertainty(tilt.estimate / deg, tilt.u / deg), "deg"]
     assert abs(tilt.estimate - np.pi / 6) < 1e-3
     assert row("pln")[2] == "point"
     assert row("pln")[-1] == "um"
