@@ -114,9 +114,16 @@ def _ticks_touch(axis: Any, renderer: Any) -> bool:
 _BINS = 8
 
 
+def _at_most(bins: int) -> Any:
+    """Ticks at most ``bins`` intervals apart, at Matplotlib's steps (1, 2, 2.5, 5, 10)."""
+    from matplotlib.ticker import MaxNLocator
+
+    return MaxNLocator(nbins=bins, steps=[1, 2, 2.5, 5, 10])
+
+
 def _thin(fig: Any, renderer: Any) -> None:
     """Fewer ticks on each linear axis of ``fig`` whose tick labels touch, until none do."""
-    from matplotlib.ticker import AutoLocator, MaxNLocator
+    from matplotlib.ticker import AutoLocator
 
     for ax in fig.axes:
         if ax.name != "rectilinear":
@@ -127,11 +134,11 @@ def _thin(fig: Any, renderer: Any) -> None:
                 continue
             if type(axis.get_major_locator()) is AutoLocator:
                 bins = min(_BINS, max(int(axis.get_tick_space()), 1))
-                axis.set_major_locator(MaxNLocator(nbins=bins, steps=[1, 2, 2.5, 5, 10]))
+                axis.set_major_locator(_at_most(bins))
             bins = len(axis.get_major_locator()())
             while bins > 2 and _ticks_touch(axis, renderer):
                 bins -= 1
-                axis.set_major_locator(MaxNLocator(nbins=bins, steps=[1, 2, 2.5, 5, 10]))
+                axis.set_major_locator(_at_most(bins))
 
 
 def _view_3d(ax: Any, labels: tuple[str, str, str], size: float) -> None:
@@ -141,10 +148,8 @@ def _view_3d(ax: Any, labels: tuple[str, str, str], size: float) -> None:
     them: at most four intervals an axis, the tick labels a point smaller than the axis'
     labels, and those set off from them.
     """
-    from matplotlib.ticker import MaxNLocator
-
     for axis, text in zip((ax.xaxis, ax.yaxis, ax.zaxis), labels, strict=True):
-        axis.set_major_locator(MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]))
+        axis.set_major_locator(_at_most(4))
         axis.set_label_text(text, fontsize=size)
         axis.labelpad = size
     ax.tick_params(labelsize=size - 1.0, pad=0.0)
