@@ -228,3 +228,22 @@ def test_a_report_of_many_quantities_draws_the_first_few_and_says_so(written: Pa
     assert page.count('data-plot="convergence:') == MAX_PLOTTED
     assert page.count('class="unplotted"') == 3
     assert f"the first {MAX_PLOTTED}" in page
+
+
+def test_the_provenance_table_names_the_copy_of_each_input_file(written: Path) -> None:
+    # Jinja's f.copy found dict.copy, a method, before the "copy" key: the report read
+    # "copied as <built-in method copy of dict object at 0x…>". Reference: provenance.json.
+    from mtmc.report import html
+
+    prov = json.loads((written / "provenance.json").read_text(encoding="utf-8"))
+    prov["input_files"] = [
+        {
+            "field": "graph",
+            "given": "../graphs/axis_c.toml",
+            "copy": "inputs/axis_c.toml",
+            "sha256": "f" * 64,
+        }
+    ]
+    page = html(_doc(written), prov)
+    assert "copied as <code>inputs/axis_c.toml</code>" in page
+    assert "built-in method" not in page
