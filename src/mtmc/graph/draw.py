@@ -159,5 +159,7 @@ def draw_graph(graph: Graph | Plan, path: str | Path) -> None:
         ax.text(x, y - 18.0, f"{t.name}\n{t.op}", ha="center", va="bottom", fontsize=LABEL_PT)
     import matplotlib
 
+    # no date in an SVG or PDF: the same graph draws the same file (a report's bytes)
+    dated = Path(path).suffix.lower() not in (".svg", ".pdf")
     with matplotlib.rc_context({"svg.fonttype": "none"}):  # names stay text in the SVG
-        fig.savefig(str(path))
+        fig.savefig(str(path), metadata=None if dated else {"Date": None})
