@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import fcntl
 import os
 import signal
+from collections.abc import Callable
+from pathlib import Path
 from typing import NoReturn
 
 import pytest
@@ -35,3 +38,50 @@ def absent(what: str, remedy: str) -> NoReturn:
     if os.environ.get("CI", "").lower() == "true":
         pytest.fail(f"{reason}; CI=true, where .ci/run installs it", pytrace=False)
     pytest.skip(reason, allow_module_level=True)
+
+
+#: The trials each shipped study (``examples/studies``) is run with for the tests that read
+#: its result folder and report (:func:`shipped`): enough for every table and plot, few
+#: enough that the 16 folders take about a minute. The seed is :data:`SHIPPED_SEED`.
+SHIPPED_TRIALS: dict[str, int] = {
+    "aguado2016": 20,  # a verification: its Monte Carlo re-identifies the machine per trial
+    "aguado2017": 20,
+    "wang2022": 100,  # an artefact study: one identification a trial
+    "circle_xy": 60,
+    "circle_c_axis": 60,
+    "circle_b_axis": 60,
+}
+SHIPPED_SEED = 3
+
+
+@pytest.fixture(scope="session")
+def shipped(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Path]:
+    """The result folder of a shipped study, written once for the whole test session.
+
+    ``shipped("axis_c")`` runs ``examples/studies/axis_c.toml`` with
+    ``SHIPPED_TRIALS`` (400 where it names none) and :data:`SHIPPED_SEED`, and writes its
+    folder with its report, as ``mtmc run -o`` does. Under pytest-xdist every worker
+    reads the same folders: the first to ask for one writes it, under a file lock, and
+    the others wait for that one. The folders are shared: a test that changes one copies
+    it first.
+    """
+    from mtmc.study import load_study, write_result
+
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # the workers' temporary folders share this one
+    root = base / "shipped"
+    root.mkdir(exist_ok=True)
+    studies = Path(__file__).resolve().parents[1] / "examples" / "studies"
+
+    def folder(name: str) -> Path:
+        out = root / name
+        with open(root / f"{name}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+            if not (out / "report.html").is_file():  # written whole, or not at all
+                study = load_study(studies / f"{name}.toml")
+                result = study.run(trials=SHIPPED_TRIALS.get(name, 400), seed=SHIPPED_SEED)
+                write_result(result, out, study_text=study.source.text)
+        return out
+
+    return folder

@@ -11,10 +11,7 @@ from pathlib import Path
 import pytest
 
 from conftest import absent
-from mtmc.study import load_study, write_result
 
-ROOT = Path(__file__).resolve().parents[2]
-STUDIES = ROOT / "examples" / "studies"
 FLAGS = [
     "--headless",
     "--no-sandbox",
@@ -44,17 +41,9 @@ def chromium() -> str:
     return path
 
 
-def _report(tmp_path_factory, name: str, trials: int) -> Path:
-    """The report of a shipped study, run with ``trials`` trials."""
-    out = tmp_path_factory.mktemp("browser") / name
-    study = load_study(STUDIES / f"{name}.toml")
-    write_result(study.run(trials=trials, seed=2), out, study_text=study.source.text)
-    return out / "report.html"
-
-
 @pytest.fixture(scope="module")
-def page(tmp_path_factory):
-    return _report(tmp_path_factory, "bcs_origin", 4000)
+def page(shipped):
+    return shipped("bcs_origin") / "report.html"
 
 
 def _run(chromium: str, profile: Path, *args: str) -> subprocess.CompletedProcess[str]:
@@ -113,8 +102,8 @@ def test_a_screenshot_is_saved(chromium, page, tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def artefact_page(tmp_path_factory):
-    return _report(tmp_path_factory, "wang2022", 400)
+def artefact_page(shipped):
+    return shipped("wang2022") / "report.html"
 
 
 def test_the_artefact_report_draws_a_histogram_per_quantity(chromium, artefact_page, tmp_path):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -66,11 +67,8 @@ def _lookup(doc, key):
 
 
 @pytest.fixture(scope="module", params=["mass_calibration", "bcs_origin", "axis_c", "five_axis"])
-def folder(request, tmp_path_factory):
-    study = load_study(STUDIES / f"{request.param}.toml")
-    out = tmp_path_factory.mktemp("rep") / request.param
-    write_result(study.run(trials=4000, seed=5), out, study_text=study.source.text)
-    return out
+def folder(request, shipped):
+    return shipped(request.param)
 
 
 def test_every_number_shown_is_the_one_in_result_json(folder):
@@ -161,12 +159,11 @@ def _decimals(text):
     return len(text.split(".")[1]) if "." in text else 0
 
 
-def test_summary_rounds_u_and_the_interval_and_the_tables_keep_one_decimal_place(tmp_path):
+def test_summary_rounds_u_and_the_interval_and_the_tables_keep_one_decimal_place(shipped):
     # JCGM 101 §5.5: u(y) to two significant digits, the interval ends to its decimal place
     # (the summary); the tables of each quantity show every length to one decimal place
     # (that of u at four digits), so d_low and d_high can be recomputed from them
-    study = load_study(STUDIES / "bcs_origin.toml")
-    folder = write_result(study.run(trials=3000, seed=2), tmp_path / "b")
+    folder = shipped("bcs_origin")
     doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
     parser = _Cells()
     parser.feed((folder / "report.html").read_text(encoding="utf-8"))
@@ -246,14 +243,12 @@ def test_the_inputs_of_a_kinematics_study_carry_their_units(folder):
     assert dict(rows) == units
 
 
-def test_a_study_without_input_rows_points_to_its_file_in_the_folder(tmp_path):
+def test_a_study_without_input_rows_points_to_its_file_in_the_folder(shipped, tmp_path):
     # a result with no input rows (result.json without them): the page says where the
     # inputs are, and that place exists (study.toml of the folder, the file whose SHA-256
     # is shown)
     study = load_study(STUDIES / "aguado2017.toml")
-    folder = write_result(
-        study.run(trials=20, seed=1), tmp_path / "v", study_text=study.source.text
-    )
+    folder = Path(shutil.copytree(shipped("aguado2017"), tmp_path / "v"))
     doc = json.loads((folder / "result.json").read_text(encoding="utf-8"))
     (folder / "result.json").write_text(json.dumps({**doc, "inputs": []}), encoding="utf-8")
     page = render(folder).read_text(encoding="utf-8")

@@ -137,22 +137,16 @@ def test_a_t_input_shows_the_u_of_the_budget_and_its_standard_deviation_apart(tm
     assert "standard deviation of the PDF (what the Monte Carlo draws)" in page
 
 
-def _run(name: str, trials: int, out: Path) -> Path:
-    study = load_study(STUDIES / f"{name}.toml")
-    write_result(study.run(trials=trials, seed=1), out, study_text=study.source.text)
-    return out
+@pytest.fixture(scope="module")
+def artefact(shipped) -> Path:
+    """The report folder of wang2022 (Table 2, 36 quantities)."""
+    return shipped("wang2022")
 
 
 @pytest.fixture(scope="module")
-def artefact(tmp_path_factory) -> Path:
-    """The report folder of wang2022 (Table 2, 36 quantities), 100 trials."""
-    return _run("wang2022", 100, tmp_path_factory.mktemp("layout") / "wang2022")
-
-
-@pytest.fixture(scope="module")
-def verification(tmp_path_factory) -> Path:
-    """The report folder of aguado2017 (a verification), 20 trials."""
-    return _run("aguado2017", 20, tmp_path_factory.mktemp("layout") / "aguado2017")
+def verification(shipped) -> Path:
+    """The report folder of aguado2017 (a verification)."""
+    return shipped("aguado2017")
 
 
 def test_the_verification_and_artefact_results_list_their_inputs(artefact, verification):
@@ -228,9 +222,9 @@ def _check_page(pg, errors) -> None:
 
 
 @pytest.fixture(scope="module")
-def graph(tmp_path_factory) -> Path:
+def graph(shipped) -> Path:
     """bcs_origin: a graph of 68 places, 3,600 px wide at its own size."""
-    return _run("bcs_origin", 500, tmp_path_factory.mktemp("layout") / "bcs_origin")
+    return shipped("bcs_origin")
 
 
 def test_the_artefact_report_fits_the_window_and_is_short(browser, artefact):

@@ -170,13 +170,17 @@ HOSTILE = (None, -1, 0, 1e308, -1e-308, "", "x", [], {}, [1, 2], True, 10**39, 0
 def test_a_generated_set_of_tampered_folders_each_ends_in_one_clear_error(
     res: Path, tmp_path: Path
 ) -> None:
-    """200 folders, one value replaced in each: read back and rendered, or one InputError."""
+    """60 folders, one value replaced in each: read back and rendered, or one InputError.
+
+    A fixed set, against the regressions of what it once found; ``make fuzz`` draws more
+    (``tests/fuzz/test_fuzz_files.py``).
+    """
     base = _doc(res)
     paths = _leaves(base)
     rnd = random.Random(38)
     outcomes = {"read": 0, "refused": 0}
     messages: list[str] = []
-    for case in range(200):
+    for case in range(60):
         doc = copy.deepcopy(base)
         path = rnd.choice(paths)
         node = doc
@@ -201,7 +205,7 @@ def test_a_generated_set_of_tampered_folders_each_ends_in_one_clear_error(
     for message in messages:  # one line, naming the file
         assert "\n" not in message
         assert "result.json" in message or "samples" in message
-    assert outcomes["refused"] > 50  # most fields are checked, and the check is not vacuous
+    assert outcomes["refused"] > 25  # most fields are checked (37 of 60), the check is not vacuous
 
 
 def test_loads_json_limits() -> None:

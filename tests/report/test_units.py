@@ -1,10 +1,11 @@
 """One unit rule: the unit a study is written in is the unit of its results everywhere.
 
-Each shipped study is run at few trials into a result folder; from its ``result.json`` and
-its ``report.html`` these tests check that every quantity is given in the unit of its study
-file, that the tables and the plots of one quantity (and of a field, a coverage region, a
-sweep, a positioning test, the outputs together) name the same unit, and that ``mtmc run``
-and the command of the study's kind print one unit (``docs/results-format.md``).
+From each shipped study's result folder (the session's ``shipped`` fixture: few trials),
+its ``result.json`` and its ``report.html``, these tests check that every quantity is given
+in the unit of its study file, that the tables and the plots of one quantity (and of a
+field, a coverage region, a sweep, a positioning test, the outputs together) name the same
+unit, and that ``mtmc run`` and the command of the study's kind print one unit
+(``docs/results-format.md``).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import html as html_text
 import json
 import re
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -19,37 +21,37 @@ import numpy as np
 import pytest
 
 from mtmc.cli.main import main as cli
-from mtmc.study import load_study, write_result
+from mtmc.study import write_result
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDIES = ROOT / "examples" / "studies"
 
 #: The unit each shipped study gives its quantities in, as its file writes them (``1``:
-#: the components of a unit direction), and the trials it is run with here.
-STUDY_UNITS: dict[str, tuple[set[str], int]] = {
+#: the components of a unit direction).
+STUDY_UNITS: dict[str, set[str]] = {
     # verification: machine errors and tracker noise written in um and urad, travel in mm
-    "aguado2016": ({"µm"}, 20),
-    "aguado2017": ({"µm"}, 20),
+    "aguado2016": {"µm"},
+    "aguado2017": {"µm"},
     # graph studies: the graph file's units = "mm"
-    "axis_a": ({"mm", "1"}, 400),
-    "axis_c": ({"mm", "1"}, 400),
-    "ball_centre": ({"mm"}, 400),
-    "bcs_origin": ({"mm"}, 400),
+    "axis_a": {"mm", "1"},
+    "axis_c": {"mm", "1"},
+    "ball_centre": {"mm"},
+    "bcs_origin": {"mm"},
     # propagate: the file's unit = "mm" / "mg", or the unit of each of its [outputs]
-    "bore_type_a": ({"mm"}, 400),
-    "gauge_blocks_correlated": ({"mm"}, 400),
-    "mass_calibration": ({"mg"}, 400),
-    "polar_coordinates": ({"mm", "rad"}, 400),
+    "bore_type_a": {"mm"},
+    "gauge_blocks_correlated": {"mm"},
+    "mass_calibration": {"mg"},
+    "polar_coordinates": {"mm", "rad"},
     # kinematics: errors and poses in mm ("lengths in mm, angles in rad")
-    "five_axis": ({"mm"}, 400),
+    "five_axis": {"mm"},
     # positioning: units = "mm,um", the deviations and the parameters in µm
-    "positioning_x": ({"µm"}, 400),
+    "positioning_x": {"µm"},
     # artefact: "Lengths in um, angles in urad" (positions of the artefact and probe in mm)
-    "wang2022": ({"µm"}, 60),
+    "wang2022": {"µm"},
     # circular: the parameters and the errors in the report's µm, µrad, µm/m and ms
-    "circle_xy": ({"µm", "µrad", "µm/m", "ms"}, 60),
-    "circle_c_axis": ({"µm", "µrad"}, 60),
-    "circle_b_axis": ({"µm", "µrad"}, 60),
+    "circle_xy": {"µm", "µrad", "µm/m", "ms"},
+    "circle_c_axis": {"µm", "µrad"},
+    "circle_b_axis": {"µm", "µrad"},
 }
 
 #: Units of length: within one report each kind of quantity has one of them.
@@ -102,19 +104,13 @@ class Report:
 
 
 @pytest.fixture(scope="module")
-def reports(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Report]:
-    out = {}
-    for name, (_, trials) in STUDY_UNITS.items():
-        study = load_study(STUDIES / f"{name}.toml")
-        folder = tmp_path_factory.mktemp("units") / name
-        write_result(study.run(trials=trials, seed=3), folder, study_text=study.source.text)
-        out[name] = Report(name, folder)
-    return out
+def reports(shipped: Callable[[str], Path]) -> dict[str, Report]:
+    return {name: Report(name, shipped(name)) for name in STUDY_UNITS}
 
 
 def test_every_quantity_is_in_the_unit_its_study_is_written_in(reports: dict[str, Report]) -> None:
     assert set(STUDY_UNITS) == {p.stem for p in STUDIES.glob("*.toml")}  # every shipped study
-    for name, (units, _) in STUDY_UNITS.items():
+    for name, units in STUDY_UNITS.items():
         got = {q["unit"] for q in reports[name].doc["quantities"]}
         assert got == units, name
 
