@@ -225,7 +225,7 @@ def test_cli_runs_on_the_cluster_with_the_same_numbers(client, capsys):
 def test_mtmc_run_through_a_scheduler_address(client, tmp_path):
     from mtmc.cli.main import main
 
-    study = Path(__file__).resolve().parents[1] / "examples" / "studies" / "bcs_origin.toml"
+    study = Path(__file__).resolve().parents[1] / "examples" / "studies" / "ball_centre.toml"
     base = ["run", str(study), "--trials", "3000", "--seed", "4", "-q"]
     assert main([*base, "-o", str(tmp_path / "here")]) == 0
     address = client.scheduler.address

@@ -93,7 +93,7 @@ def test_a_pure_squareness_gives_g_equal_to_r_times_s_and_is_identified():
 def test_mtmc_run_circle_simulate_and_the_folder_agree(tmp_path):
     study = load_study(SHIPPED)
     result = study.run(trials=TRIALS, seed=SEED)
-    folder = write_result(result, tmp_path / "r", study_text=study.source.text)
+    folder = write_result(result, tmp_path / "r", study_text=study.source.text, report=False)
     back = load_result(folder)
     assert back.kind == "circular"
     out = tmp_path / "cli"

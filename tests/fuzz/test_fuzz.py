@@ -1,6 +1,6 @@
 """Hostile input: every file mtmc reads, mutated, ends in a result or in one line of error.
 
-The budget is small and fixed (``MTMC_FUZZ_EXAMPLES``, default 40 cases, derandomised) so
+The budget is small and fixed (``MTMC_FUZZ_EXAMPLES``, default 25 cases, derandomised) so
 that the suite stays fast; ``make fuzz`` runs the same property with a larger budget and a
 random campaign with counts (``tests/fuzz/mtmc_fuzz.py``).
 """
@@ -35,7 +35,7 @@ from mtmc.errors import DegenerateGeometryError, InputError, ParseError
 from mtmc.instruments.multilateration import self_calibrate, trilaterate
 from mtmc.io import decode_utf8
 
-EXAMPLES = int(os.environ.get("MTMC_FUZZ_EXAMPLES", "40"))
+EXAMPLES = int(os.environ.get("MTMC_FUZZ_EXAMPLES", "25"))
 TARGETS = targets()
 
 

@@ -2,7 +2,7 @@
 changed under the workbench. Each ends in a result or in one line of error, with no
 warning, and an edit on disk is never lost.
 
-The budget is ``MTMC_FUZZ_EXAMPLES`` (default 40 cases, derandomised), as in
+The budget is ``MTMC_FUZZ_EXAMPLES`` (default 25 cases, derandomised), as in
 ``test_fuzz.py``; ``make fuzz`` runs these properties with its larger budget.
 """
 
@@ -26,7 +26,7 @@ from mtmc.graph import loads_graph
 from mtmc.report import render
 from mtmc.study import load_result, loads_study, write_result
 
-EXAMPLES = int(os.environ.get("MTMC_FUZZ_EXAMPLES", "40"))
+EXAMPLES = int(os.environ.get("MTMC_FUZZ_EXAMPLES", "25"))
 ROOT = Path(__file__).resolve().parents[2]
 SETTINGS = settings(
     max_examples=EXAMPLES,

@@ -83,7 +83,7 @@ def written(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Any, An
     for kind, study in _kinds().items():
         result = study.run(trials=400, seed=11, samples=True)
         folder = tmp_path_factory.mktemp("conf") / kind
-        write_result(result, folder, study_text=study.source.text)
+        write_result(result, folder, study_text=study.source.text, report=False)
         out[kind] = (result, load_result(folder))
     return out
 
