@@ -34,11 +34,12 @@ TEST_WORKERS ?= auto
 unit: $(STAMP)
 	$(BIN)/pytest -n $(TEST_WORKERS) --dist loadfile --cov=mtmc --cov-report=term-missing:skip-covered --cov-fail-under=$(COV_FLOOR)
 
-## fuzz: hostile input at a larger budget: the property of tests/fuzz (2000 cases), then a
-## random campaign over every reader and command that reads a file, with counts by outcome
+## fuzz: hostile input at a larger budget: the properties of tests/fuzz (2000 cases each, on
+## every core), then a random campaign over every reader and command that reads a file, with
+## counts by outcome
 FUZZ_CASES ?= 2000
 fuzz: $(STAMP)
-	MTMC_FUZZ_EXAMPLES=$(FUZZ_CASES) $(BIN)/pytest tests/fuzz --no-cov -p no:cacheprovider -q
+	MTMC_FUZZ_EXAMPLES=$(FUZZ_CASES) $(BIN)/pytest tests/fuzz -n $(TEST_WORKERS) --dist load --no-cov -p no:cacheprovider -q
 	cd tests/fuzz && ../../$(BIN)/python mtmc_fuzz.py --cases $(FUZZ_CASES) --seed 1 --quiet
 
 ## bench: the benchmarks of benchmarks/ (installs suncal for the side-by-side comparison)
