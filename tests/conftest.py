@@ -5,9 +5,10 @@ from __future__ import annotations
 import fcntl
 import os
 import signal
+import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import pytest
 
@@ -85,3 +86,45 @@ def shipped(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str], Path]:
         return out
 
     return folder
+
+
+def _untraced(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """``fn`` run with this thread's tracer (coverage's, where it measures) taken off.
+
+    The same tracer goes back after it, with what it knows of the calls around: the lines of
+    the caller that follow are counted as before (stopping coverage and starting it again
+    would lose them).
+    """
+    import functools
+
+    @functools.wraps(fn)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        tracer = sys.gettrace()
+        if tracer is None:
+            return fn(*args, **kwargs)
+        sys.settrace(None)
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            sys.settrace(tracer)
+
+    return run
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Build and draw Matplotlib's figures with coverage's tracer paused.
+
+    Coverage measures mtmc's lines only, but on Python 3.11 its tracer slows every line of
+    every module while it runs. Matplotlib's own work for a report (making axes, measuring
+    them for ``mtmc.report.plots._fit``, drawing with ``Figure.savefig``) runs as it is,
+    untraced; mtmc's lines are traced as before. The unit and report tests took 170 s of CPU
+    under the tracer, 132 s so, and 103 s without coverage; the lines counted are the same.
+    """
+    if session.config.pluginmanager.hasplugin("_cov"):
+        from matplotlib.axis import Axis
+        from matplotlib.figure import Figure, FigureBase
+
+        Figure.savefig = _untraced(Figure.savefig)  # type: ignore[method-assign]
+        Axis.get_tightbbox = _untraced(Axis.get_tightbbox)  # type: ignore[method-assign]
+        FigureBase.add_subplot = _untraced(FigureBase.add_subplot)  # type: ignore[method-assign]
+        FigureBase.subplots = _untraced(FigureBase.subplots)  # type: ignore[method-assign]
