@@ -45,6 +45,7 @@ __all__ = [
     "MAX_RAD",
     "check_length",
     "check_number",
+    "finite",
     "key_lines",
     "load_toml",
     "loads_toml",
@@ -398,6 +399,47 @@ class Fields:
             return v
         return check_number(v, lambda msg: self.error(msg, key), low, high, open_low, open_high)
 
+    def numbers(
+        self,
+        key: str,
+        n: int,
+        default: Any = _REQUIRED,
+        *,
+        limit: float | None = None,
+        low: float | None = None,
+        what: str | None = None,
+    ) -> Any:
+        """An array of ``n`` finite numbers, as a tuple of floats.
+
+        Each at most ``limit`` in size and at least ``low``, where given. ``what`` names
+        the array in the error (default ``"an array of n finite numbers"``). An integer
+        past the largest float (a file may write 400 digits) is not finite.
+
+        Examples
+        --------
+        >>> loads_toml("ball = [150, 0.0, 80.0]", file="s.toml").numbers("ball", 3, limit=MAX_MM)
+        (150.0, 0.0, 80.0)
+        >>> loads_toml("bad = [1, 2, 1e400]", file="s.toml").numbers("bad", 3)
+        Traceback (most recent call last):
+        ...
+        mtmc.errors.InputError: s.toml:1: field bad: expected an array of 3 finite numbers, ...
+        """
+        v = self._get(key, default)
+        if v is default and key not in self.data:
+            return v
+        values = [finite(x) for x in v] if isinstance(v, list) and len(v) == n else [None]
+        if any(
+            x is None or (limit is not None and abs(x) > limit) or (low is not None and x < low)
+            for x in values
+        ):
+            text = what or f"an array of {n} finite numbers"
+            if limit is not None:
+                text += f", each at most {limit:g} in size"
+            if low is not None:
+                text += f", each at least {low:g}"
+            raise self.error(f"expected {text}, got {_short(v)}", key)
+        return tuple(values)
+
     def flag(self, key: str, default: Any = _REQUIRED) -> Any:
         """A boolean field."""
         v = self._get(key, default)
@@ -442,6 +484,24 @@ def check_length(v: Any, maximum: int, err: Callable[[str], InputError]) -> None
         raise err(f"expected at most {maximum} entries, got {len(v)}")
 
 
+def finite(v: Any) -> float | None:
+    """``v`` as a float if it is a finite number (not a boolean), else None.
+
+    An integer past the largest float (``10**400``) is None, where ``float()`` raises.
+
+    Examples
+    --------
+    >>> finite(3), finite(2.5), finite(10**400), finite(float("nan")), finite(True), finite("1")
+    (3.0, 2.5, None, None, None, None)
+    """
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        return None
+    if isinstance(v, int) and abs(v) > sys.float_info.max:
+        return None
+    f = float(v)
+    return f if math.isfinite(f) else None
+
+
 def check_number(
     v: Any,
     err: Callable[[str], InputError],
@@ -453,8 +513,8 @@ def check_number(
     """``v`` as a finite float in the range, or ``err(message)`` raised."""
     if isinstance(v, bool) or not isinstance(v, int | float):
         raise err(f"expected a number, got {_typename(v)} {_short(v)}")
-    f = float(v) if isinstance(v, float) or abs(v) <= sys.float_info.max else math.inf
-    if not math.isfinite(f):
+    f = finite(v)
+    if f is None:
         raise err(f"expected a finite number, got {_short(v)}")
     lo_ok = low is None or (f > low if open_low else f >= low)
     hi_ok = high is None or (f < high if open_high else f <= high)

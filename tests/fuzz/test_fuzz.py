@@ -8,6 +8,7 @@ random campaign with counts (``tests/fuzz/mtmc_fuzz.py``).
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -211,3 +212,44 @@ def test_numbers_the_new_strategies_broke_are_refused_with_their_place() -> None
         loads_assertions("p(1, 1e400, 0).\n", file="g.pl")
     assert (info.value.file, info.value.line) == ("g.pl", 1)
     assert "expected a finite number at most 1.8e+308 in size, got '1e400'" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("study", "old", "new", "field"),
+    [
+        # make fuzz at 2000 cases: a 301-digit integer in an array of numbers (OverflowError:
+        # int too large to convert to float, in three readers of [x, y, z])
+        ("circle_b_axis.toml", "ball = [150.0,", "ball = [1" + "0" * 300 + ",", "rotary.ball"),
+        (
+            "wang2022.toml",
+            "position = [0.0,",
+            "position = [1" + "0" * 300 + ",",
+            "artefact.position",
+        ),
+    ],
+)
+def test_a_huge_integer_in_an_array_of_numbers_is_refused_with_its_place(
+    study: str, old: str, new: str, field: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = (Path(__file__).resolve().parents[2] / "examples" / "studies" / study).read_text()
+    assert old in text
+    path = tmp_path / study
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    assert main(["run", str(path), "-n", "20", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert f"field {field}: expected" in err, err
+    assert "each at most 1e+06 in size" in err, err
+
+
+def test_a_huge_integer_in_an_artefact_file_is_refused_with_its_place(tmp_path: Path) -> None:
+    from mtmc.artefact.artefact import load_artefact
+
+    shipped = Path(__file__).resolve().parents[2] / "examples" / "artefacts"
+    text = (shipped / "wang2022_five_ball.toml").read_text(encoding="utf-8")
+    text, n = re.subn(r"centre = \[[^,\]]+,", "centre = [1" + "0" * 300 + ",", text, count=1)
+    assert n == 1
+    path = tmp_path / "five.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(InputError, match=r"field ball\[0\]\.centre: expected three finite"):
+        load_artefact(path)

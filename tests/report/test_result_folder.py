@@ -137,6 +137,11 @@ def test_json_that_would_break_a_reader(res: Path, raw: bytes, words: str) -> No
         (("quantities", 0, "monte_carlo", "p"), 0.0, "0 < p < 1"),
         (("quantities", 0, "histogram", "density"), [1.0], "histogram.density"),
         (("quantities", 0, "convergence", "u"), "x", "convergence.u"),
+        # make fuzz at 2000 cases: 2**63 trials (OverflowError: Python int too large to
+        # convert to C long, in load_result), and a count past the quantity's trials
+        (("quantities", 0, "convergence", "m", 0), 2**63, "convergence.m\\[0\\]"),
+        (("quantities", 0, "convergence", "m", -1), 2001, "an integer from 1 to 2000"),
+        (("quantities", 0, "convergence", "m", 1), 10.5, "convergence.m\\[1\\]"),
         (("quantities", 0, "name"), 3, "quantities\\[0\\].name"),
         (("quantities", 0), False, "quantities\\[0\\]"),
     ],

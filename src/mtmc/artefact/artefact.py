@@ -289,19 +289,9 @@ def loads_artefact(text: str, file: str = "<artefact>") -> Artefact:
 
 def _triple(f: Any, key: str) -> list[float]:
     """Three finite numbers from field ``key`` of a :class:`~mtmc.document.Fields`."""
-    v = f._get(key, None) if f.has(key) else None
     from mtmc.document import MAX_MM
 
-    if not (
-        isinstance(v, list)
-        and len(v) == 3
-        and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
-        and all(abs(float(x)) <= MAX_MM for x in v)
-    ):
-        raise f.error(
-            f"expected three finite numbers [x, y, z] of at most {MAX_MM:g} mm, got {v!r}", key
-        )
-    return [float(x) for x in v]
+    return list(f.numbers(key, 3, limit=MAX_MM, what="three finite numbers [x, y, z] (mm)"))
 
 
 #: The most balls an artefact file may have.

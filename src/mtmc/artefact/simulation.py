@@ -46,7 +46,7 @@ from mtmc.artefact.analysis import ANALYSIS_OUTPUTS, Analysis, analyse
 from mtmc.artefact.artefact import SHIPPED, Artefact, load_artefact, pairs, shipped_artefact
 from mtmc.artefact.model import FiducialSetup, Measurement, identify_setup, setup_error_names
 from mtmc.artefact.probing import PAPER_REPEATABILITY_UM, patch_offsets
-from mtmc.document import Fields, check_length
+from mtmc.document import MAX_DEG, MAX_MM, Fields, check_length
 from mtmc.errors import InputError
 from mtmc.geometry.fits import fit_sphere
 from mtmc.kinematics import Machine
@@ -662,22 +662,21 @@ def _error_value(f: Any, name: str, machine: Machine, key: str) -> Any:
     )
 
 
-def _vec(f: Any, key: str, default: Any = None, n: int = 3, positive: bool = False) -> Any:
+def _vec(
+    f: Any,
+    key: str,
+    default: Any = None,
+    n: int = 3,
+    positive: bool = False,
+    limit: float = MAX_MM,
+) -> Any:
+    """``n`` finite numbers at ``key``, non-negative where asked, each at most ``limit``.
+
+    ``limit`` is in mm, unless the key names another unit (``_deg``, ``_um``).
+    """
     if not f.has(key):
         return default
-    v = f.data[key]
-    ok = (
-        isinstance(v, list)
-        and len(v) == n
-        and all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
-        and all(math.isfinite(x) for x in v)
-    )
-    if ok and positive:
-        ok = all(x >= 0 for x in v)
-    if not ok:
-        what = "non-negative " if positive else ""
-        raise f.error(f"expected {n} finite {what}numbers, got {v!r}", key)
-    return np.array(v, dtype=np.float64)
+    return np.array(f.numbers(key, n, limit=limit, low=0.0 if positive else None))
 
 
 def _artefact(top: Any) -> tuple[Artefact, _F]:
@@ -693,7 +692,7 @@ def _artefact(top: Any) -> tuple[Artefact, _F]:
     else:
         art = shipped_artefact(art_f.text("shipped", choices=SHIPPED))
     pos = _vec(art_f, "position", np.zeros(3))
-    rot_deg = _vec(art_f, "rotation_deg", np.zeros(3))
+    rot_deg = _vec(art_f, "rotation_deg", np.zeros(3), limit=MAX_DEG)
     from mtmc.geometry.transforms import matrix_from_euler
 
     rot = matrix_from_euler(np.radians(rot_deg), "zyx") if np.any(rot_deg) else np.eye(3)
@@ -748,7 +747,7 @@ def _probing(top: Any, machine: Machine, art: Artefact, axis: _F) -> tuple[Fiduc
         cols = pf.integer("columns", cols, minimum=1, maximum=100)
         rows = pf.integer("rows", rows, minimum=1, maximum=100)
         size = pf.number("size_mm", size, low=0.0, open_low=True)
-        rep = _vec(pf, "repeatability_um", rep, positive=True)
+        rep = _vec(pf, "repeatability_um", rep, positive=True, limit=1e3 * MAX_MM)
         free = pf.text("radius", "calibrated", choices=("calibrated", "free")) == "free"
     if 0.5 * size * math.sqrt(2.0) >= art.radius:
         raise (pf or top).error(
@@ -804,7 +803,7 @@ def _uncertainty(top: Any) -> tuple[bool, _F | None, float | None]:
     if uf is not None:
         uf.only(("cmm", "machine_repeatability_um", "setup_errors_um"))
         cmm = uf.flag("cmm", True)
-        mrep = _vec(uf, "machine_repeatability_um", None, positive=True)
+        mrep = _vec(uf, "machine_repeatability_um", None, positive=True, limit=1e3 * MAX_MM)
         if mrep is not None:
             mrep = mrep * UM
         if uf.has("setup_errors_um"):

@@ -172,6 +172,12 @@ class _Check:
         if isinstance(d, bool) or not isinstance(d, int) or not low <= d <= high:
             raise self.fail(where, f"an integer from {low} to {high}", d)
 
+    def integers(self, d: Any, where: str, low: int, high: int) -> int:
+        """An array of integers from ``low`` to ``high``; its length."""
+        for i, x in enumerate(self.seq(d, where)):
+            self.integer(x, f"{where}[{i}]", low, high)
+        return len(d)
+
     def probability(self, d: Any, where: str) -> None:
         if isinstance(d, bool) or not isinstance(d, int | float) or not 0 < d < 1:
             raise self.fail(where, "a probability 0 < p < 1", d)
@@ -218,7 +224,7 @@ def _quantity(c: _Check, q: Any, where: str) -> None:
     n_edges = c.numbers(hist["edges"], f"{where}.histogram.edges")
     c.numbers(hist["density"], f"{where}.histogram.density", max(n_edges - 1, 0))
     conv = c.obj(q["convergence"], f"{where}.convergence", ("m", "estimate", "u"))
-    n = c.numbers(conv["m"], f"{where}.convergence.m")
+    n = c.integers(conv["m"], f"{where}.convergence.m", 1, mc["trials"])
     c.numbers(conv["estimate"], f"{where}.convergence.estimate", n, null=True)
     c.numbers(conv["u"], f"{where}.convergence.u", n, null=True)
     rep = c.obj(q["reported"], f"{where}.reported", ("estimate", "U"))

@@ -648,15 +648,7 @@ def _numbers(t: Fields, key: str, what: str, n: int, default: Any = None) -> Any
     """
     if default is not None and not t.has(key):
         return default
-    v = t.data.get(key)
-    if (
-        not isinstance(v, list)
-        or len(v) != n
-        or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)
-        or not all(np.isfinite(float(x)) and abs(x) <= MAX_MM for x in v)
-    ):
-        raise t.error(f"expected {what}, each at most {MAX_MM:g} in size, got {v!r}", key)
-    return tuple(float(x) for x in v)
+    return t.numbers(key, n, limit=MAX_MM, what=what)
 
 
 @register_kind("circular", "an ISO 230-4 circular test (ballbar) simulated with its uncertainty")

@@ -220,25 +220,9 @@ _MAX_URAD = MAX_RAD * 1e6
 
 def _vector(f: Fields, key: str, n: int = 3, limit: float = MAX_MM) -> _F:
     """``n`` finite numbers, each at most ``limit`` in size (mm unless the key says)."""
-    v = f.data.get(key)
-    if v is None:
+    if f.data.get(key) is None:
         raise f.error(f"missing {key}", key)
-    if (
-        not isinstance(v, list)
-        or len(v) != n
-        or not all(
-            isinstance(x, int | float)
-            and not isinstance(x, bool)
-            and (isinstance(x, int) or math.isfinite(x))
-            for x in v
-        )
-    ):
-        raise f.error(f"expected an array of {n} finite numbers, got {v!r}", key)
-    if any(abs(x) > limit for x in v):
-        raise f.error(
-            f"expected an array of {n} numbers each at most {limit:g} in size, got {v!r}", key
-        )
-    return np.array(v, dtype=np.float64)
+    return np.array(f.numbers(key, n, limit=limit), dtype=np.float64)
 
 
 def _pair(
