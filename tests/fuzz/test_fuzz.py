@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -253,3 +254,29 @@ def test_a_huge_integer_in_an_artefact_file_is_refused_with_its_place(tmp_path: 
     path.write_text(text, encoding="utf-8")
     with pytest.raises(InputError, match=r"field ball\[0\]\.centre: expected three finite"):
         load_artefact(path)
+
+
+@pytest.mark.parametrize(
+    ("study", "old", "field"),
+    [
+        # 10**300 trials of the Sobol budget: a multiple of its seed block, and no upper
+        # limit, where [run] trials has one (MemoryError, or the machine's memory spent)
+        ("mass_calibration.toml", "trials = 131072", "sensitivity.trials"),
+        ("bcs_origin.toml", "trials = 1000 ", "sweep.trials"),
+    ],
+)
+def test_trials_past_the_limit_are_refused_in_every_table(
+    study: str, old: str, field: str, tmp_path: Path
+) -> None:
+    from mtmc.study import load_study
+
+    examples = Path(__file__).resolve().parents[2] / "examples"
+    text = (examples / "studies" / study).read_text(encoding="utf-8")
+    assert old in text
+    text = text.replace(old, "trials = 1" + "0" * 300 + " ", 1)
+    shutil.copytree(examples / "graphs", tmp_path / "graphs")
+    (tmp_path / "studies").mkdir()
+    path = tmp_path / "studies" / study
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(InputError, match=rf"field {field}: expected an integer <= 1000000000"):
+        load_study(path)

@@ -36,7 +36,7 @@ from mtmc.study.base import ProgressFn, Study
 from mtmc.study.observations import input_record
 from mtmc.study.options import ADAPTIVE, NAN_POLICY, mc_run_record
 from mtmc.study.result import Quantity, Region, StudyResult, Table, quantity, region
-from mtmc.study.settings import RunSettings
+from mtmc.study.settings import MAX_TRIALS, RunSettings
 from mtmc.study.spec import register_kind
 from mtmc.uncertainty.propagation import gum
 from mtmc.uncertainty.results import MonteCarloResult
@@ -387,7 +387,7 @@ def _read_sweep(top: Fields, graph: Graph, plan: Plan) -> SweepSpec:
     return SweepSpec(
         output=output,
         vary=vary,
-        trials=t.integer("trials", 1000, minimum=2),
+        trials=t.integer("trials", 1000, minimum=2, maximum=MAX_TRIALS),
         intercept=t.flag("intercept", True),
     )
 

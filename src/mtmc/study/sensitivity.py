@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any, cast
 
 from mtmc.document import Fields
+from mtmc.study.settings import MAX_TRIALS
 from mtmc.uncertainty.distributions import Distribution
 from mtmc.uncertainty.propagation import GumResult
 from mtmc.uncertainty.sampling import SEED_BLOCK_SIZE, Sampling
@@ -78,7 +79,9 @@ def read_sensitivity(top: Fields) -> SensitivitySettings | None:
     if table is None:
         return None
     table.only(("trials", "sampling"))
-    trials = table.integer("trials", DEFAULT_TRIALS, minimum=2 * SEED_BLOCK_SIZE)
+    trials = table.integer(
+        "trials", DEFAULT_TRIALS, minimum=2 * SEED_BLOCK_SIZE, maximum=MAX_TRIALS
+    )
     if trials % SEED_BLOCK_SIZE:
         raise table.error(
             f"expected a multiple of {SEED_BLOCK_SIZE} (whole seed blocks, whose spread gives "
