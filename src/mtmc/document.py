@@ -43,6 +43,8 @@ __all__ = [
     "MAX_MM",
     "MAX_NAMES",
     "MAX_RAD",
+    "MAX_UM",
+    "MAX_URAD",
     "check_length",
     "check_number",
     "finite",
@@ -68,6 +70,12 @@ MAX_DEG = 3600.0
 
 #: :data:`MAX_DEG` in radians (20π, about 62.8 rad).
 MAX_RAD = math.radians(MAX_DEG)
+
+#: The largest value a file may give in µm (an uncertainty, an error): :data:`MAX_MM`.
+MAX_UM = MAX_MM * 1e3
+
+#: The largest value a file may give in µrad (an angular error): :data:`MAX_RAD`.
+MAX_URAD = MAX_RAD * 1e6
 
 _HEADER = re.compile(r"""^\s*(\[\[?)\s*([A-Za-z0-9_\-."' ]+?)\s*\]\]?\s*(#.*)?$""")
 _KEY = re.compile(

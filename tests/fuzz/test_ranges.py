@@ -182,3 +182,28 @@ def test_an_overflowing_model_stops_with_one_line_and_no_warning(
     assert rc == 2
     assert len(err) == 1
     assert "not finite" in err[0]
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "field"),
+    [
+        # the artefact study's errors (µm, µrad), setup errors and poses, held to the limits
+        # of the verification's: 1e300 µrad ran to "points coplanar", 1e300 µm at dpx to an
+        # error naming EXY with RuntimeWarnings, and a pose at 1e300° ran
+        ("EC0Y = 4.0", "EC0Y = 1e300", "machine.errors.EC0Y"),
+        ("EXX = [0.0, -0.0026]", "EXX = [0.0, 1e300]", "machine.errors.EXX"),
+        ("dpx = 1.0", "dpx = 1e300", "setup_errors.dpx"),
+        ("poses_deg = [[0, 0],", "poses_deg = [[1e300, 0],", "plan.poses_deg"),
+        ("poses_deg = [[0, 0],", "poses_deg = [[3601, 0],", "plan.poses_deg"),
+        ("position = [0.0, -30.0, 0.0]", "position = [1e30, -30.0, 0.0]", "artefact.position"),
+    ],
+)
+def test_artefact_numbers_beyond_a_machine(old: str, new: str, field: str) -> None:
+    err = _refused("wang2022.toml", old, new, field)
+    assert "at most" in err.message or " in [" in err.message
+
+
+def test_artefact_numbers_at_the_limits_are_read() -> None:
+    text = _study("wang2022.toml", "poses_deg = [[0, 0],", "poses_deg = [[3600, -3600],")
+    text = text.replace("EC0Y = 4.0", "EC0Y = 6.2e7", 1).replace("dpx = 1.0", "dpx = -1e9", 1)
+    loads_study(text, file="wang2022.toml", folder=EXAMPLES / "studies")

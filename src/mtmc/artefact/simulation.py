@@ -46,7 +46,7 @@ from mtmc.artefact.analysis import ANALYSIS_OUTPUTS, Analysis, analyse
 from mtmc.artefact.artefact import SHIPPED, Artefact, load_artefact, pairs, shipped_artefact
 from mtmc.artefact.model import FiducialSetup, Measurement, identify_setup, setup_error_names
 from mtmc.artefact.probing import PAPER_REPEATABILITY_UM, patch_offsets
-from mtmc.document import MAX_DEG, MAX_MM, Fields, check_length
+from mtmc.document import MAX_DEG, MAX_MM, MAX_UM, MAX_URAD, Fields, check_length, finite
 from mtmc.errors import InputError
 from mtmc.geometry.fits import fit_sphere
 from mtmc.kinematics import Machine
@@ -637,15 +637,18 @@ def simulate_artefact(
 
 
 def _error_value(f: Any, name: str, machine: Machine, key: str) -> Any:
+    """An error of ``[machine.errors]``, in µm or µrad: a number, or a polynomial's coefficients.
+
+    Each number at most :data:`~mtmc.document.MAX_UM` (µm) or
+    :data:`~mtmc.document.MAX_URAD` (µrad) in size, as the verification's errors.
+    """
     term = machine.error_term(name)
-    unit = URAD if term.angular else UM
+    unit, limit = (URAD, MAX_URAD) if term.angular else (UM, MAX_UM)
     v = f.data[key]
     if isinstance(v, bool):
         raise f.error(f"expected a number or an array of coefficients, got {v!r}", key)
     if isinstance(v, int | float):
-        if not math.isfinite(v):
-            raise f.error(f"expected a finite number, got {v!r}", key)
-        return float(v) * unit
+        return f.number(key, low=-limit, high=limit) * unit
     if (
         isinstance(v, list)
         and v
@@ -653,8 +656,9 @@ def _error_value(f: Any, name: str, machine: Machine, key: str) -> Any:
     ):
         if term.kind != "component":
             raise f.error(f"{term.name} is a {term.kind} error, a constant: expected a number", key)
+        v = f.numbers(key, len(v), limit=limit, what="polynomial coefficients")
         scale = 1.0 if is_linear(term.axis) else 180.0 / math.pi  # per deg^k -> per rad^k
-        coeffs = [float(c) * unit * scale**i for i, c in enumerate(v)]
+        coeffs = [c * unit * scale**i for i, c in enumerate(v)]
         return PolynomialFunction(np.array(coeffs))
     raise f.error(
         f"expected a number (um or urad) or an array of polynomial coefficients, got {v!r}",
@@ -747,7 +751,7 @@ def _probing(top: Any, machine: Machine, art: Artefact, axis: _F) -> tuple[Fiduc
         cols = pf.integer("columns", cols, minimum=1, maximum=100)
         rows = pf.integer("rows", rows, minimum=1, maximum=100)
         size = pf.number("size_mm", size, low=0.0, open_low=True)
-        rep = _vec(pf, "repeatability_um", rep, positive=True, limit=1e3 * MAX_MM)
+        rep = _vec(pf, "repeatability_um", rep, positive=True, limit=MAX_UM)
         free = pf.text("radius", "calibrated", choices=("calibrated", "free")) == "free"
     if 0.5 * size * math.sqrt(2.0) >= art.radius:
         raise (pf or top).error(
@@ -772,12 +776,13 @@ def _plan(top: Any, rotary: tuple[str, ...]) -> tuple[_F, int]:
         and all(
             isinstance(r, list)
             and len(r) == n_rot
-            and all(isinstance(x, int | float) and not isinstance(x, bool) for x in r)
+            and all(finite(a) is not None and abs(a) <= MAX_DEG for a in r)
             for r in raw
         )
     ):
         raise plan.error(
-            f"expected a list of poses, each [{', '.join(a.lower() for a in rotary)}] in degrees",
+            f"expected a list of poses, each [{', '.join(a.lower() for a in rotary)}] in "
+            f"degrees, each angle at most {MAX_DEG:g} in size, got {raw!r:.80}",
             "poses_deg",
         )
     poses = np.radians(np.array(raw, dtype=np.float64).reshape(len(raw), n_rot))
@@ -792,7 +797,7 @@ def _setup_errors(top: Any, ball_names: tuple[str, ...]) -> _F:
     if sf is not None:
         sf.only(names)
         for j, nm in enumerate(names):
-            E[j] = sf.number(nm, 0.0) * UM
+            E[j] = sf.number(nm, 0.0, low=-MAX_UM, high=MAX_UM) * UM
     return E
 
 
@@ -803,11 +808,11 @@ def _uncertainty(top: Any) -> tuple[bool, _F | None, float | None]:
     if uf is not None:
         uf.only(("cmm", "machine_repeatability_um", "setup_errors_um"))
         cmm = uf.flag("cmm", True)
-        mrep = _vec(uf, "machine_repeatability_um", None, positive=True, limit=1e3 * MAX_MM)
+        mrep = _vec(uf, "machine_repeatability_um", None, positive=True, limit=MAX_UM)
         if mrep is not None:
             mrep = mrep * UM
         if uf.has("setup_errors_um"):
-            su = uf.number("setup_errors_um", low=0.0, open_low=True) * UM
+            su = uf.number("setup_errors_um", low=0.0, high=MAX_UM, open_low=True) * UM
     return cmm, mrep, su
 
 

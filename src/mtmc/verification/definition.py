@@ -69,7 +69,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mtmc.document import MAX_DEG, MAX_MM, MAX_RAD, Fields
+from mtmc.document import MAX_DEG, MAX_MM, MAX_UM, MAX_URAD, Fields
 from mtmc.errors import InputError, MtmcError
 from mtmc.instruments.laser_tracker import LaserTracker, TrackerLimits, TrackerNoise
 from mtmc.kinematics.functions import (
@@ -212,12 +212,6 @@ def _is_angle(machine: Machine, name: str) -> bool:
 MAX_DEGREE = 20
 
 
-#: The largest value in µm (an uncertainty, an MPE, an error coefficient): :data:`MAX_MM`.
-_MAX_UM = MAX_MM * 1e3
-#: The largest value in µrad (an uncertainty, an angular error): :data:`MAX_RAD`.
-_MAX_URAD = MAX_RAD * 1e6
-
-
 def _vector(f: Fields, key: str, n: int = 3, limit: float = MAX_MM) -> _F:
     """``n`` finite numbers, each at most ``limit`` in size (mm unless the key says)."""
     if f.data.get(key) is None:
@@ -252,7 +246,7 @@ def _travel(mf: Fields, topo_axes: tuple[str, ...]) -> dict[str, tuple[float, fl
 
 def _mpe_mm(nf: Fields, key: str) -> tuple[float, float]:
     """An MPE ``[A_um, B_um_per_m]`` of the file as ``(A, B)`` in mm and mm/mm."""
-    v = _vector(nf, key, 2, _MAX_UM)
+    v = _vector(nf, key, 2, MAX_UM)
     return v[0] * 1e-3, v[1] * 1e-6
 
 
@@ -271,10 +265,10 @@ def _noise(tf: Fields) -> TrackerNoise:
         return TrackerNoise.from_mpe(adm=adm, transverse=tr, conversion=conv)
     nf.only(("radial_a_um", "radial_b_um_per_m", "azimuth_urad", "elevation_urad"))
     return TrackerNoise(
-        nf.number("radial_a_um", low=0.0, high=_MAX_UM) * 1e-3,
-        nf.number("radial_b_um_per_m", low=0.0, high=_MAX_UM) * 1e-6,
-        nf.number("azimuth_urad", low=0.0, high=_MAX_URAD) * 1e-6,
-        nf.number("elevation_urad", low=0.0, high=_MAX_URAD) * 1e-6,
+        nf.number("radial_a_um", low=0.0, high=MAX_UM) * 1e-3,
+        nf.number("radial_b_um_per_m", low=0.0, high=MAX_UM) * 1e-6,
+        nf.number("azimuth_urad", low=0.0, high=MAX_URAD) * 1e-6,
+        nf.number("elevation_urad", low=0.0, high=MAX_URAD) * 1e-6,
         0.0,
         "study file",
     )
@@ -443,7 +437,7 @@ def _truth(
             continue
         name = _term_name(machine, tr, key)
         scale = 1e-6 if _is_angle(machine, name) else 1e-3
-        limit = _MAX_URAD if _is_angle(machine, name) else _MAX_UM
+        limit = MAX_URAD if _is_angle(machine, name) else MAX_UM
         if isinstance(v, list):
             if not v or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v):
                 raise tr.error(f"expected an array of numbers, got {v!r}", key)
@@ -500,8 +494,8 @@ def _run(
     return {
         "default_points": dp,
         "default_tracker": dt,
-        "repeatability": rf.number("repeatability_um", 0.0, low=0.0, high=_MAX_UM) * 1e-3,
-        "reflector_u": rf.number("reflector_um", 0.0, low=0.0, high=_MAX_UM) * 1e-3,
+        "repeatability": rf.number("repeatability_um", 0.0, low=0.0, high=MAX_UM) * 1e-3,
+        "reflector_u": rf.number("reflector_um", 0.0, low=0.0, high=MAX_UM) * 1e-3,
         "pose_u": pose_u,
     }
 
