@@ -280,3 +280,28 @@ def test_trials_past_the_limit_are_refused_in_every_table(
     path.write_text(text, encoding="utf-8")
     with pytest.raises(InputError, match=rf"field {field}: expected an integer <= 1000000000"):
         load_study(path)
+
+
+@pytest.mark.parametrize(
+    ("study", "old", "new", "field"),
+    [
+        # a 401-digit integer where the study reads an array of arrays (OverflowError: int
+        # too large to convert to float, in the correlation's and the workspace's readers)
+        ("gauge_blocks_correlated.toml", '"e2", 0.9]', '"e2", 1' + "0" * 400 + "]", "pairs[0]"),
+        ("aguado2016.toml", "offsets = [[0.0,", "offsets = [[1" + "0" * 400 + ",", "offsets"),
+    ],
+)
+def test_a_huge_integer_in_an_array_of_arrays_is_refused_with_its_place(
+    study: str, old: str, new: str, field: str
+) -> None:
+    from mtmc.study import loads_study
+
+    studies = Path(__file__).resolve().parents[2] / "examples" / "studies"
+    text = (studies / study).read_text(encoding="utf-8")
+    assert old in text
+    text = text.replace(old, new, 1)
+    with pytest.raises(InputError) as info:
+        loads_study(text, file=study, folder=studies)
+    err = info.value
+    assert (err.file, err.field.split(".", 1)[-1]) == (study, field)
+    assert text.splitlines()[err.line - 1].lstrip().startswith(field.split("[")[0])

@@ -22,14 +22,13 @@ and the field (``correlation.pairs[1]``).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from mtmc.document import Fields
+from mtmc.document import Fields, finite
 from mtmc.errors import InputError
 from mtmc.uncertainty.copula import (
     Copula,
@@ -186,11 +185,12 @@ def _read_pairs(table: Fields, inputs: Mapping[str, Distribution]) -> list[tuple
             )
         for name in entry[:2]:
             _check_name(table, where, name, inputs)
-        if not math.isfinite(float(entry[2])):
+        r = finite(entry[2])
+        if r is None:
             raise table.source.error(
-                f"expected a finite coefficient, got {entry[2]!r}", (*table.path, *where)
+                f"expected a finite coefficient, got {entry[2]!r:.80}", (*table.path, *where)
             )
-        items.append((entry[0], entry[1], float(entry[2])))
+        items.append((entry[0], entry[1], r))
     return items
 
 
@@ -207,12 +207,10 @@ def _read_matrix(
         _check_name(table, ("names", i), name, inputs)
     matrix = table.data["matrix"]
     rows_ok = isinstance(matrix, list) and all(
-        isinstance(row, list)
-        and all(isinstance(v, int | float) and not isinstance(v, bool) for v in row)
-        for row in matrix
+        isinstance(row, list) and all(finite(v) is not None for v in row) for row in matrix
     )
     if not rows_ok:
-        raise table.error("expected a matrix: an array of arrays of numbers", "matrix")
+        raise table.error("expected a matrix: an array of arrays of finite numbers", "matrix")
     if len(matrix) != len(names) or any(len(row) != len(names) for row in matrix):
         raise table.error(
             f"expected {len(names)} rows of {len(names)} numbers, one per name, in the "

@@ -45,7 +45,7 @@ import numpy as np
 import numpy.typing as npt
 from numpy.typing import NDArray
 
-from mtmc.document import Fields, Source
+from mtmc.document import MAX_MM, Fields, Source, finite
 from mtmc.errors import InputError
 from mtmc.frozen import frozen_array
 from mtmc.kinematics.topology import AXIS_DIRECTION, is_rotary
@@ -858,20 +858,17 @@ def _read_offsets(ws: Fields) -> NDArray[np.float64]:
         and all(
             isinstance(r, list)
             and len(r) == 3
-            and all(isinstance(v, int | float) and not isinstance(v, bool) for v in r)
+            and all(finite(v) is not None and abs(v) <= MAX_MM for v in r)
             for r in raw
         )
     )
     if not ok:
         raise ws.error(
-            f"expected an array of [x, y, z] offsets in mm, e.g. [[0, 0, 0], [0, 0, 100]], "
-            f"got {raw!r}",
+            f"expected an array of [x, y, z] offsets in mm, each at most {MAX_MM:g} in size, "
+            f"e.g. [[0, 0, 0], [0, 0, 100]], got {raw!r:.80}",
             "offsets",
         )
-    arr = np.asarray(raw, dtype=np.float64)
-    if not np.all(np.isfinite(arr)):
-        raise ws.error("expected finite offsets", "offsets")
-    return arr
+    return np.asarray(raw, dtype=np.float64)
 
 
 def workspace_from_dict(
