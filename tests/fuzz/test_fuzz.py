@@ -218,13 +218,13 @@ def test_numbers_the_new_strategies_broke_are_refused_with_their_place() -> None
 @pytest.mark.parametrize(
     ("study", "old", "new", "field"),
     [
-        # make fuzz at 2000 cases: a 301-digit integer in an array of numbers (OverflowError:
-        # int too large to convert to float, in three readers of [x, y, z])
-        ("circle_b_axis.toml", "ball = [150.0,", "ball = [1" + "0" * 300 + ",", "rotary.ball"),
+        # make fuzz at 2000 cases: an integer past the largest float in an array of numbers
+        # (OverflowError: int too large to convert to float, in three readers of [x, y, z])
+        ("circle_b_axis.toml", "ball = [150.0,", "ball = [1" + "0" * 400 + ",", "rotary.ball"),
         (
             "wang2022.toml",
             "position = [0.0,",
-            "position = [1" + "0" * 300 + ",",
+            "position = [1" + "0" * 400 + ",",
             "artefact.position",
         ),
     ],
@@ -248,7 +248,7 @@ def test_a_huge_integer_in_an_artefact_file_is_refused_with_its_place(tmp_path: 
 
     shipped = Path(__file__).resolve().parents[2] / "examples" / "artefacts"
     text = (shipped / "wang2022_five_ball.toml").read_text(encoding="utf-8")
-    text, n = re.subn(r"centre = \[[^,\]]+,", "centre = [1" + "0" * 300 + ",", text, count=1)
+    text, n = re.subn(r"centre = \[[^,\]]+,", "centre = [1" + "0" * 400 + ",", text, count=1)
     assert n == 1
     path = tmp_path / "five.toml"
     path.write_text(text, encoding="utf-8")
