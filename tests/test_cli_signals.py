@@ -154,7 +154,7 @@ def test_signal_while_the_dask_cluster_starts_is_one_line_and_leaves_nothing(tmp
     pytest.importorskip("distributed")
     # and Ctrl-C in a terminal: SIGINT to the whole process group, the workers too
     cases = [("before", signal.SIGTERM, False), (0.0, signal.SIGINT, False)]
-    cases += [(0.5, signal.SIGTERM, False), (1.5, signal.SIGINT, False), (1.0, signal.SIGINT, True)]
+    cases += [(0.5, signal.SIGTERM, False), (1.5, signal.SIGINT, True), (4.0, signal.SIGINT, True)]
     for when, sig, group in cases:
         tmp = tmp_path / f"tmp-{sig.name}-{when}-{'group' if group else 'main'}"
         tmp.mkdir()
@@ -196,13 +196,10 @@ def test_signal_while_the_dask_cluster_starts_is_one_line_and_leaves_nothing(tmp
                 if sig == signal.SIGTERM
                 else (130, "mtmc: interrupted\n")
             )
-            if group:
-                # the parent's exit and last line; the workers, which got the signal too
-                # while they imported Dask, may print their own KeyboardInterrupt above it
-                last = err.decode().splitlines()[-1:]
-                assert (proc.returncode, last) == (130, ["mtmc: interrupted"]), (when, sig)
-            else:
-                assert (proc.returncode, err.decode()) == expected, (when, sig)
+            # Ctrl-C to the group reaches the workers too: they printed their own
+            # KeyboardInterrupt traceback above the line (3 of 3 tries) until SIGINT was
+            # blocked in them (parallel._ctrl_c_held_from_workers)
+            assert (proc.returncode, err.decode()) == expected, (when, sig, group)
             deadline = time.monotonic() + 30
             while _session(proc.pid) and time.monotonic() < deadline:
                 time.sleep(0.2)

@@ -15,7 +15,8 @@ and the results are put back in trial order. This module is the one place that d
   with ``scheduler=None`` a :class:`distributed.LocalCluster` of ``workers`` worker
   processes started for the call and closed after it (started and closed whole: a
   Ctrl-C or SIGTERM meanwhile waits for it; its scratch files in a temporary folder
-  removed with it; Dask's warnings off); with ``scheduler`` a running
+  removed with it; Dask's warnings off; its workers deaf to Ctrl-C, which this process
+  acts on by closing them); with ``scheduler`` a running
   cluster, by the address of its scheduler (``"tcp://host:8786"``) or a
   :class:`distributed.Client`. The function (the model and what it was built from) is
   sent to every worker once; each task (a few blocks of trials) is submitted with
@@ -231,9 +232,39 @@ def local_cluster(workers: int = 2, **kwargs: Any) -> LocalCluster:
     }
     options.update(kwargs)
     env = {f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in WORKER_MALLOC_ENV.items()}
-    with dask.config.set({**env, **WORKER_CONFIG}):
+    with dask.config.set({**env, **WORKER_CONFIG}), _ctrl_c_held_from_workers():
         cluster: LocalCluster = distributed.LocalCluster(**options)
     return cluster
+
+
+@contextlib.contextmanager
+def _ctrl_c_held_from_workers() -> Iterator[None]:
+    """Processes started in the block (and the threads that start them) never see SIGINT.
+
+    Ctrl-C in a terminal sends SIGINT to the whole process group: to this process and to
+    the cluster's worker processes, which print their own ``KeyboardInterrupt`` traceback
+    above the command's one-line message. The cluster is this process's to stop (it closes
+    it on Ctrl-C), so SIGINT is blocked in this thread for the block: the cluster's threads,
+    created here, and their worker processes inherit the blocked mask (across ``exec``)
+    and keep it. This process still gets the signal: the kernel hands it to a thread that
+    does not block it, or it waits, pending, until the block ends (``pthread_sigmask``);
+    Python's handler runs in the main thread either way, and nothing is lost. SIGTERM is
+    not blocked: the nanny stops a worker with it. Multiprocessing's resource tracker is
+    started first, here: starting it unblocks SIGINT in the thread that starts it
+    (``resource_tracker.ensure_running``), which would otherwise be the cluster's.
+    """
+    import signal
+    from multiprocessing import resource_tracker
+
+    if not hasattr(signal, "pthread_sigmask"):  # pragma: no cover - Windows
+        yield
+        return
+    resource_tracker.ensure_running()
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def planned_workers(workers: int, executor: ExecutorKind | cf.Executor) -> int:
