@@ -804,26 +804,30 @@ class _Runner:
         progress: ProgressFn | None,
     ) -> None:
         bs = self.block_size
-        spans = [(a, min(a + bs, stop)) for a in range(start, stop, bs)]
         total = start + collector.total
         serial = self.workers == 1 and self.executor in ("thread", "process")
+        # the spans are listed once the first block has settled the outputs' shapes, and
+        # with them whether the run fits: a run refused for its size (10^12 trials kept)
+        # is refused at once, not after listing its 1.5e7 blocks (13 s)
+        rest = start
         if collector.shapes is None and serial:
             # the first block runs here: its outputs' names and shapes settle what is
             # kept, sketched or reduced
-            a, b = spans.pop(0)
+            a, b = start, min(start + bs, stop)
             outs = _evaluate(self.model, self.source.trials(a, b), a, b)
             collector.setup({n: arr.shape[1:] for n, arr in outs.items()})
             assert collector.keep != "auto"
             collector.add(_digest(a, outs, collector.keep, total, collector.sketch))
             if progress is not None:
                 progress(b, stop)
+            rest = b
         elif collector.shapes is None:
             # on workers, the names and shapes of the outputs come from the first trial
             # alone, evaluated here and left: every block then runs on the workers, none
             # here while they wait (a verification's first block of 256 trials is 0.45 s)
-            a = spans[0][0]
-            outs = _evaluate(self.model, self.source.trials(a, a + 1), a, a + 1)
+            outs = _evaluate(self.model, self.source.trials(start, start + 1), start, start + 1)
             collector.setup({n: arr.shape[1:] for n, arr in outs.items()})
+        spans = [(a, min(a + bs, stop)) for a in range(rest, stop, bs)]
         keep, sketch = collector.keep, collector.sketch
         assert keep != "auto"
         tasks: list[tuple[tuple[int, int], ...]]
