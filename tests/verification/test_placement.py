@@ -79,3 +79,34 @@ def test_place_cli_text_says_u_in_micrometres(capsys) -> None:  # type: ignore[n
     assert "µm (GUM)" in out
     assert " um" not in out
     assert out.count(" µm\n") == 4  # the four reference positions
+
+
+def test_the_search_runs_blas_on_one_thread_and_the_setting_comes_back(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # each candidate's score is a pinv of a (3N, p) Jacobian and thin products: with two
+    # BLAS threads on a loaded 2-core machine the default search took 26.4 s, with one 7.4 s
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from mtmc.verification import placement
+
+    def threads() -> int:
+        return max(d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas")
+
+    seen: list[int] = []
+    score = placement._gum_score
+
+    def spy(ver, lt):  # type: ignore[no-untyped-def]
+        seen.append(threads())
+        return score(ver, lt)
+
+    monkeypatch.setattr(placement, "_gum_score", spy)
+    st = load_study(STUDY).study
+    ver = st.verification("mesh96", "pos1")
+    assert st.limits is not None
+    with threadpool_limits(limits=2, user_api="blas"):
+        before = threads()
+        r = place(ver, st.limits, references=st.trackers, n_xy=3, heights=1, refine=3)
+        after = threads()
+    assert before == after == 2
+    assert seen
+    assert set(seen) == {1}
+    assert r.candidates > 0
