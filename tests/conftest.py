@@ -12,6 +12,15 @@ from typing import Any, NoReturn
 
 import pytest
 
+# One BLAS thread in each test process, unless the environment says otherwise: pytest-xdist
+# runs a worker per core (make test), and each worker's OpenBLAS would start a thread per
+# core again, which spin against each other on the thin products of the tests (the tests of
+# tests/verification took 110 s on two workers with two BLAS threads each, 67 s with one,
+# the machine under the same load). The numbers do not depend on it; the tests of
+# one_blas_thread set their own counts (threadpool_limits). Set here, before NumPy is
+# imported, it reaches the workers, which inherit this process's environment.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 
 def pytest_configure() -> None:
     """Let Ctrl-C reach the child processes that the tests interrupt on purpose.
