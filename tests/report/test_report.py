@@ -329,3 +329,43 @@ def test_the_budget_gives_the_unit_of_each_sensitivity_coefficient():
     assert cells["rho_a"] == ["kg/m³", "mg/(kg/m³)"]
     assert "or no more than the rounding of the estimates (|c| u(x) below 10⁻⁶ u(y))" in page
     assert 1.2 != 0.5 * (1.1 + 1.3)  # the premise of the rounding
+
+
+def test_mtmc_report_plots_draws_as_many_histograms_as_asked(shipped, tmp_path, capsys):
+    # the report draws the first MAX_PLOTTED quantities' histograms and convergence; the
+    # reader who wants every one asks for them, and the page of the default says how
+    from mtmc.cli.main import main
+    from mtmc.errors import InputError
+    from mtmc.report import MAX_PLOTTED
+
+    folder = Path(shutil.copytree(shipped("wang2022"), tmp_path / "w"))
+    n = len(json.loads((folder / "result.json").read_text(encoding="utf-8"))["quantities"])
+    assert n == 36 > MAX_PLOTTED
+
+    def drawn() -> tuple[int, int, int]:
+        page = (folder / "report.html").read_text(encoding="utf-8")
+        return (
+            page.count('data-plot="histogram:'),
+            page.count('data-plot="convergence:'),
+            page.count('class="unplotted"'),
+        )
+
+    assert drawn() == (MAX_PLOTTED, MAX_PLOTTED, n - MAX_PLOTTED)
+    assert "<code>mtmc report FOLDER --plots all</code> draws every one" in (
+        folder / "report.html"
+    ).read_text(encoding="utf-8")
+    assert main(["report", str(folder), "--plots", "all"]) == 0
+    assert drawn() == (n, n, 0)
+    assert main(["report", str(folder), "--plots", "2"]) == 0
+    assert drawn() == (2, 2, n - 2)
+    capsys.readouterr()
+    before = (folder / "report.html").read_bytes()
+    for bad in ("-1", "some", "1.5", "٣"):
+        assert main(["report", str(folder), "--plots", bad]) == 2, bad
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1, err
+        assert "--plots: expected a whole number >= 0 or 'all'" in err, err
+    assert (folder / "report.html").read_bytes() == before  # nothing written
+    for bad_value in (-1, 1.5, True, "some"):
+        with pytest.raises(InputError, match="whole number >= 0 or 'all'"):
+            render(folder, plotted=bad_value)

@@ -41,6 +41,7 @@ from mtmc.cli.run_options import (
     run_message,
 )
 from mtmc.errors import MtmcError
+from mtmc.report import MAX_PLOTTED
 
 __all__ = [
     "default_outdir",
@@ -357,12 +358,24 @@ def run_cmd(
 
 def report_cmd(
     outdir: Path = typer.Argument(..., help="A result folder (it holds result.json)."),
+    plots: str | None = typer.Option(
+        None,
+        "--plots",
+        metavar="N|all",
+        help="How many quantities, from the first, get a histogram and a convergence "
+        f"plot: a whole number or 'all' (default {MAX_PLOTTED}).",
+    ),
 ) -> None:
     """Render OUTDIR/report.html again from the result files."""
     from mtmc.report import render
 
+    plotted: int | str | None = plots
+    if plots is not None and plots != "all":
+        if not plots.isascii() or not plots.isdigit():
+            fail(f"--plots: expected a whole number >= 0 or 'all', got {plots!r}")
+        plotted = int(plots)
     try:
-        path = render(outdir)
+        path = render(outdir, plotted=plotted)
     except (MtmcError, OSError) as exc:
         fail(exc)
     typer.echo(f"report: {path}")

@@ -101,9 +101,25 @@ def at_place(x: Any, u: Any, ndig: int = 2, *, the_u: bool = False) -> str:
 MAX_PLOTTED = 12
 
 
-def plotted_count(result: Mapping[str, Any]) -> int:
-    """How many quantities of ``result`` get a histogram and a convergence plot."""
-    return min(len(result.get("quantities", [])), MAX_PLOTTED)
+def plotted_count(result: Mapping[str, Any], plotted: int | str | None = None) -> int:
+    """How many quantities of ``result`` get a histogram and a convergence plot.
+
+    ``plotted``: the first so many (``None``: :data:`MAX_PLOTTED`), or ``"all"``.
+
+    Examples
+    --------
+    >>> doc = {"quantities": [{}] * 36}
+    >>> plotted_count(doc), plotted_count(doc, 3), plotted_count(doc, "all")
+    (12, 3, 36)
+    """
+    n = len(result.get("quantities", []))
+    if plotted is None:
+        return min(n, MAX_PLOTTED)
+    if plotted == "all":
+        return n
+    if isinstance(plotted, bool) or not isinstance(plotted, int) or plotted < 0:
+        raise InputError(f"expected a whole number >= 0 or 'all', got {plotted!r}", field="plotted")
+    return min(n, plotted)
 
 
 def _env() -> Any:
@@ -142,7 +158,12 @@ def _read_json(path: Path) -> dict[str, Any]:
     return data
 
 
-def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None) -> str:
+def html(
+    result: Mapping[str, Any],
+    provenance: Mapping[str, Any] | None = None,
+    *,
+    plotted: int | str | None = None,
+) -> str:
     """The report page of a result, as HTML text.
 
     Parameters
@@ -151,6 +172,9 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
         The content of ``result.json``.
     provenance : mapping, optional
         The content of ``provenance.json``.
+    plotted : int or "all", optional
+        How many quantities, from the first, get a histogram and a convergence plot
+        (:func:`plotted_count`; default :data:`MAX_PLOTTED`).
 
     Returns
     -------
@@ -167,10 +191,11 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
             f"expected an mtmc result (format mtmc-result/1), got format {result.get('format')!r}",
             field="format",
         )
+    drawn = plotted_count(result, plotted)
     from mtmc.report import plots
 
     figs: dict[str, str] = {}
-    for q in result.get("quantities", [])[: plotted_count(result)]:
+    for q in result.get("quantities", [])[:drawn]:
         if not q["monte_carlo"]["u"]:  # u = 0 (or not finite): one value, nothing to draw
             continue
         figs[f"histogram:{q['name']}"] = plots.histogram_svg(q)
@@ -210,18 +235,21 @@ def html(result: Mapping[str, Any], provenance: Mapping[str, Any] | None = None)
             prov=provenance or {},
             figs=figs,
             input_units=units,
-            max_plotted=plotted_count(result),
+            max_plotted=drawn,
         )
     )
 
 
-def render(folder: str | Path) -> Path:
+def render(folder: str | Path, *, plotted: int | str | None = None) -> Path:
     """Write ``report.html`` of a result folder from its ``result.json`` and ``provenance.json``.
 
     Parameters
     ----------
     folder : str or Path
         The result folder.
+    plotted : int or "all", optional
+        How many quantities, from the first, get a histogram and a convergence plot
+        (default :data:`MAX_PLOTTED`; ``mtmc report FOLDER --plots all``).
 
     Returns
     -------
@@ -231,20 +259,22 @@ def render(folder: str | Path) -> Path:
     Raises
     ------
     InputError
-        If the folder holds no readable ``result.json``.
+        If the folder holds no readable ``result.json``, or ``plotted`` is neither a whole
+        number >= 0 nor ``"all"``.
     """
     import jinja2
     import numpy as np
 
     from mtmc.report.folder import read_folder
 
+    plotted_count({}, plotted)  # the option checked before the folder is read
     d = Path(folder)
     read = read_folder(d, samples=False)  # every file checked before the report reads it
     try:
         # values at the ends of the float range (1e308, within the format) overflow in
         # Matplotlib's tick arithmetic, which handles them: no warning for the reader
         with np.errstate(over="ignore", invalid="ignore"):
-            page = html(read.result, read.provenance)
+            page = html(read.result, read.provenance, plotted=plotted)
     except KeyError as exc:  # a result.json edited, or of another version
         raise InputError(
             f"not an mtmc result: no {exc.args[0]!r} where the report needs one "
