@@ -296,17 +296,21 @@ def _read(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str], dict[s
             **{k: np.asarray(d.mean, dtype=np.float64)[None, ...] for k, d in inputs.items()}
         )[0]
     )
-    th, d = identify_with.theta, identify_with.direction
-    plot = {
-        "plane": identify_with.plane,
-        "radius": identify_with.radius,
-        "feed": identify_with.feed,
+    return model, inputs, limits, units, _plot(identify_with, trace)
+
+
+def _plot(design: Any, trace_um: Any) -> dict[str, Any]:
+    """What the report's polar plot of a circular test needs: the path and its trace (µm)."""
+    th, d = design.theta, design.direction
+    return {
+        "plane": design.plane,
+        "radius": design.radius,
+        "feed": design.feed,
         "theta_deg": np.degrees(th),
         "direction": d,
-        "trace_um": trace,
-        "circles": _circles(th, d, trace),
+        "trace_um": trace_um,
+        "circles": _circles(th, d, trace_um),
     }
-    return model, inputs, limits, units, plot
 
 
 def _ballbar(top: Fields, keys: tuple[str, ...] = _BALLBAR_KEYS) -> dict[str, Any]:
@@ -392,15 +396,7 @@ def _read_measured(top: Fields) -> tuple[Any, dict[str, Any], Any, dict[str, str
     model, inputs = circular_model(des, Ballbar(**kw), measured=meas)
     limits = read_output_conformity(top, model.symbols)
     units = dict(zip(des.names, des.units, strict=True))
-    th, d = des.theta, des.direction
-    plot = {
-        "plane": des.plane,
-        "radius": des.radius,
-        "feed": des.feed,
-        "theta_deg": np.degrees(th),
-        "direction": d,
-        "trace_um": 1e3 * meas,
-        "circles": _circles(th, d, 1e3 * meas),
+    plot = _plot(des, 1e3 * meas) | {
         "data": trace.source,
         "identifiability": ident.identifiability.text(),
         "rms_um": 1e3 * float(ident.rms[0]),
