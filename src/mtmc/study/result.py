@@ -18,7 +18,7 @@ import io
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -104,6 +104,23 @@ class Table:
 
 def _scaled(x: float | None, factor: float) -> float | None:
     return None if x is None else float(x) * factor
+
+
+_D = TypeVar("_D")
+
+
+def _times(record: _D, factor: float, *names: str) -> _D:
+    """``record`` (a frozen dataclass, or None) with the fields ``names`` times ``factor``.
+
+    A field is a number or a pair of numbers (an interval).
+    """
+    if record is None:
+        return record
+
+    def times(x: Any) -> Any:
+        return (x[0] * factor, x[1] * factor) if isinstance(x, tuple) else x * factor
+
+    return replace(record, **{n: times(getattr(record, n)) for n in names})  # type: ignore[type-var]
 
 
 def _dof_of(x: Any) -> float:
@@ -487,34 +504,11 @@ class Quantity:
         if self.conformity is not None:
             raise ValueError("a quantity with a conformity decision keeps its study's unit")
 
-        mc = replace(
-            self.mc,
-            estimate=self.mc.estimate * factor,
-            u=self.mc.u * factor,
-            U=self.mc.U * factor,
-            shortest=(self.mc.shortest[0] * factor, self.mc.shortest[1] * factor),
-            symmetric=(self.mc.symmetric[0] * factor, self.mc.symmetric[1] * factor),
+        mc = _times(self.mc, factor, "estimate", "u", "U", "shortest", "symmetric")
+        gum = _times(self.gum, factor, "estimate", "u", "U", "interval")
+        validation = _times(
+            self.validation, factor, "d_low", "d_high", "delta", "endpoint_std_error"
         )
-        gum = None
-        if self.gum is not None:
-            g = self.gum
-            gum = replace(
-                g,
-                estimate=g.estimate * factor,
-                u=g.u * factor,
-                U=g.U * factor,
-                interval=(g.interval[0] * factor, g.interval[1] * factor),
-            )
-        validation = None
-        if self.validation is not None:
-            v = self.validation
-            validation = replace(
-                v,
-                d_low=v.d_low * factor,
-                d_high=v.d_high * factor,
-                delta=v.delta * factor,
-                endpoint_std_error=v.endpoint_std_error * factor,
-            )
         budget = tuple(
             replace(
                 b,
