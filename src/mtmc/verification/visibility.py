@@ -126,17 +126,21 @@ class PlanVisibility:
         if self.ok:
             return f"{name}: all {len(self.names)} limit points visible"
         lines = [f"{name}: {len(self.report.failures)} failures"]
-        for f in self.failures(axes):
-            where = (
-                "tracker"
-                if f["point"] == "tracker"
-                else f"{f['point']} ({', '.join(f'{a} {v:g}' for a, v in f['axes'].items())})"
-            )
-            lines.append(
-                f"  {where}: {f['limit']} {f['value']:.2f} {f['unit']} outside "
-                f"[{f['low']:g}, {f['high']:g}] {f['unit']}"
-            )
+        lines += [f"  {_failure_text(f, 'tracker')}" for f in self.failures(axes)]
         return "\n".join(lines)
+
+
+def _failure_text(f: Mapping[str, Any], tracker: str) -> str:
+    """One failure of :meth:`PlanVisibility.failures` in words: where, which limit, how far."""
+    where = (
+        tracker
+        if f["point"] == "tracker"
+        else f"{f['point']} ({', '.join(f'{a} {x:g}' for a, x in f['axes'].items())})"
+    )
+    return (
+        f"{where}: {f['limit']} {f['value']:.2f} {f['unit']} outside "
+        f"[{f['low']:g}, {f['high']:g}] {f['unit']}"
+    )
 
 
 def plan_visibility(
@@ -318,17 +322,7 @@ def visibility_warnings(vis: Mapping[str, PlanVisibility], axes: tuple[str, ...]
     for name, v in vis.items():
         if v.ok:
             continue
-        parts = []
-        for f in v.failures(axes):
-            where = (
-                "the tracker"
-                if f["point"] == "tracker"
-                else f"{f['point']} ({', '.join(f'{a} {x:g}' for a, x in f['axes'].items())})"
-            )
-            parts.append(
-                f"{where}: {f['limit']} {f['value']:.2f} {f['unit']} outside "
-                f"[{f['low']:g}, {f['high']:g}] {f['unit']}"
-            )
+        parts = [_failure_text(f, "the tracker") for f in v.failures(axes)]
         out.append(
             f"tracker position {name} cannot see every limit point of the measured points "
             "(Aguado et al. 2016 eqs. 19-21): " + "; ".join(parts)
