@@ -284,10 +284,12 @@ def planned_workers(workers: int, executor: ExecutorKind | cf.Executor) -> int:
 
 #: Dask's log level in a cluster started for one call (:func:`_dask_client`), in this
 #: process and (through :mod:`mtmc._warm`, which reads the setting ``mtmc.worker-log-level``)
-#: in its workers: the run reports its own failures, and an interrupted run's workers would
+#: in its workers: the run reports its own failures (a task's error, a worker lost, reach
+#: the client and end the command with one line), and an interrupted run's workers would
 #: otherwise log the cancelled tasks of their ending ("Async instruction ... ended with
-#: CancelledError", one line a worker).
-CALL_CLUSTER_LOG_LEVEL: str = "ERROR"
+#: CancelledError", one line a worker, at WARNING) or, under load, a heartbeat that met the
+#: scheduler already closed (an ERROR with its traceback, above ``mtmc: interrupted``).
+CALL_CLUSTER_LOG_LEVEL: str = "CRITICAL"
 
 
 @contextlib.contextmanager
