@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from mtmc.errors import MtmcError
@@ -165,6 +165,8 @@ def _tamper(d: Path, leaf: int, value: Any, how: str) -> None:
 
 @SETTINGS
 @given(case=tampered_folders())
+# make fuzz at 2000: quantities[0].name = "˯", a glyph DejaVu Sans lacks (a UserWarning)
+@example(case=(249, "˯", "none"))
 def test_tampered_result_folders_read_or_refused_in_one_line(
     written: Path, case: tuple[int, Any, str]
 ) -> None:

@@ -258,3 +258,23 @@ def test_the_provenance_table_names_the_copy_of_each_input_file(written: Path) -
     page = html(_doc(written), prov)
     assert "copied as <code>inputs/axis_c.toml</code>" in page
     assert "built-in method" not in page
+
+
+def test_a_text_the_plots_font_lacks_is_drawn_without_a_warning(
+    written: Path, tmp_path: Path
+) -> None:
+    # make fuzz (2000 tampered folders) renamed a quantity "˯" (U+02EF), which DejaVu Sans
+    # does not have: Matplotlib measured the label without the glyph and the report leaked
+    # its UserWarning. The SVG keeps the text as text, for the browser to draw.
+    import warnings
+
+    d = Path(shutil.copytree(written, tmp_path / "r"))
+    doc = json.loads((d / "result.json").read_text(encoding="utf-8"))
+    doc["quantities"][0]["name"] = "˯"
+    (d / "result.json").write_text(json.dumps(doc), encoding="utf-8")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        page = render(d).read_text(encoding="utf-8")
+    figure = page[page.index('data-plot="histogram:˯"') :]
+    figure = figure[: figure.index("</figure>")]
+    assert "˯" in figure  # its axis label, as text

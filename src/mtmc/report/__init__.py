@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -159,40 +160,8 @@ def _read_json(path: Path) -> dict[str, Any]:
     return data
 
 
-def html(
-    result: Mapping[str, Any],
-    provenance: Mapping[str, Any] | None = None,
-    *,
-    plotted: int | str | None = None,
-) -> str:
-    """The report page of a result, as HTML text.
-
-    Parameters
-    ----------
-    result : mapping
-        The content of ``result.json``.
-    provenance : mapping, optional
-        The content of ``provenance.json``.
-    plotted : int or "all", optional
-        How many quantities, from the first, get a histogram and a convergence plot
-        (:func:`plotted_count`; default :data:`MAX_PLOTTED`).
-
-    Returns
-    -------
-    str
-        A self-contained HTML document.
-
-    Raises
-    ------
-    InputError
-        If ``result`` is not an mtmc result (no ``format`` ``mtmc-result/...``).
-    """
-    if not str(result.get("format", "")).startswith("mtmc-result/"):
-        raise InputError(
-            f"expected an mtmc result (format mtmc-result/1), got format {result.get('format')!r}",
-            field="format",
-        )
-    drawn = plotted_count(result, plotted)
+def _figures(result: Mapping[str, Any], drawn: int) -> dict[str, str]:
+    """The SVG figures of a report page, by their key in the template."""
     from mtmc.report import plots
 
     figs: dict[str, str] = {}
@@ -227,6 +196,52 @@ def html(
 
         circ = result["circular"]
         figs["circular"] = rotary_svg(circ) if circ.get("rotary") else circular_svg(circ)
+    return figs
+
+
+def html(
+    result: Mapping[str, Any],
+    provenance: Mapping[str, Any] | None = None,
+    *,
+    plotted: int | str | None = None,
+) -> str:
+    """The report page of a result, as HTML text.
+
+    Parameters
+    ----------
+    result : mapping
+        The content of ``result.json``.
+    provenance : mapping, optional
+        The content of ``provenance.json``.
+    plotted : int or "all", optional
+        How many quantities, from the first, get a histogram and a convergence plot
+        (:func:`plotted_count`; default :data:`MAX_PLOTTED`).
+
+    Returns
+    -------
+    str
+        A self-contained HTML document.
+
+    Raises
+    ------
+    InputError
+        If ``result`` is not an mtmc result (no ``format`` ``mtmc-result/...``).
+    """
+    if not str(result.get("format", "")).startswith("mtmc-result/"):
+        raise InputError(
+            f"expected an mtmc result (format mtmc-result/1), got format {result.get('format')!r}",
+            field="format",
+        )
+    drawn = plotted_count(result, plotted)
+    with warnings.catch_warnings():
+        # a text with a character DejaVu Sans lacks (a name edited into result.json, a
+        # unit in another script): Matplotlib measures it without the glyph and says so;
+        # the SVG keeps the text as text (svg.fonttype "none"), which the browser draws
+        # in a font that has it
+        warnings.filterwarnings(
+            "ignore", message="Glyph .* missing from font", category=UserWarning
+        )
+        figs = _figures(result, drawn)
     template = _env().get_template("report.html.j2")
     # the units of the inputs, where the result gives them (a kinematics study: mm, rad)
     units = {x["name"]: x["unit"] for x in result.get("inputs", []) if x.get("unit")}
