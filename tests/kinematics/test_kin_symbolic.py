@@ -50,6 +50,24 @@ def test_first_order_equation_is_nominal_plus_jacobian(name: str) -> None:
     assert 0.2 < gap(0.5) / gap(1.0) < 0.3
 
 
+@pytest.mark.parametrize("topology", ["XFYZ", "FXYZ"])
+def test_first_order_equation_is_the_full_one_truncated(topology: str) -> None:
+    # the first-order product carries v0 + sum e_k v_k through the chain; the full product
+    # expanded with every error scaled by eps, and cut after eps^1, must be the same
+    # expression (a three-axis machine, where the full product is small)
+    import sympy as sp
+
+    mach = Machine.from_topology(topology)
+    full = equation_of_motion(mach)
+    lin = equation_of_motion(mach, first_order=True)
+    eps = sp.Symbol("eps")
+    scale = {e: eps * e for e in full.error_symbols}
+    for a, b in zip(full.position, lin.position, strict=True):
+        e = sp.expand(a.xreplace(scale))
+        cut = e.coeff(eps, 0) + e.coeff(eps, 1)
+        assert sp.expand(cut - b) == 0
+
+
 @pytest.mark.parametrize(
     ("name", "subset"),
     [

