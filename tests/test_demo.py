@@ -19,17 +19,21 @@ import pytest
 from conftest import absent
 from mtmc import demo, load_graph
 from mtmc.cli.main import main
+from mtmc.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
-M = 4000
+M = 1000  # the mass calibration's MC u within 4/sqrt(2M) = 9 % of JCGM 101's, 40 % from the GUM's
 
 
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo") / "mtmc-demo"
     lines: list[str] = []
-    index = demo.run_demo(out, trials=M, seed=101, echo=lines.append)
+    # one quantity of each report drawn: the run, the folders, the index and the lines are
+    # what is tested here; every figure of every shipped study's report, drawn at the
+    # default, is held to the layout rule below (shipped folders) and read by test_units
+    index = demo.run_demo(out, trials=M, seed=101, echo=lines.append, plotted=1)
     return out, index, lines
 
 
@@ -76,7 +80,9 @@ def test_the_results_against_independent_references(quick):
 
 def test_same_seed_same_numbers(quick, tmp_path):
     out, _, _ = quick
-    demo.run_demo(tmp_path, trials=M, seed=101, studies=["axis_c.toml"], echo=lambda _: None)
+    demo.run_demo(
+        tmp_path, trials=M, seed=101, studies=["axis_c.toml"], echo=lambda _: None, plotted=1
+    )
     a = json.loads((out / "axis_c" / "result.json").read_text())
     b = json.loads((tmp_path / "axis_c" / "result.json").read_text())
     assert a == b
@@ -111,6 +117,21 @@ def test_bad_trials_is_refused_with_a_message(capsys, tmp_path):
     assert main(["demo", "--trials", "1", "-o", str(tmp_path)]) == 2
 
 
+@pytest.mark.parametrize("bad", ["-1", "some", "1.5", "٣"])
+def test_bad_plots_is_refused_before_any_study_runs(capsys, tmp_path, bad):
+    out = tmp_path / "d"
+    with pytest.raises(SystemExit) as exc:
+        demo.main(["--plots", bad, "--out", str(out)])
+    assert exc.value.code == 2
+    assert f"--plots: expected a whole number >= 0 or 'all', got {bad!r}" in capsys.readouterr().err
+    assert main(["demo", "--plots", bad, "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"mtmc: error: --plots: expected a whole number >= 0 or 'all', got {bad!r}\n"
+    with pytest.raises(InputError, match="whole number >= 0 or 'all'"):
+        demo.run_demo(out, plotted=bad, echo=lambda _: None)
+    assert not out.exists()  # nothing ran, nothing written
+
+
 def test_out_that_is_a_file_is_refused_with_a_message(capsys, tmp_path):
     f = tmp_path / "results"
     f.write_text("not a folder")
@@ -126,13 +147,20 @@ def test_cli_demo_ends_with_the_report_path(capsys, tmp_path, monkeypatch):
     assert main(argv) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last == f"Report: {tmp_path / 'd' / 'index.html'}"
-    assert main([*argv[:2], str(tmp_path / "w"), *argv[3:], "--workers", "2"]) == 0
+    argv_w = [*argv[:2], str(tmp_path / "w"), *argv[3:], "--workers", "2", "--plots", "0"]
+    assert main(argv_w) == 0
     for d in ("d", "w"):
         assert (tmp_path / d / "ball_centre" / "result.json").is_file()
     one, two = (
         json.loads((tmp_path / d / "ball_centre" / "result.json").read_text()) for d in "dw"
     )
     assert one["quantities"] == two["quantities"]
+    # --plots 0: the report draws no histogram and names each quantity it does not draw
+    pages = [(tmp_path / d / "ball_centre" / "report.html").read_text("utf-8") for d in "dw"]
+    n = len(one["quantities"])
+    assert pages[0].count('data-plot="histogram:') == min(n, 12)
+    assert pages[1].count('data-plot="histogram:') == 0
+    assert pages[1].count('class="unplotted"') == n
 
 
 # ---------------------------------------------------------------------------------------
@@ -179,7 +207,7 @@ def _fonts() -> str:
     return " ".join(Path(f).name for f in font_manager.findSystemFonts())
 
 
-def test_no_text_of_a_plot_overlaps_another_or_leaves_its_figure(quick):
+def test_no_text_of_a_plot_overlaps_another_or_leaves_its_figure(shipped):
     # Reference: the text boxes Chromium lays out (the reports name DejaVu Sans, the font
     # Matplotlib measured). Before report.plots._fit the 13 reports of `make demo` had 199
     # texts out of their figures or over another (an axis label cut at the left edge,
@@ -194,13 +222,16 @@ def test_no_text_of_a_plot_overlaps_another_or_leaves_its_figure(quick):
     if "DejaVuSans.ttf" not in _fonts():
         # the browser would draw the plots' text in another font than Matplotlib measured
         absent("DejaVu Sans", "Debian: apt-get install fonts-dejavu-core")
-    out, _, _ = quick
+    # every shipped study's report, each quantity's plots drawn to the default limit
+    studies = sorted((EXAMPLES / "studies").glob("*.toml"))
+    reports = [shipped(p.stem) / "report.html" for p in studies]
+    assert len(reports) == 16
     found: dict[str, list[list[str]]] = {}
     texts = 0
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=path, args=["--no-sandbox", "--disable-gpu"])
         try:
-            for report in sorted(out.glob("*/report.html")):
+            for report in reports:
                 page = browser.new_page(viewport={"width": 1280, "height": 900})
                 page.goto(report.as_uri())
                 page.wait_for_load_state("load")

@@ -37,6 +37,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from mtmc.errors import InputError
+from mtmc.report import plotted_from_text
+
 __all__ = ["STUDIES", "main", "run_demo", "study_path"]
 
 #: The shipped studies the demo runs, in order (files of ``mtmc/data/studies``).
@@ -81,6 +84,7 @@ def run_demo(
     progress: Callable[[str], Any] | None = None,
     echo: Callable[[str], Any] = print,
     on_result: Callable[[Path, Any], Any] | None = None,
+    plotted: int | str | None = None,
     **parallel: Any,
 ) -> Path:
     """Run the shipped studies into ``out`` and write ``out/index.html``.
@@ -102,6 +106,9 @@ def run_demo(
         Where the one-line summaries go (each states the seed of its study).
     on_result : callable, optional
         ``on_result(folder, result)`` after each study's result folder is written.
+    plotted : int or "all", optional
+        How many quantities of each report, from the first, get a histogram and a
+        convergence plot (default :data:`mtmc.report.MAX_PLOTTED`).
     **parallel
         ``workers``, ``executor``, ``scheduler`` of every run (:meth:`Study.run`).
 
@@ -112,10 +119,11 @@ def run_demo(
     """
     import contextlib
 
-    from mtmc.report import render_index
+    from mtmc.report import plotted_count, render_index
     from mtmc.study import load_study, write_result
     from mtmc.study.write import now
 
+    plotted_count({}, plotted)  # checked before the first study runs
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     entries = []
@@ -134,6 +142,7 @@ def run_demo(
             study_text=study.source.text,
             started=started,
             argv=["mtmc", "demo"],
+            plotted=plotted,
         )
         if on_result is not None:
             on_result(folder / stem, result)
@@ -153,7 +162,9 @@ def run_demo(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m mtmc.demo [--out DIR] [--trials N] [--seed S]``; returns 0, or 130 on Ctrl-C.
+    """``python -m mtmc.demo [--out DIR] [--trials N] [--seed S] [--plots N|all]``.
+
+    Returns 0, or 130 on Ctrl-C.
 
     Each study's folder is written whole or not at all, so an interrupted demo leaves the
     studies done so far, complete, and none half-written.
@@ -162,13 +173,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("mtmc-demo"), help="output folder")
     parser.add_argument("--trials", type=int, default=None, help="trials of every study")
     parser.add_argument("--seed", type=int, default=None, help="seed of every study")
+    parser.add_argument(
+        "--plots",
+        default=None,
+        metavar="N|all",
+        help="quantities of each report with a histogram and a convergence plot",
+    )
     args = parser.parse_args(argv)
     if args.trials is not None and args.trials < 2:
         parser.error(f"--trials: expected an integer >= 2, got {args.trials}")
+    try:
+        plotted = plotted_from_text(args.plots)
+    except InputError as exc:
+        parser.error(f"--plots: {exc.message}")
     if args.out.exists() and not args.out.is_dir():
         parser.error(f"--out: expected a folder, but {args.out} is a file")
     try:
-        run_demo(args.out, trials=args.trials, seed=args.seed)
+        run_demo(args.out, trials=args.trials, seed=args.seed, plotted=plotted)
     except KeyboardInterrupt:
         print("mtmc demo: interrupted", file=sys.stderr)
         return 130

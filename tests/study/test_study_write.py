@@ -151,3 +151,21 @@ def test_cli_run_takes_the_parallel_options(tmp_path, capsys):
     assert main([*base, "-o", str(tmp_path / "bad"), "--executor", "mpi"]) == 2
     assert "expected thread, process or dask" in capsys.readouterr().err
     assert not (tmp_path / "bad").exists()
+
+
+def test_write_result_draws_the_plots_asked_and_refuses_a_bad_count_before_writing(tmp_path):
+    study = load_study(STUDIES / "ball_centre.toml")
+    result = study.run(trials=200, seed=2)
+    n = len(result.quantities)
+    assert n == 3
+    for plotted, drawn in ((0, 0), (1, 1), ("all", n), (None, min(n, 12))):
+        out = write_result(result, tmp_path / f"r{plotted}", plotted=plotted)
+        page = (out / "report.html").read_text(encoding="utf-8")
+        assert page.count('data-plot="histogram:') == drawn, plotted
+        assert page.count('class="unplotted"') == n - drawn, plotted
+    for bad in (-1, 1.5, True, "some"):
+        with pytest.raises(InputError, match="whole number >= 0 or 'all'"):
+            write_result(result, tmp_path / "bad", plotted=bad)
+        assert not (tmp_path / "bad").exists()
+    # without a report the count is not read
+    assert (write_result(result, tmp_path / "plain", report=False, plotted=-1)).is_dir()

@@ -19,6 +19,7 @@ import typer
 
 from mtmc.errors import InputError, MtmcError
 from mtmc.io import to_jsonable, write_bytes_atomic, write_text_atomic
+from mtmc.report import MAX_PLOTTED, plotted_from_text
 
 if TYPE_CHECKING:  # the library and Rich's progress bar are imported where they are used
     from rich.console import Console
@@ -53,6 +54,26 @@ RESULT_OPTION: Any = typer.Option(
     "created with its parents.",
     show_default=False,
 )
+
+
+#: ``--plots N|all`` of the commands that write a report: how many quantities, from the
+#: first, get a histogram and a convergence plot (:func:`mtmc.report.plotted_count`).
+PLOTS_OPTION: Any = typer.Option(
+    None,
+    "--plots",
+    metavar="N|all",
+    help="How many quantities, from the first, get a histogram and a convergence "
+    f"plot in the report: a whole number or 'all' (default {MAX_PLOTTED}).",
+    show_default=False,
+)
+
+
+def plots_value(plots: str | None) -> int | str | None:
+    """``--plots`` as :func:`mtmc.report.render` takes it; one line and exit 2 on a bad value."""
+    try:
+        return plotted_from_text(plots)
+    except InputError as exc:
+        fail(f"--plots: {exc.message}")
 
 
 def progress_flag(progress: bool | None, quiet: bool) -> bool | None:

@@ -19,6 +19,7 @@ from rich.table import Table
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
+    PLOTS_OPTION,
     PROGRESS_OPTION,
     QUIET_OPTION,
     SCHEDULER_OPTION,
@@ -27,6 +28,7 @@ from mtmc.cli.common import (
     fail,
     nan_policy,
     parallel_options,
+    plots_value,
     print_json,
     print_trials_seed,
     progress_bar,
@@ -41,7 +43,6 @@ from mtmc.cli.run_options import (
     run_message,
 )
 from mtmc.errors import MtmcError
-from mtmc.report import MAX_PLOTTED
 
 __all__ = [
     "default_outdir",
@@ -358,22 +359,12 @@ def run_cmd(
 
 def report_cmd(
     outdir: Path = typer.Argument(..., help="A result folder (it holds result.json)."),
-    plots: str | None = typer.Option(
-        None,
-        "--plots",
-        metavar="N|all",
-        help="How many quantities, from the first, get a histogram and a convergence "
-        f"plot: a whole number or 'all' (default {MAX_PLOTTED}).",
-    ),
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Render OUTDIR/report.html again from the result files."""
     from mtmc.report import render
 
-    plotted: int | str | None = plots
-    if plots is not None and plots != "all":
-        if not plots.isascii() or not plots.isdigit():
-            fail(f"--plots: expected a whole number >= 0 or 'all', got {plots!r}")
-        plotted = int(plots)
+    plotted = plots_value(plots)
     try:
         path = render(outdir, plotted=plotted)
     except (MtmcError, OSError) as exc:
@@ -391,6 +382,7 @@ def demo_cmd(
     workers: int = WORKERS_OPTION,
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Run the shipped studies into OUTPUT and write OUTPUT/index.html linking their reports.
 
@@ -402,6 +394,7 @@ def demo_cmd(
     if trials is not None and trials < 2:
         fail(f"--trials: expected an integer >= 2, got {trials}")
     check_trials(trials)
+    plotted = plots_value(plots)
 
     def bar(label: str) -> Any:
         return progress_bar(f"{label}: Monte Carlo", progress_flag(progress, quiet))
@@ -415,6 +408,7 @@ def demo_cmd(
             progress=bar,
             echo=(lambda _line: None) if as_json else typer.echo,
             on_result=lambda folder, result: summaries.append(run_summary(result, folder)),
+            plotted=plotted,
             **parallel_options(workers, executor, scheduler),
         )
     except (MtmcError, OSError) as exc:

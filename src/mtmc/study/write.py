@@ -302,6 +302,7 @@ def write_result(
     started: str | None = None,
     argv: Sequence[str] | None = None,
     report: bool = True,
+    plotted: int | str | None = None,
 ) -> Path:
     """Write the result folder of a run (atomically, as a whole).
 
@@ -323,6 +324,9 @@ def write_result(
         The command line (default ``sys.argv``).
     report : bool
         Also render ``report.html`` (:func:`mtmc.report.render`).
+    plotted : int or "all", optional
+        How many quantities of the report, from the first, get a histogram and a
+        convergence plot (default :data:`mtmc.report.MAX_PLOTTED`).
 
     Returns
     -------
@@ -333,8 +337,13 @@ def write_result(
     ------
     InputError
         If ``outdir`` exists and is a file or a folder that is not a result folder; if a
-        file the study names changed since the run read it.
+        file the study names changed since the run read it; if ``plotted`` is neither a
+        whole number >= 0 nor ``"all"``.
     """
+    if report:
+        from mtmc.report import plotted_count
+
+        plotted_count({}, plotted)  # checked before anything is written
     if not isinstance(result, StudyResult):
         from mtmc.study.load import study_result
 
@@ -368,7 +377,7 @@ def write_result(
         if report:
             from mtmc.report import render
 
-            render(tmp)
+            render(tmp, plotted=plotted)
         os.chmod(tmp, 0o777 & ~_umask())
         old = None
         # the swap is never cut half-way by Ctrl-C, and one writer of a folder swaps at a
