@@ -85,7 +85,7 @@ def test_failure_while_writing_leaves_nothing(tmp_path, monkeypatch):
 
     result = load_study(STUDIES / "ball_centre.toml").run(trials=1000, seed=1)
 
-    def boom(_folder):
+    def boom(_folder, **_options):
         raise RuntimeError("disk full")
 
     monkeypatch.setattr(report, "render", boom)

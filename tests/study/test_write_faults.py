@@ -35,7 +35,7 @@ import sys, time
 import mtmc.report
 from mtmc.study import load_study, write_result
 
-def stuck(folder):
+def stuck(folder, **options):
     print("writing", flush=True)
     time.sleep(60)
 
