@@ -202,9 +202,12 @@ def test_the_line_the_report_prints_reruns_a_demo_folder(tmp_path):
     from mtmc.cli.main import main
     from mtmc.demo import run_demo
 
-    run_demo(tmp_path / "demo", trials=TRIALS, seed=SEED, studies=["bcs_origin.toml"], echo=str)
-    moved = tmp_path / "elsewhere" / "bcs_origin"
-    shutil.copytree(tmp_path / "demo" / "bcs_origin", moved)
+    # Stryczek's ball centre: a graph study whose graph file is copied into its folder
+    # (the sweep of bcs_origin, also such a study, took 16 s here)
+    run_demo(tmp_path / "demo", trials=TRIALS, seed=SEED, studies=["ball_centre.toml"], echo=str)
+    moved = tmp_path / "elsewhere" / "ball_centre"
+    shutil.copytree(tmp_path / "demo" / "ball_centre", moved)
+    assert (moved / "inputs" / "ball_centre.toml").is_file()
     shutil.rmtree(tmp_path / "demo")
     page = (moved / "report.html").read_text(encoding="utf-8")
     line = re.search(r"<code>mtmc run study.toml (--seed \d+ --trials \d+)</code>", page)
