@@ -154,3 +154,46 @@ def test_every_study_command_takes_quiet(
     out, err = capsys.readouterr()
     assert out.splitlines() == ["trials 40  seed 3", f"report: {out_dir / 'report.html'}"]
     assert "trials" not in err  # -q turns the bar off, --progress or not
+
+
+#: One command line of each command that writes a result folder with a report (``-o``);
+#: TRACE and ARTEFACT are written by the test.
+REPORT_COMMANDS = {
+    "run": ["run", "examples/studies/ball_centre.toml"],
+    "propagate": ["propagate", "a * b", "-i", "a=normal(2, 0.1)", "-i", "b=normal(3, 0.2)"],
+    "artefact simulate": ["artefact", "simulate", "ARTEFACT"],
+    "verify simulate": ["verify", "simulate", "examples/studies/aguado2017.toml"],
+    "positioning evaluate": [
+        "positioning",
+        "evaluate",
+        "examples/studies/positioning_x.csv",
+        "--study",
+        "examples/studies/positioning_x.toml",
+    ],
+    "circle simulate": ["circle", "simulate", "examples/studies/circle_c_axis.toml"],
+    "circle evaluate": ["circle", "evaluate", "TRACE", "--radius", "150"],
+}
+
+
+@pytest.mark.parametrize("name", sorted(REPORT_COMMANDS))
+def test_every_command_that_writes_a_report_takes_plots(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--plots N|all means what it means to mtmc report: the first N quantities drawn."""
+    argv = REPORT_COMMANDS[name]
+    argv = [str(_trace(tmp_path)) if a == "TRACE" else a for a in argv]
+    argv = [str(_two_poses(tmp_path)) if a == "ARTEFACT" else a for a in argv]
+    argv = [str(ROOT / a) if a.startswith("examples/") else a for a in argv]
+    out_dir = tmp_path / "r"
+    # a bad count: one line, exit 2, before anything runs or is written
+    assert main([*argv, "-n", "20", "-s", "3", "-o", str(out_dir), "--plots", "some"]) == 2
+    err = capsys.readouterr().err
+    assert err == "mtmc: error: --plots: expected a whole number >= 0 or 'all', got 'some'\n"
+    assert not out_dir.exists()
+    assert main([*argv, "-n", "20", "-s", "3", "-o", str(out_dir), "-q", "--plots", "1"]) == 0
+    capsys.readouterr()
+    n = len(json.loads((out_dir / "result.json").read_text(encoding="utf-8"))["quantities"])
+    page = (out_dir / "report.html").read_text(encoding="utf-8")
+    drawn = 1 if n else 0
+    assert page.count('data-plot="histogram:') == drawn, name
+    assert page.count('class="unplotted"') == n - drawn, name

@@ -18,6 +18,7 @@ from rich.table import Table
 
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
+    PLOTS_OPTION,
     PROGRESS_OPTION,
     QUIET_OPTION,
     RESULT_OPTION,
@@ -25,6 +26,7 @@ from mtmc.cli.common import (
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
+    plots_value,
     print_json,
     print_quiet,
     seed_option,
@@ -95,11 +97,13 @@ def simulate_cmd(
     quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties.
 
     The study runs as mtmc run runs it; with -o its result folder and report are written.
     """
+    plotted = plots_value(plots)
     _check_options(figure, adaptive and trials is not None, noise, outdir, no_gum)
     simulated: list[Any] = []
     try:
@@ -119,6 +123,7 @@ def simulate_cmd(
             scheduler=scheduler,
             adaptive=adaptive,
             nan=nan,
+            plotted=plotted,
         )
         res = simulated[0]
         if figure is not None:

@@ -18,12 +18,14 @@ from rich.table import Table
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
+    PLOTS_OPTION,
     PROGRESS_OPTION,
     QUIET_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
+    plots_value,
     print_json,
     print_quiet,
     print_trials_seed,
@@ -151,9 +153,12 @@ def evaluate_cmd(
     quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Evaluate DATA: F, G (LSC, MZ), H, G(b) and the identified errors, each with U."""
     from mtmc.cli.run import run_with_options
+
+    plotted = plots_value(plots)
 
     try:
         overrides = {
@@ -181,6 +186,7 @@ def evaluate_cmd(
             scheduler=scheduler,
             adaptive=adaptive,
             nan=nan,
+            plotted=plotted,
         )
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))
@@ -246,9 +252,12 @@ def simulate_cmd(
     quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Simulate STUDY as mtmc run does: the parameters and the identified errors with U."""
     from mtmc.cli.run import run_with_options
+
+    plotted = plots_value(plots)
 
     try:
         result = run_with_options(
@@ -265,6 +274,7 @@ def simulate_cmd(
             scheduler=scheduler,
             adaptive=adaptive,
             nan=nan,
+            plotted=plotted,
         )
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))

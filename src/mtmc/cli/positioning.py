@@ -21,12 +21,14 @@ from rich.table import Table
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
+    PLOTS_OPTION,
     PROGRESS_OPTION,
     QUIET_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     fail,
     load_study_of_kind,
+    plots_value,
     print_json,
     print_trials_seed,
     seed_option,
@@ -131,9 +133,12 @@ def evaluate_cmd(
     quiet: bool = QUIET_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Evaluate DATA: the parameters of ISO 230-2, each with U by Monte Carlo and the GUM."""
     from mtmc.cli.run import run_with_options
+
+    plotted = plots_value(plots)
     from mtmc.positioning import pitch_compensation
     from mtmc.study.positioning import summary
     from mtmc.verification.compensation import dump_compensation
@@ -154,6 +159,7 @@ def evaluate_cmd(
             scheduler=scheduler,
             adaptive=adaptive,
             nan=nan,
+            plotted=plotted,
         )
         if compensation is not None:
             dump_compensation(pitch_compensation(s.test, s.axis, sign=sign), compensation, fmt)

@@ -20,6 +20,7 @@ from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
     NAN_POLICY_OPTION,
+    PLOTS_OPTION,
     PROGRESS_OPTION,
     QUIET_OPTION,
     RESULT_OPTION,
@@ -32,6 +33,7 @@ from mtmc.cli.common import (
     input_texts,
     nan_policy,
     parallel_options,
+    plots_value,
     print_json,
     print_trials_seed,
     progress_flag,
@@ -327,12 +329,14 @@ def propagate(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Propagate input distributions through EXPR by Monte Carlo (JCGM 101).
 
     The options make a propagate study (docs/study-format.md), run as mtmc run runs a
     study file; with -o its result folder holds that study file and the report.
     """
+    plotted = plots_value(plots)
     from mtmc.cli.outputs import (
         check_inputs,
         is_several,
@@ -393,6 +397,7 @@ def propagate(
                 progress=progress_flag(progress, quiet),
                 argv=command_line(ctx),
                 parallel=parallel_options(workers, executor, scheduler),
+                plotted=plotted,
             )
     except (MtmcError, ValueError) as exc:
         fail(engine_message(_at_option(exc)))

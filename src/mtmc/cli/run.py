@@ -155,6 +155,7 @@ def run_study(
     parallel: dict[str, Any] | None = None,
     adaptive: bool | None = None,
     nan_policy: str | None = None,
+    plotted: int | str | None = None,
 ) -> Any:
     """Run a loaded study and, with ``outdir``, write its result folder: every command's route.
 
@@ -174,6 +175,9 @@ def run_study(
         ``--progress/--no-progress`` (None: when stderr is a terminal).
     argv : list of str, optional
         The command line, for ``provenance.json``.
+    plotted : int or "all", optional
+        ``--plots``: how many quantities of the report get a histogram and a convergence
+        plot (:func:`mtmc.report.plotted_count`).
 
     Returns
     -------
@@ -194,7 +198,14 @@ def run_study(
             **(parallel or {}),
         )
     if outdir is not None:
-        write_result(result, outdir, study_text=study.source.text, started=started, argv=argv)
+        write_result(
+            result,
+            outdir,
+            study_text=study.source.text,
+            started=started,
+            argv=argv,
+            plotted=plotted,
+        )
     return result
 
 
@@ -213,6 +224,7 @@ def run_with_options(
     scheduler: str | None,
     adaptive: bool,
     nan: str | None,
+    plotted: int | str | None = None,
 ) -> Any:
     """:func:`run_study` with the shared options as typer gives them.
 
@@ -231,6 +243,7 @@ def run_with_options(
         parallel=parallel_options(workers, executor, scheduler),
         adaptive=True if adaptive else None,
         nan_policy=None if nan is None else nan_policy(nan),
+        plotted=plotted,
     )
 
 
@@ -246,6 +259,7 @@ def run_study_file(
     parallel: dict[str, Any] | None = None,
     adaptive: bool | None = None,
     nan_policy: str | None = None,
+    plotted: int | str | None = None,
 ) -> Any:
     """Load, run and write one study (the library calls of ``mtmc run``); return the result.
 
@@ -267,6 +281,7 @@ def run_study_file(
         parallel=parallel,
         adaptive=adaptive,
         nan_policy=nan_policy,
+        plotted=plotted,
     )
 
 
@@ -318,8 +333,10 @@ def run_cmd(
     scheduler: str | None = SCHEDULER_OPTION,
     adaptive: bool = ADAPTIVE_OPTION,
     nan: str | None = RUN_NAN_POLICY_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Run STUDY and write its result folder and HTML report."""
+    plotted = plots_value(plots)
     if trials is not None and trials < 2:
         fail(f"--trials: expected an integer >= 2, got {trials}")
     check_trials(trials)
@@ -338,6 +355,7 @@ def run_cmd(
             parallel=parallel_options(workers, executor, scheduler),
             adaptive=True if adaptive else None,
             nan_policy=None if nan is None else nan_policy(nan),
+            plotted=plotted,
         )
     except (MtmcError, OSError) as exc:
         fail(run_message(exc) + _reader_of(study, exc))

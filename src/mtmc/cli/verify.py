@@ -15,6 +15,7 @@ import typer
 from mtmc.cli.common import (
     EXECUTOR_OPTION,
     JSON_OPTION,
+    PLOTS_OPTION,
     PROGRESS_OPTION,
     QUIET_OPTION,
     RESULT_OPTION,
@@ -23,6 +24,7 @@ from mtmc.cli.common import (
     fail,
     load_study_of_kind,
     parallel_options,
+    plots_value,
     print_json,
     print_trials_seed,
     progress_bar,
@@ -259,11 +261,13 @@ def simulate_cmd(
     executor: str = EXECUTOR_OPTION,
     scheduler: str | None = SCHEDULER_OPTION,
     progress: bool | None = PROGRESS_OPTION,
+    plots: str | None = PLOTS_OPTION,
 ) -> None:
     """Monte Carlo of the whole verification: volumetric errors, coefficients, point u.
 
     The study runs as mtmc run runs it; with -o its result folder and report are written.
     """
+    plotted = plots_value(plots)
     if outdir is not None and (points is not None or tracker is not None):
         fail(
             "-o writes the study as its file gives it, which simulates its default point "
@@ -282,6 +286,7 @@ def simulate_cmd(
             progress=progress_flag(progress, quiet),
             argv=command_line(ctx),
             parallel=parallel_options(workers, executor, scheduler),
+            plotted=plotted,
         )
     except MtmcError as exc:
         if exc.field == "trials" and exc.message.endswith("run fewer trials"):
