@@ -117,11 +117,9 @@ def plotted_from_text(text: str | None) -> int | str | None:
     InputError
         On any other text (``"-1"``, ``"1.5"``, a digit of another script).
     """
-    if text is None or text == "all":
-        return text
-    if not text.isascii() or not text.isdigit():
-        raise InputError(f"expected a whole number >= 0 or 'all', got {text!r}", field="plots")
-    return int(text)
+    value = int(text) if text is not None and text.isascii() and text.isdigit() else text
+    plotted_count({}, value)  # the one check of the value, and its message
+    return value
 
 
 def plotted_count(result: Mapping[str, Any], plotted: int | str | None = None) -> int:
@@ -150,8 +148,9 @@ def _env() -> Any:
     """The Jinja environment of the report's templates, made once a process.
 
     The environment keeps its compiled templates: compiling ``report.html.j2`` and the
-    parts it includes took 0.3-0.5 s a report, a tenth of the time of a report of
-    15 figures, when each report made an environment of its own.
+    parts it includes took 0.27-0.36 s a report (a tenth of the time of a report of
+    15 figures) when each report made an environment of its own; the page, figures
+    aside, now takes 0.02-0.03 s.
     """
     import jinja2
 
