@@ -233,7 +233,7 @@ def test_a_report_of_many_quantities_draws_the_first_few_and_says_so(
     # (the test at 12 drew 120, 25 s of the suite); test_browser reads a shipped report
     # drawn at 12
     monkeypatch.setattr(mtmc.report, "MAX_PLOTTED", 2)
-    MAX_PLOTTED = 2
+    MAX_PLOTTED = mtmc.report.MAX_PLOTTED
     doc = _doc(written)
     q = doc["quantities"][0]
     doc["quantities"] = [dict(q, name=f"pose{i}.x") for i in range(MAX_PLOTTED + 3)]

@@ -137,11 +137,11 @@ def evaluate_cmd(
 ) -> None:
     """Evaluate DATA: the parameters of ISO 230-2, each with U by Monte Carlo and the GUM."""
     from mtmc.cli.run import run_with_options
-
-    plotted = plots_value(plots)
     from mtmc.positioning import pitch_compensation
     from mtmc.study.positioning import summary
     from mtmc.verification.compensation import dump_compensation
+
+    plotted = plots_value(plots)
 
     try:
         s = _study(data, study_file, units, parse_columns(columns), axis, type_a, directions)

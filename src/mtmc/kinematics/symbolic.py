@@ -98,13 +98,14 @@ def _first_order_product(mats: Sequence[sp.Matrix], errors: tuple[sp.Symbol, ...
     import sympy as sp
 
     zero = dict.fromkeys(errors, sp.Integer(0))
+    symbols = set(errors)
     v0 = sp.Matrix([0, 0, 0, 1])
     vk: dict[sp.Symbol, sp.Matrix] = {}
     for M in reversed(mats):
-        present = [e for e in errors if e in M.free_symbols]
+        present = [e for e in errors if e in M.free_symbols]  # in the order of errors
         M0 = M.xreplace(zero)
         parts = {e: M.diff(e) for e in present}
-        if any(d.free_symbols & set(errors) for d in parts.values()):
+        if any(d.free_symbols & symbols for d in parts.values()):
             raise AssertionError("a factor of the chain is not affine in the errors")
         new = {e: M0 * w for e, w in vk.items()}
         for e, Mk in parts.items():
