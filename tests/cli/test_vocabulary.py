@@ -355,3 +355,36 @@ def test_the_table_of_shared_options_says_which_commands_have_each() -> None:
         else:
             expected = listed
         assert having[option] == expected, (option, sorted(having[option] ^ expected))
+
+
+#: The commands that run a study they build or load: their shared options come from one
+#: declaration (mtmc.cli.run.study_command).
+STUDY_COMMANDS = ("artefact simulate", "positioning evaluate", "circle simulate", "circle evaluate")
+
+
+def _described(opt: Any) -> tuple[Any, ...]:
+    return (opt.opts, opt.secondary_opts, opt.default, opt.help, _value_type(opt))
+
+
+def test_the_study_commands_take_one_set_of_shared_options() -> None:
+    # before, each command declared them itself, and -o said two things: "Also write the
+    # result folder with its HTML report" (circle, positioning) and "Also write the result
+    # folder (result.json, the study file, report.html) here; ..." (artefact, verify, propagate)
+    from mtmc.cli.run import _STUDY_OPTIONS
+
+    shared = {name for name, _kind, _option in _STUDY_OPTIONS}
+    described = {
+        path: {o.name: _described(o) for o in _options(COMMANDS[path]) if o.name in shared}
+        for path in STUDY_COMMANDS
+    }
+    first = described[STUDY_COMMANDS[0]]
+    assert set(first) == shared
+    for path in STUDY_COMMANDS[1:]:
+        assert described[path] == first, path
+    # and -o means one thing wherever it writes a result folder with its report
+    writers = ("propagate", "verify simulate", *STUDY_COMMANDS)
+    helps = {
+        path: next(o.help for o in _options(COMMANDS[path]) if "--output" in o.opts)
+        for path in writers
+    }
+    assert len(set(helps.values())) == 1, helps

@@ -16,29 +16,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import (
-    EXECUTOR_OPTION,
-    PLOTS_OPTION,
-    PROGRESS_OPTION,
-    QUIET_OPTION,
-    RESULT_OPTION,
-    SCHEDULER_OPTION,
-    WORKERS_OPTION,
-    fail,
-    load_study_of_kind,
-    plots_value,
-    print_json,
-    print_quiet,
-    seed_option,
-    with_u,
-)
-from mtmc.cli.run import run_with_options
-from mtmc.cli.run_options import (
-    ADAPTIVE_OPTION,
-    RUN_NAN_POLICY_OPTION,
-    run_lines,
-    run_message,
-)
+from mtmc.cli.common import fail, load_study_of_kind, print_json, print_quiet, with_u
+from mtmc.cli.run import StudyOptions, study_command
+from mtmc.cli.run_options import run_lines, run_message
 from mtmc.errors import InputError, MtmcError
 
 app = typer.Typer(
@@ -68,11 +48,10 @@ def _check_options(
 
 
 @app.command("simulate")
+@study_command
 def simulate_cmd(
     ctx: typer.Context,
     study: Path = typer.Argument(..., help="Artefact study file (.toml)."),
-    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
-    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     figure: Path | None = typer.Option(
         None, "--figure", help="Write the error-vector plot (Fig. 7) here: .svg, .png, .pdf."
     ),
@@ -86,45 +65,23 @@ def simulate_cmd(
         help="points: draw every probed coordinate's noise; centres: each fit's centre "
         "noise from its covariance (same Gaussian law, 30 times fewer draws).",
     ),
-    outdir: Path | None = RESULT_OPTION,
     as_json: bool = typer.Option(
         False, "--json", help="Print one JSON object (lengths in µm, as its unit says)."
     ),
-    workers: int = WORKERS_OPTION,
-    executor: str = EXECUTOR_OPTION,
-    scheduler: str | None = SCHEDULER_OPTION,
-    progress: bool | None = PROGRESS_OPTION,
-    quiet: bool = QUIET_OPTION,
-    adaptive: bool = ADAPTIVE_OPTION,
-    nan: str | None = RUN_NAN_POLICY_OPTION,
-    plots: str | None = PLOTS_OPTION,
+    *,
+    options: StudyOptions,
 ) -> None:
     """Simulate STUDY: probe, identify setup errors, Table 2 and 3 with uncertainties.
 
     The study runs as mtmc run runs it; with -o its result folder and report are written.
     """
-    plotted = plots_value(plots)
-    _check_options(figure, adaptive and trials is not None, noise, outdir, no_gum)
+    outdir = options.outdir
+    _check_options(figure, options.adaptive and options.trials is not None, noise, outdir, no_gum)
     simulated: list[Any] = []
     try:
         kind = load_study_of_kind(study, "artefact")  # the study as ``mtmc run`` reads it
         kind = dataclasses.replace(kind, noise=noise, gum=not no_gum, on_simulated=simulated.append)
-        result = run_with_options(
-            ctx,
-            kind,
-            outdir,
-            study.name,
-            trials=trials,
-            seed=seed,
-            progress=progress,
-            quiet=quiet,
-            workers=workers,
-            executor=executor,
-            scheduler=scheduler,
-            adaptive=adaptive,
-            nan=nan,
-            plotted=plotted,
-        )
+        result = options.run(ctx, kind, study.name)
         res = simulated[0]
         if figure is not None:
             from mtmc.artefact.plot import plot_error_vectors
@@ -153,7 +110,7 @@ def simulate_cmd(
             }
         )
         return
-    if quiet:
+    if options.quiet:
         print_quiet(result, outdir)
         return
     con = Console()

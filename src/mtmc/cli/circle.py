@@ -16,29 +16,16 @@ from rich.console import Console
 from rich.table import Table
 
 from mtmc.cli.common import (
-    EXECUTOR_OPTION,
     JSON_OPTION,
-    PLOTS_OPTION,
-    PROGRESS_OPTION,
-    QUIET_OPTION,
-    SCHEDULER_OPTION,
-    WORKERS_OPTION,
     fail,
     load_study_of_kind,
-    plots_value,
     print_json,
     print_quiet,
     print_trials_seed,
-    seed_option,
 )
 from mtmc.cli.positioning import parse_columns
-from mtmc.cli.run_options import (
-    ADAPTIVE_OPTION,
-    RESULT_FOLDER_OPTION,
-    RUN_NAN_POLICY_OPTION,
-    run_lines,
-    run_message,
-)
+from mtmc.cli.run import StudyOptions, study_command
+from mtmc.cli.run_options import run_lines, run_message
 from mtmc.csvtable import read_pairs
 from mtmc.errors import InputError, MtmcError
 
@@ -111,6 +98,7 @@ def _measured_study(
 
 
 @app.command("evaluate")
+@study_command
 def evaluate_cmd(
     ctx: typer.Context,
     data: Path = typer.Argument(
@@ -142,24 +130,11 @@ def evaluate_cmd(
     directions: str | None = typer.Option(
         None, "--directions", help="The file's direction words: clockwise=cw,counter=ccw."
     ),
-    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
-    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     as_json: bool = JSON_OPTION,
-    outdir: Path | None = RESULT_FOLDER_OPTION,
-    workers: int = WORKERS_OPTION,
-    executor: str = EXECUTOR_OPTION,
-    scheduler: str | None = SCHEDULER_OPTION,
-    progress: bool | None = PROGRESS_OPTION,
-    quiet: bool = QUIET_OPTION,
-    adaptive: bool = ADAPTIVE_OPTION,
-    nan: str | None = RUN_NAN_POLICY_OPTION,
-    plots: str | None = PLOTS_OPTION,
+    *,
+    options: StudyOptions,
 ) -> None:
     """Evaluate DATA: F, G (LSC, MZ), H, G(b) and the identified errors, each with U."""
-    from mtmc.cli.run import run_with_options
-
-    plotted = plots_value(plots)
-
     try:
         overrides = {
             "units": units,
@@ -172,22 +147,7 @@ def evaluate_cmd(
             path = {k: v for k, v in path.items() if v is not None or k == "radius"}
             path.setdefault("overrun", None)
         s = _measured_study(data, study_file, overrides, path)
-        result = run_with_options(
-            ctx,
-            s,
-            outdir,
-            data.name,
-            trials=trials,
-            seed=seed,
-            progress=progress,
-            quiet=quiet,
-            workers=workers,
-            executor=executor,
-            scheduler=scheduler,
-            adaptive=adaptive,
-            nan=nan,
-            plotted=plotted,
-        )
+        result = options.run(ctx, s, data.name)
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))
     circ = result.extra["circular"]
@@ -211,8 +171,8 @@ def evaluate_cmd(
     if as_json:
         print_json(out)
         return
-    if quiet:
-        print_quiet(result, outdir)
+    if options.quiet:
+        print_quiet(result, options.outdir)
         return
     table = Table(title=f"{data.name}: circular test ({result.trials} trials)")
     for col in ("quantity", "estimate", "U (MC, 95 %)", "U (GUM, 95 %)", "unit", "GUM §8"):
@@ -233,49 +193,22 @@ def evaluate_cmd(
         typer.echo(line)
     for note in out["notes"]:
         typer.echo(f"note: {note}")
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
+    if options.outdir is not None:
+        typer.echo(f"report: {options.outdir / 'report.html'}")
 
 
 @app.command("simulate")
+@study_command
 def simulate_cmd(
     ctx: typer.Context,
     study: Path = typer.Argument(..., help='A circular study (kind = "circular").'),
-    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
-    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     as_json: bool = JSON_OPTION,
-    outdir: Path | None = RESULT_FOLDER_OPTION,
-    workers: int = WORKERS_OPTION,
-    executor: str = EXECUTOR_OPTION,
-    scheduler: str | None = SCHEDULER_OPTION,
-    progress: bool | None = PROGRESS_OPTION,
-    quiet: bool = QUIET_OPTION,
-    adaptive: bool = ADAPTIVE_OPTION,
-    nan: str | None = RUN_NAN_POLICY_OPTION,
-    plots: str | None = PLOTS_OPTION,
+    *,
+    options: StudyOptions,
 ) -> None:
     """Simulate STUDY as mtmc run does: the parameters and the identified errors with U."""
-    from mtmc.cli.run import run_with_options
-
-    plotted = plots_value(plots)
-
     try:
-        result = run_with_options(
-            ctx,
-            load_study_of_kind(study, "circular"),
-            outdir,
-            study.name,
-            trials=trials,
-            seed=seed,
-            progress=progress,
-            quiet=quiet,
-            workers=workers,
-            executor=executor,
-            scheduler=scheduler,
-            adaptive=adaptive,
-            nan=nan,
-            plotted=plotted,
-        )
+        result = options.run(ctx, load_study_of_kind(study, "circular"), study.name)
     except (MtmcError, OSError) as exc:
         fail(run_message(exc))
     out: dict[str, Any] = {
@@ -297,8 +230,8 @@ def simulate_cmd(
     if as_json:
         print_json(out)
         return
-    if quiet:
-        print_quiet(result, outdir)
+    if options.quiet:
+        print_quiet(result, options.outdir)
         return
     table = Table(title=f"{result.title} ({result.trials} trials)")
     for col in ("quantity", "estimate", "U (MC)", "U (GUM)", "unit", "GUM §8"):
@@ -318,5 +251,5 @@ def simulate_cmd(
         typer.echo(line)
     for note in out["notes"]:
         typer.echo(f"note: {note}")
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
+    if options.outdir is not None:
+        typer.echo(f"report: {options.outdir / 'report.html'}")

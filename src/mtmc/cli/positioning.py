@@ -18,28 +18,9 @@ from rich import box
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import (
-    EXECUTOR_OPTION,
-    JSON_OPTION,
-    PLOTS_OPTION,
-    PROGRESS_OPTION,
-    QUIET_OPTION,
-    SCHEDULER_OPTION,
-    WORKERS_OPTION,
-    fail,
-    load_study_of_kind,
-    plots_value,
-    print_json,
-    print_trials_seed,
-    seed_option,
-)
-from mtmc.cli.run_options import (
-    ADAPTIVE_OPTION,
-    RESULT_FOLDER_OPTION,
-    RUN_NAN_POLICY_OPTION,
-    run_lines,
-    run_message,
-)
+from mtmc.cli.common import JSON_OPTION, fail, load_study_of_kind, print_json, print_trials_seed
+from mtmc.cli.run import StudyOptions, study_command
+from mtmc.cli.run_options import run_lines, run_message
 from mtmc.csvtable import read_pairs
 from mtmc.errors import InputError, MtmcError
 
@@ -90,6 +71,7 @@ def _study(
 
 
 @app.command("evaluate")
+@study_command
 def evaluate_cmd(
     ctx: typer.Context,
     data: Path = typer.Argument(..., help="CSV file: target,run,direction,deviation per row."),
@@ -117,50 +99,23 @@ def evaluate_cmd(
     type_a: str | None = typer.Option(
         None, "--type-a", help="means, means-and-s or none (default: means, or the study's)."
     ),
-    trials: int | None = typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials."),
-    seed: int | None = seed_option("the study's run.seed, or fresh entropy"),
     as_json: bool = JSON_OPTION,
     compensation: Path | None = typer.Option(
         None, "--compensation", help="Write the pitch-error compensation table here."
     ),
     fmt: str = typer.Option("isg", "--format", help="Its format: isg, etalon or csv."),
     sign: str = typer.Option("error", "--sign", help="Its values: error or correction."),
-    outdir: Path | None = RESULT_FOLDER_OPTION,
-    workers: int = WORKERS_OPTION,
-    executor: str = EXECUTOR_OPTION,
-    scheduler: str | None = SCHEDULER_OPTION,
-    progress: bool | None = PROGRESS_OPTION,
-    quiet: bool = QUIET_OPTION,
-    adaptive: bool = ADAPTIVE_OPTION,
-    nan: str | None = RUN_NAN_POLICY_OPTION,
-    plots: str | None = PLOTS_OPTION,
+    *,
+    options: StudyOptions,
 ) -> None:
     """Evaluate DATA: the parameters of ISO 230-2, each with U by Monte Carlo and the GUM."""
-    from mtmc.cli.run import run_with_options
     from mtmc.positioning import pitch_compensation
     from mtmc.study.positioning import summary
     from mtmc.verification.compensation import dump_compensation
 
-    plotted = plots_value(plots)
-
     try:
         s = _study(data, study_file, units, parse_columns(columns), axis, type_a, directions)
-        result = run_with_options(
-            ctx,
-            s,
-            outdir,
-            data.name,
-            trials=trials,
-            seed=seed,
-            progress=progress,
-            quiet=quiet,
-            workers=workers,
-            executor=executor,
-            scheduler=scheduler,
-            adaptive=adaptive,
-            nan=nan,
-            plotted=plotted,
-        )
+        result = options.run(ctx, s, data.name)
         if compensation is not None:
             dump_compensation(pitch_compensation(s.test, s.axis, sign=sign), compensation, fmt)
     except (MtmcError, OSError) as exc:
@@ -169,14 +124,14 @@ def evaluate_cmd(
     if as_json:
         print_json(out)
         return
-    if quiet:
+    if options.quiet:
         print_trials_seed(result.trials, result.seed)
     else:
         _print(result, out)
     if compensation is not None:
         typer.echo(f"compensation table: {compensation}")
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
+    if options.outdir is not None:
+        typer.echo(f"report: {options.outdir / 'report.html'}")
 
 
 def _decimals(text: str) -> int:

@@ -8,7 +8,11 @@ status 2; a failed or interrupted run leaves no result folder.
 
 from __future__ import annotations
 
+import functools
+import inspect
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +26,7 @@ from mtmc.cli.common import (
     PLOTS_OPTION,
     PROGRESS_OPTION,
     QUIET_OPTION,
+    RESULT_OPTION,
     SCHEDULER_OPTION,
     WORKERS_OPTION,
     check_trials,
@@ -49,9 +54,11 @@ __all__ = [
     "report_cmd",
     "run_cmd",
     "command_line",
+    "StudyOptions",
     "run_study",
     "run_study_file",
     "run_summary",
+    "study_command",
     "summary_table",
 ]
 
@@ -209,42 +216,86 @@ def run_study(
     return result
 
 
-def run_with_options(
-    ctx: typer.Context,
-    study: Any,
-    outdir: Path | None,
-    label: str,
-    *,
-    trials: int | None,
-    seed: int | None,
-    progress: bool | None,
-    quiet: bool,
-    workers: int,
-    executor: str,
-    scheduler: str | None,
-    adaptive: bool,
-    nan: str | None,
-    plotted: int | str | None = None,
-) -> Any:
-    """:func:`run_study` with the shared options as typer gives them.
+#: The options of a command that runs a study it builds or loads, as its ``--help`` lists
+#: them after the command's own: (parameter, type, typer option). One declaration for
+#: ``circle simulate``, ``circle evaluate``, ``positioning evaluate`` and ``artefact
+#: simulate`` (:func:`study_command`): one name, default and help text each.
+_STUDY_OPTIONS: tuple[tuple[str, Any, Any], ...] = (
+    ("trials", int | None, typer.Option(None, "--trials", "-n", min=2, help="Monte Carlo trials.")),
+    ("seed", int | None, seed_option("the study's run.seed, or fresh entropy")),
+    ("outdir", Path | None, RESULT_OPTION),
+    ("workers", int, WORKERS_OPTION),
+    ("executor", str, EXECUTOR_OPTION),
+    ("scheduler", str | None, SCHEDULER_OPTION),
+    ("progress", bool | None, PROGRESS_OPTION),
+    ("quiet", bool, QUIET_OPTION),
+    ("adaptive", bool, ADAPTIVE_OPTION),
+    ("nan", str | None, RUN_NAN_POLICY_OPTION),
+    ("plots", str | None, PLOTS_OPTION),
+)
 
-    The one reading of ``-q``, ``-w``, ``--executor``, ``--scheduler``, ``--adaptive`` and
-    ``--nan-policy`` for the commands that run a study they build or load (``circle
-    simulate``, ``circle evaluate``, ``positioning evaluate``, ``artefact simulate``).
+
+@dataclass(frozen=True)
+class StudyOptions:
+    """The shared options of a study command (:func:`study_command`), as typer gives them.
+
+    ``plotted`` is ``--plots`` read by :func:`mtmc.cli.common.plots_value`, checked before
+    the command runs anything.
     """
-    return run_study(
-        study,
-        outdir,
-        label=label,
-        trials=trials,
-        seed=seed,
-        progress=progress_flag(progress, quiet),
-        argv=command_line(ctx),
-        parallel=parallel_options(workers, executor, scheduler),
-        adaptive=True if adaptive else None,
-        nan_policy=None if nan is None else nan_policy(nan),
-        plotted=plotted,
-    )
+
+    trials: int | None
+    seed: int | None
+    outdir: Path | None
+    workers: int
+    executor: str
+    scheduler: str | None
+    progress: bool | None
+    quiet: bool
+    adaptive: bool
+    nan: str | None
+    plotted: int | str | None
+
+    def run(self, ctx: typer.Context, study: Any, label: str) -> Any:
+        """:func:`run_study` of ``study`` with these options; ``label`` heads the bar."""
+        return run_study(
+            study,
+            self.outdir,
+            label=label,
+            trials=self.trials,
+            seed=self.seed,
+            progress=progress_flag(self.progress, self.quiet),
+            argv=command_line(ctx),
+            parallel=parallel_options(self.workers, self.executor, self.scheduler),
+            adaptive=True if self.adaptive else None,
+            nan_policy=None if self.nan is None else nan_policy(self.nan),
+            plotted=self.plotted,
+        )
+
+
+def study_command(fn: Callable[..., None]) -> Callable[..., None]:
+    """``fn(..., options: StudyOptions)`` as a typer command with the shared options.
+
+    The command's ``--help`` lists its own options, then those of ``_STUDY_OPTIONS``;
+    ``fn`` gets them as one :class:`StudyOptions`. A new study command takes the options
+    by this decorator, so that every such command spells and explains them one way.
+    """
+    sig = inspect.signature(fn, eval_str=True)
+    own = [p for p in sig.parameters.values() if p.name != "options"]
+    shared = [
+        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=option, annotation=kind)
+        for name, kind, option in _STUDY_OPTIONS
+    ]
+
+    @functools.wraps(fn)
+    def command(*args: Any, **kwargs: Any) -> None:
+        values = {name: kwargs.pop(name) for name, _kind, _option in _STUDY_OPTIONS}
+        values["plotted"] = plots_value(values.pop("plots"))
+        fn(*args, options=StudyOptions(**values), **kwargs)
+
+    params = [*own, *shared]
+    command.__signature__ = sig.replace(parameters=params)  # type: ignore[attr-defined]
+    command.__annotations__ = {p.name: p.annotation for p in params} | {"return": None}
+    return command
 
 
 def run_study_file(

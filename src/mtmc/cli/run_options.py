@@ -15,16 +15,10 @@ import typer
 
 __all__ = [
     "ADAPTIVE_OPTION",
-    "RESULT_FOLDER_OPTION",
     "RUN_NAN_POLICY_OPTION",
     "run_lines",
     "run_message",
 ]
-
-#: ``-o``/``--output`` of a command that runs a study and may also write its result folder.
-RESULT_FOLDER_OPTION: Any = typer.Option(
-    None, "-o", "--output", help="Also write the result folder with its HTML report."
-)
 
 #: ``--adaptive``: the number of trials chosen by the adaptive procedure of JCGM 101 §7.9.
 ADAPTIVE_OPTION: Any = typer.Option(
