@@ -9,6 +9,7 @@ packages below it in :data:`ALLOWED` (the table of docs/architecture.md).
 from __future__ import annotations
 
 import ast
+import functools
 from collections import defaultdict
 from pathlib import Path
 
@@ -120,7 +121,10 @@ def _package(module: str) -> str:
     return parts[1]
 
 
+@functools.cache
 def _graph(*, typing_too: bool = False) -> dict[str, set[str]]:
+    """Each module's imports of other modules of mtmc, read once per test process (the
+    three tests that read it took 5-7 s each to parse the package, under coverage)."""
     modules = _modules()
     return {m: _imports(m, p, modules, typing_too=typing_too) for m, p in modules.items()}
 
