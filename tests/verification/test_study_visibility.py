@@ -127,3 +127,24 @@ def test_mtmc_run_warns_and_the_result_carries_it(
     table = next(t for t in result["tables"] if t["name"] == "point_mean_volumetric_error")
     assert table["rows"][0][:2] == ["initial", "max"]
     assert table["rows"][0][3] == pytest.approx(pm["initial"]["max"]["estimate"])
+
+
+def test_an_unknown_point_set_or_tracker_is_refused_as_the_simulation_refuses_it() -> None:
+    # one lookup of a point set and of a tracker position (VerificationStudy.point_set,
+    # tracker_name) for the simulation and the visibility check: the same message in both
+    from mtmc.errors import InputError
+
+    st = load_study(STUDY).study
+    for call in (lambda: study_visibility(st, "nope"), lambda: st.verification("nope")):
+        with pytest.raises(InputError, match=r"^field points: no point set 'nope'; the study ha"):
+            call()
+    for call in (
+        lambda: study_visibility(st, "mesh96", ["pos1", "posX"]),
+        lambda: st.verification("mesh96", "posX"),
+    ):
+        with pytest.raises(InputError) as info:
+            call()
+        assert info.value.field == "tracker"
+        assert info.value.message == "no tracker position 'posX'; the study has " + ", ".join(
+            st.trackers
+        )

@@ -138,25 +138,45 @@ class VerificationStudy:
         InputError
             For an unknown point set or tracker name.
         """
-        pn = self.default_points if points is None else points
-        tn = self.default_tracker if tracker is None else tracker
+        return Verification(
+            self.model,
+            self.point_set(points).q,
+            self.trackers[self.tracker_name(tracker)],
+            self.truth,
+            pose=self.pose,
+            fixed=self.fixed,
+        )
+
+    def point_set(self, name: str | None = None) -> PointSet:
+        """The point set ``name`` (default: the study's ``[run] points``).
+
+        Raises
+        ------
+        InputError
+            For a name the study does not have, naming those it has.
+        """
+        pn = self.default_points if name is None else name
         if pn not in self.points:
             raise InputError(
                 f"no point set {pn!r}; the study has {', '.join(self.points)}", field="points"
             )
+        return self.points[pn]
+
+    def tracker_name(self, name: str | None = None) -> str:
+        """``name`` checked against the tracker positions (default: ``[run] tracker``).
+
+        Raises
+        ------
+        InputError
+            For a name the study does not have, naming those it has.
+        """
+        tn = self.default_tracker if name is None else name
         if tn not in self.trackers:
             raise InputError(
                 f"no tracker position {tn!r}; the study has {', '.join(self.trackers)}",
                 field="tracker",
             )
-        return Verification(
-            self.model,
-            self.points[pn].q,
-            self.trackers[tn],
-            self.truth,
-            pose=self.pose,
-            fixed=self.fixed,
-        )
+        return tn
 
     def simulate(
         self,

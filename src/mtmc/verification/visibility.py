@@ -279,23 +279,11 @@ def study_visibility(
     InputError
         For an unknown point set or tracker position.
     """
-    from mtmc.errors import InputError
-
-    pn = study.default_points if points is None else points
-    if pn not in study.points:
-        raise InputError(
-            f"no point set {pn!r}; the study has {', '.join(study.points)}", field="points"
-        )
-    names = list(study.trackers) if trackers is None else list(trackers)
-    for n in names:
-        if n not in study.trackers:
-            raise InputError(
-                f"no tracker position {n!r}; the study has {', '.join(study.trackers)}",
-                field="tracker",
-            )
+    q = study.point_set(points).q
+    names = [study.tracker_name(n) for n in (study.trackers if trackers is None else trackers)]
     return plan_visibility(
         study.machine,
-        study.points[pn].q,
+        q,
         {n: study.trackers[n] for n in names},
         study.limits or TrackerLimits(),
     )
