@@ -107,6 +107,13 @@ class PointSet:
     description: str = ""
 
 
+def _one_of(names: Mapping[str, Any], name: str, what: str, field: str) -> str:
+    """``name`` where ``names`` has it; an :class:`InputError` naming those it has otherwise."""
+    if name not in names:
+        raise InputError(f"no {what} {name!r}; the study has {', '.join(names)}", field=field)
+    return name
+
+
 @dataclass(frozen=True)
 class VerificationStudy:
     """A verification study read from a file (see the module notes)."""
@@ -148,35 +155,14 @@ class VerificationStudy:
         )
 
     def point_set(self, name: str | None = None) -> PointSet:
-        """The point set ``name`` (default: the study's ``[run] points``).
-
-        Raises
-        ------
-        InputError
-            For a name the study does not have, naming those it has.
-        """
+        """The point set ``name`` (default: ``[run] points``); InputError for another name."""
         pn = self.default_points if name is None else name
-        if pn not in self.points:
-            raise InputError(
-                f"no point set {pn!r}; the study has {', '.join(self.points)}", field="points"
-            )
-        return self.points[pn]
+        return self.points[_one_of(self.points, pn, "point set", "points")]
 
     def tracker_name(self, name: str | None = None) -> str:
-        """``name`` checked against the tracker positions (default: ``[run] tracker``).
-
-        Raises
-        ------
-        InputError
-            For a name the study does not have, naming those it has.
-        """
+        """``name``, a tracker position of the study (default: ``[run] tracker``), checked."""
         tn = self.default_tracker if name is None else name
-        if tn not in self.trackers:
-            raise InputError(
-                f"no tracker position {tn!r}; the study has {', '.join(self.trackers)}",
-                field="tracker",
-            )
-        return tn
+        return _one_of(self.trackers, tn, "tracker position", "tracker")
 
     def simulate(
         self,
