@@ -22,6 +22,7 @@ function states its scale in its docstring.
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -43,6 +44,8 @@ __all__ = [
     "check_scalars",
     "check_vectors",
     "degenerate",
+    "in_batch",
+    "IN_BATCH",
 ]
 
 RTOL: float = 1e-10
@@ -54,6 +57,28 @@ ORTHO_TOL: float = 1e-9
 Products of a few hundred rotations in float64 stay near 1e-13; a first-order (small-angle)
 matrix ``I + [e]x`` misses by ``|e|²`` and passes for angles below about 3e-5 rad.
 """
+
+
+def in_batch(mask: npt.ArrayLike, items: str = "trials", item: str = "trial") -> str:
+    """Where the set entries of ``mask``, shape ``(M,)``, are: the words of a batch's error.
+
+    Every refusal of some trials of a batch says it so: how many, of how many, the first.
+
+    Examples
+    --------
+    >>> in_batch(np.array([False, True, True]))
+    'in 2 of 3 trials (first: trial 1)'
+    >>> in_batch(np.array([True]), "matrices", "matrix")
+    'in 1 of 1 matrices (first: matrix 0)'
+    """
+    m = np.asarray(mask, dtype=np.bool_).ravel()
+    bad = np.flatnonzero(m)
+    return f"in {bad.size} of {m.size} {items} (first: {item} {bad[0]})"
+
+
+#: The words :func:`in_batch` writes, as a pattern: a message about one case (the nominal
+#: values of a graph) leaves them out.
+IN_BATCH = re.compile(r" in \d+ of \d+ \w+ \(first: \w+ \d+\)")
 
 
 def _shape_text(shape: tuple[int, ...]) -> str:
@@ -209,19 +234,16 @@ def check_rotation_matrices(x: npt.ArrayLike, name: str = "R") -> NDArray[np.flo
     err = np.abs(np.swapaxes(flat, -1, -2) @ flat - np.eye(3)).max(axis=(-2, -1))
     bad = ~(err <= ORTHO_TOL)
     if bad.any():
-        first = int(np.flatnonzero(bad)[0])
         raise InputError(
             f"expected a rotation matrix (max |RᵀR − I| <= {ORTHO_TOL:g}), got one with "
-            f"{float(err[first]):.3g} in {int(bad.sum())} of {bad.size} matrices "
-            f"(first: matrix {first})",
+            f"{float(err[np.argmax(bad)]):.3g} {in_batch(bad, 'matrices', 'matrix')}",
             field=name,
         )
     refl = np.linalg.det(flat) < 0.0
     if refl.any():
-        first = int(np.flatnonzero(refl)[0])
         raise InputError(
-            f"expected a rotation matrix (det +1), got a reflection (det -1) in "
-            f"{int(refl.sum())} of {refl.size} matrices (first: matrix {first})",
+            "expected a rotation matrix (det +1), got a reflection (det -1) "
+            + in_batch(refl, "matrices", "matrix"),
             field=name,
         )
     return arr
@@ -277,11 +299,8 @@ def check_point_sets(
         )
     finite = np.isfinite(arr).all(axis=(1, 2))
     if not finite.all():
-        bad = np.flatnonzero(~finite)
         raise InputError(
-            f"expected finite coordinates, got NaN or infinity in {bad.size} of "
-            f"{arr.shape[0]} trials (first: trial {bad[0]})",
-            field=name,
+            f"expected finite coordinates, got NaN or infinity {in_batch(~finite)}", field=name
         )
     return arr
 
@@ -407,9 +426,4 @@ def degenerate(mask: NDArray[np.bool_], case: str, expected: str, field: str | N
     the vector has zero length in 1 of 2 trials (first: trial 1); expected a vector
     """
     if mask.any():
-        bad = np.flatnonzero(mask)
-        raise DegenerateGeometryError(
-            f"{case} in {bad.size} of {mask.shape[0]} trials (first: trial {bad[0]}); "
-            f"expected {expected}",
-            field=field,
-        )
+        raise DegenerateGeometryError(f"{case} {in_batch(mask)}; expected {expected}", field=field)

@@ -61,6 +61,7 @@ from mtmc.geometry.checks import (
     check_scalars,
     check_vectors,
     degenerate,
+    in_batch,
 )
 from mtmc.geometry.primitives import Circle, Index, Line, Plane, Sphere, _index
 from mtmc.geometry.vec import cross as _cross
@@ -533,10 +534,9 @@ def _check_iteration_args(xtol: float, max_iterations: int) -> None:
 
 def _converged(failed: NDArray[np.bool_], what: str, max_iterations: int) -> None:
     if failed.any():
-        bad = np.flatnonzero(failed)
         raise ConvergenceError(
-            f"{what} did not converge in {max_iterations} Gauss-Newton iterations in "
-            f"{bad.size} of {failed.shape[0]} trials (first: trial {bad[0]}); expected "
+            f"{what} did not converge in {max_iterations} Gauss-Newton iterations "
+            f"{in_batch(failed)}; expected "
             "points that determine the feature (a patch too small for its noise leaves "
             "the radius undetermined), or a larger max_iterations",
             field="points",

@@ -42,6 +42,7 @@ from mtmc.geometry.checks import (
     check_scalars,
     check_vectors,
     degenerate,
+    in_batch,
 )
 
 __all__ = ["Circle", "Line", "Plane", "Sphere"]
@@ -145,10 +146,8 @@ def _set(obj: object, **values: NDArray[np.float64]) -> None:
 def _check_radius(r: NDArray[np.float64], name: str) -> None:
     bad = r < 0.0
     if bad.any():
-        first = int(np.flatnonzero(bad)[0])
         raise InputError(
-            f"expected a radius >= 0 mm, got {float(r[first])!r} in {int(bad.sum())} of "
-            f"{r.shape[0]} trials (first: trial {first})",
+            f"expected a radius >= 0 mm, got {float(r[np.argmax(bad)])!r} {in_batch(bad)}",
             field=name,
         )
 

@@ -34,7 +34,6 @@ e.g. an angle typed in radians in a place that says ``unit = "deg"``, is refused
 from __future__ import annotations
 
 import math
-import re
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -46,6 +45,7 @@ from numpy.typing import NDArray
 
 from mtmc.errors import ConditioningWarning, DegenerateGeometryError, GraphError, MtmcError
 from mtmc.frozen import frozen_floats
+from mtmc.geometry.checks import IN_BATCH
 from mtmc.graph.places import VECTOR_TYPES
 from mtmc.graph.structure import Plan, Step
 from mtmc.graph.units import place_dimension
@@ -254,7 +254,7 @@ def check_nominal(plan: Plan, *, max_condition: float = MAX_CONDITION) -> Nomina
         try:
             out = flatten(out_type, _fire(step, args), 1)[0]
         except DegenerateGeometryError as exc:
-            what = re.sub(r" in \d+ of \d+ trials \(first: trial \d+\)", "", exc.message)
+            what = IN_BATCH.sub("", exc.message)
             raise DegenerateGeometryError(
                 f"transition {t.name} ({t.op}): at the nominal values (without noise) "
                 f"{what}; the inputs {', '.join(t.inputs)} do not define a {t.op}",
