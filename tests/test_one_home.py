@@ -32,6 +32,8 @@ HOMES: dict[str, tuple[str, ...]] = {
     "csvtable.py": ("read_csv", "read_pairs", "read_units"),
     "study/units.py": ("read_unit", "model_unit", "check_model_units"),
     "cli/run.py": ("study_command", "StudyOptions"),
+    "geometry/checks.py": ("in_batch",),
+    "verification/definition.py": ("point_set", "tracker_name"),
 }
 
 
