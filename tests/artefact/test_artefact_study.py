@@ -306,3 +306,38 @@ def test_exact_fit_batch_equals_one_ball_and_one_trial_at_a_time(study) -> None:
         dF = (cal[None, None] - centres).reshape(-1)
         E, *_ = np.linalg.lstsq(J, dF, rcond=None)
         np.testing.assert_allclose(batch["setup"][i], E, rtol=0, atol=1e-12)
+
+
+def test_the_input_rows_of_the_optional_laws_state_them_in_um() -> None:
+    # the rows of result.json's inputs for the machine's repeatability and the setup errors
+    # (neither in the shipped study), against the study's own numbers in mm
+    import dataclasses
+
+    from mtmc.study.artefact import _inputs
+
+    st = load_study(STUDY).study
+    n = 3 + 3 * int(st.setup.artefact.n_balls)
+    values = np.linspace(-2e-3, 3e-3, n)
+    st = dataclasses.replace(
+        st, machine_repeatability=(1e-4, 2e-4, 3e-4), setup_u=5e-4, setup_errors=values
+    )
+    rows = {r["name"]: r for r in _inputs(st)}
+    probed = int(st.repetitions) * len(st.poses) * int(st.setup.artefact.n_balls)
+    for axis, sd in zip("XYZ", (0.1, 0.2, 0.3), strict=True):
+        row = rows[f"machine repeatability, {axis} (each of the {probed} probings)"]
+        assert row == {
+            "name": row["name"],
+            "distribution": f"normal(0, {sd:g})",
+            "estimate": 0.0,
+            "u": pytest.approx(sd, rel=1e-12),
+            "unit": "µm",
+        }
+    for name, v in zip(st.names, values, strict=True):
+        row = rows[f"setup error {name}"]
+        assert row["distribution"] == f"normal({1e3 * v:g}, 0.5)"
+        assert (row["estimate"], row["u"], row["unit"]) == (
+            pytest.approx(1e3 * v, rel=1e-12),
+            pytest.approx(0.5, rel=1e-12),
+            "µm",
+        )
+    assert len(rows) == 3 + 1 + 3 + n  # probing, the CMM's centres, machine, setup

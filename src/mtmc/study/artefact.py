@@ -152,6 +152,17 @@ class ArtefactKindStudy(Study):
         )
 
 
+def _normal(name: str, mean_mm: float, sd_mm: float) -> dict[str, Any]:
+    """An input row of the artefact study: a normal law of a length, given in mm, in µm."""
+    return {
+        "name": name,
+        "distribution": f"normal({_UM * mean_mm:g}, {_UM * sd_mm:g})",
+        "estimate": _UM * float(mean_mm),
+        "u": _UM * float(sd_mm),
+        "unit": "µm",
+    }
+
+
 def _inputs(study: Any) -> tuple[dict[str, Any], ...]:
     """The uncertain inputs the study file fixes, as ``inputs`` of ``result.json``, in µm.
 
@@ -168,13 +179,7 @@ def _inputs(study: Any) -> tuple[dict[str, Any], ...]:
     probed = R * P * N
     points = probed * len(setup.offsets)
     out: list[dict[str, Any]] = [
-        {
-            "name": f"probing repeatability, {a} (each of the {points} points)",
-            "distribution": f"normal(0, {_UM * s:g})",
-            "estimate": 0.0,
-            "u": _UM * float(s),
-            "unit": "µm",
-        }
+        _normal(f"probing repeatability, {a} (each of the {points} points)", 0.0, s)
         for a, s in zip(axes, study.repeatability, strict=True)
     ]
     if study.cmm:
@@ -192,25 +197,13 @@ def _inputs(study: Any) -> tuple[dict[str, Any], ...]:
         )
     if study.machine_repeatability is not None:
         out += [
-            {
-                "name": f"machine repeatability, {a} (each of the {probed} probings)",
-                "distribution": f"normal(0, {_UM * s:g})",
-                "estimate": 0.0,
-                "u": _UM * float(s),
-                "unit": "µm",
-            }
+            _normal(f"machine repeatability, {a} (each of the {probed} probings)", 0.0, s)
             for a, s in zip(axes, study.machine_repeatability, strict=True)
         ]
     if study.setup_u is not None:
         values = np.zeros(3 + 3 * N) if study.setup_errors is None else study.setup_errors
         out += [
-            {
-                "name": f"setup error {name}",
-                "distribution": f"normal({_UM * v:g}, {_UM * study.setup_u:g})",
-                "estimate": _UM * float(v),
-                "u": _UM * float(study.setup_u),
-                "unit": "µm",
-            }
+            _normal(f"setup error {name}", v, study.setup_u)
             for name, v in zip(study.names, values, strict=True)
         ]
     return tuple(out)
