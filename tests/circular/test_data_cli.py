@@ -116,17 +116,26 @@ def test_cli_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-
     assert "--directions" in capsys.readouterr().err
 
 
-def test_cli_evaluate_table(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_cli_evaluate_table(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    # the table of mtmc run: y and U as the report and result.json round them (before, a
+    # table of its own: the GUM's estimate to 4 digits, U to 2, "U (MC, 95 %)" whatever p)
+    from mtmc.study import load_result
+
+    monkeypatch.setenv("COLUMNS", "200")
     p, _ = _trace(tmp_path, np.random.default_rng(3))
     argv = ["circle", "evaluate", str(p), "--radius", str(R), "-n", "500", "--seed", "1"]
     argv += ["--columns", "angle=Angle,direction=Dir,deviation=Error"]
-    argv += ["--directions", "counter=ccw", "--units", "deg,um"]
-    assert main(argv) == 0
+    argv += ["--directions", "counter=ccw", "--units", "deg,um", "-o", str(tmp_path / "r")]
+    assert main([*argv, "--plots", "0"]) == 0
     out = capsys.readouterr().out
-    assert "G_mz" in out
-    assert "squareness" in out
-    assert "µrad" in out
+    assert "U (k, p = 95 %)" in out
     assert "note: radius" in out
+    rows = {line.split("│")[1].strip(): line for line in out.splitlines() if line.count("│") > 3}
+    result = load_result(tmp_path / "r")
+    assert sorted(rows) == sorted(q.name for q in result.quantities)
+    for q in result.quantities:
+        cells = [c.strip() for c in rows[q.name].split("│")[1:-1]]
+        assert cells[1:4] == [q.reported.estimate, f"{q.reported.U} (k = {q.mc.k:.3f})", q.unit]
 
 
 def test_cli_evaluate_is_a_study_with_the_shared_options(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]

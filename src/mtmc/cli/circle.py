@@ -13,7 +13,6 @@ from typing import Any
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from mtmc.cli.common import (
     JSON_OPTION,
@@ -24,7 +23,7 @@ from mtmc.cli.common import (
     print_trials_seed,
 )
 from mtmc.cli.positioning import parse_columns
-from mtmc.cli.run import StudyOptions, study_command
+from mtmc.cli.run import StudyOptions, study_command, summary_table
 from mtmc.cli.run_options import run_lines, run_message
 from mtmc.csvtable import read_pairs
 from mtmc.errors import InputError, MtmcError
@@ -174,20 +173,7 @@ def evaluate_cmd(
     if options.quiet:
         print_quiet(result, options.outdir)
         return
-    table = Table(title=f"{data.name}: circular test ({result.trials} trials)")
-    for col in ("quantity", "estimate", "U (MC, 95 %)", "U (GUM, 95 %)", "unit", "GUM §8"):
-        table.add_column(col, justify="left" if col in ("quantity", "unit") else "right")
-    for group in ("parameters", "errors"):
-        for name, e in out[group].items():
-            table.add_row(
-                name,
-                f"{e['estimate']:.4g}",
-                f"{e['U']:.2g}",
-                "" if e["U_gum"] is None else f"{e['U_gum']:.2g}",
-                e["unit"],
-                "validated" if e["validated"] else "not validated",
-            )
-    Console().print(table)
+    Console().print(summary_table(result))  # the table of mtmc run, as the report rounds
     print_trials_seed(result.trials, result.seed)
     for line in run_lines(result.extra.get("run")):
         typer.echo(line)
@@ -233,19 +219,7 @@ def simulate_cmd(
     if options.quiet:
         print_quiet(result, options.outdir)
         return
-    table = Table(title=f"{result.title} ({result.trials} trials)")
-    for col in ("quantity", "estimate", "U (MC)", "U (GUM)", "unit", "GUM §8"):
-        table.add_column(col, justify="left" if col in ("quantity", "unit") else "right")
-    for q in result.quantities:
-        table.add_row(
-            q.name,
-            f"{q.mc.estimate:.4g}",
-            f"{q.mc.U:.2g}",
-            "" if q.gum is None else f"{q.gum.U:.2g}",
-            q.unit,
-            "" if q.validation is None else q.validation.verdict,
-        )
-    Console().print(table)
+    Console().print(summary_table(result))  # the table of mtmc run, as the report rounds
     print_trials_seed(result.trials, result.seed)
     for line in run_lines(result.extra.get("run")):
         typer.echo(line)
