@@ -56,7 +56,6 @@ __all__ = [
     "command_line",
     "StudyOptions",
     "run_study",
-    "run_study_file",
     "run_summary",
     "study_command",
     "summary_table",
@@ -255,14 +254,18 @@ class StudyOptions:
     nan: str | None
     plotted: int | str | None
 
-    def run(self, ctx: typer.Context, study: Any, label: str) -> Any:
-        """:func:`run_study` of ``study`` with these options; ``label`` heads the bar."""
+    def run(self, ctx: typer.Context, study: Any, label: str, *, samples: bool = False) -> Any:
+        """:func:`run_study` of ``study`` with these options; ``label`` heads the bar.
+
+        ``samples`` is ``mtmc run --samples``: the samples also written as ``.npy``.
+        """
         return run_study(
             study,
             self.outdir,
             label=label,
             trials=self.trials,
             seed=self.seed,
+            samples=True if samples else None,
             progress=progress_flag(self.progress, self.quiet),
             argv=command_line(ctx),
             parallel=parallel_options(self.workers, self.executor, self.scheduler),
@@ -296,44 +299,6 @@ def study_command(fn: Callable[..., None]) -> Callable[..., None]:
     command.__signature__ = sig.replace(parameters=params)  # type: ignore[attr-defined]
     command.__annotations__ = {p.name: p.annotation for p in params} | {"return": None}
     return command
-
-
-def run_study_file(
-    study: Path,
-    outdir: Path,
-    *,
-    trials: int | None = None,
-    seed: int | None = None,
-    samples: bool | None = None,
-    progress: bool | None = None,
-    argv: list[str] | None = None,
-    parallel: dict[str, Any] | None = None,
-    adaptive: bool | None = None,
-    nan_policy: str | None = None,
-    plotted: int | str | None = None,
-) -> Any:
-    """Load, run and write one study (the library calls of ``mtmc run``); return the result.
-
-    ``parallel`` holds the ``workers``, ``executor`` and ``scheduler`` of
-    :meth:`mtmc.study.Study.run`; ``adaptive`` and ``nan_policy`` override ``[run]``
-    (None: as the file says).
-    """
-    from mtmc.study import load_study
-
-    return run_study(
-        load_study(study),
-        outdir,
-        label=study.name,
-        trials=trials,
-        seed=seed,
-        samples=samples,
-        progress=progress,
-        argv=argv,
-        parallel=parallel,
-        adaptive=adaptive,
-        nan_policy=nan_policy,
-        plotted=plotted,
-    )
 
 
 def command_line(ctx: typer.Context) -> list[str]:
@@ -394,20 +359,13 @@ def run_cmd(
     if adaptive and trials is not None:
         fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
     out = outdir if outdir is not None else default_outdir(study)
+    options = StudyOptions(
+        trials, seed, out, workers, executor, scheduler, progress, quiet, adaptive, nan, plotted
+    )
     try:
-        result = run_study_file(
-            study,
-            out,
-            trials=trials,
-            seed=seed,
-            samples=True if samples else None,
-            progress=progress_flag(progress, quiet),
-            argv=command_line(ctx),
-            parallel=parallel_options(workers, executor, scheduler),
-            adaptive=True if adaptive else None,
-            nan_policy=None if nan is None else nan_policy(nan),
-            plotted=plotted,
-        )
+        from mtmc.study import load_study
+
+        result = options.run(ctx, load_study(study), study.name, samples=samples)
     except (MtmcError, OSError) as exc:
         fail(run_message(exc) + _reader_of(study, exc))
     warn(result.extra.get("warnings", ()))
