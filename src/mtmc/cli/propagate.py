@@ -336,7 +336,6 @@ def propagate(
     The options make a propagate study (docs/study-format.md), run as mtmc run runs a
     study file; with -o its result folder holds that study file and the report.
     """
-    plotted = plots_value(plots)
     from mtmc.cli.outputs import (
         check_inputs,
         is_several,
@@ -346,6 +345,7 @@ def propagate(
     from mtmc.study import loads_study
     from mtmc.uncertainty.formula import expression
 
+    plotted = plots_value(plots)
     check_trials(trials, None if adaptive else p)
     if adaptive and trials is not None:
         fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
