@@ -167,6 +167,15 @@ def evaluate_cmd(
     out["rms"] = circ["rms_um"]
     out["trials"] = result.trials
     out["seed"] = result.seed
+    _print(result, out, as_json, options)
+
+
+def _print(result: Any, out: dict[str, Any], as_json: bool, options: StudyOptions) -> None:
+    """What both circle commands print of their result.
+
+    ``out`` with --json; else the table of mtmc run, the trials and seed, how the run went,
+    the notes and the report (with -q: the trials and seed, and the report).
+    """
     if as_json:
         print_json(out)
         return
@@ -213,17 +222,4 @@ def simulate_cmd(
         },
         "notes": result.extra["circular"]["notes"],
     }
-    if as_json:
-        print_json(out)
-        return
-    if options.quiet:
-        print_quiet(result, options.outdir)
-        return
-    Console().print(summary_table(result))  # the table of mtmc run, as the report rounds
-    print_trials_seed(result.trials, result.seed)
-    for line in run_lines(result.extra.get("run")):
-        typer.echo(line)
-    for note in out["notes"]:
-        typer.echo(f"note: {note}")
-    if options.outdir is not None:
-        typer.echo(f"report: {options.outdir / 'report.html'}")
+    _print(result, out, as_json, options)
