@@ -83,10 +83,16 @@ def _modules() -> dict[str, Path]:
     return out
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The syntax tree of a module of mtmc, parsed once for all the tests of this file."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
 def _imports(
     name: str, path: Path, modules: dict[str, Path], *, typing_too: bool = False
 ) -> set[str]:
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     skip: set[int] = set()
     for node in [] if typing_too else ast.walk(tree):
         if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
@@ -195,7 +201,7 @@ def _dotted(node: ast.expr) -> list[str] | None:
 
 def _refused_uses(path: Path) -> list[str]:
     """The uses of :data:`_REFUSED` in a module: imports and ``np.linalg.X`` attributes."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     alias = {"numpy": "numpy", "scipy": "scipy"}
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
