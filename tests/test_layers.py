@@ -85,7 +85,7 @@ def _modules() -> dict[str, Path]:
 
 @functools.cache
 def _tree(path: Path) -> ast.Module:
-    """The syntax tree of a module of mtmc, parsed once for all the tests of this file."""
+    """The syntax tree of a Python file, parsed once per test process."""
     return ast.parse(path.read_text(encoding="utf-8"))
 
 
