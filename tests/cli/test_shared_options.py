@@ -145,18 +145,33 @@ def _trace(tmp_path: Path) -> Path:
 def test_every_study_command_takes_quiet(
     argv: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """-q means what it means to mtmc run: no table, no bar; the trials, seed and report."""
+    """-q means what it means to mtmc run: no table, no bar; the trials and seed, how the
+    run went, the JCGM 106 decisions and the report."""
     argv = [str(_trace(tmp_path)) if a == "TRACE" else a for a in argv]
     argv = [str(_two_poses(tmp_path)) if a == "ARTEFACT" else a for a in argv]
     argv = [str(ROOT / a) if a.startswith("examples/") else a for a in argv]
     out_dir = tmp_path / "r"
     # the report without histograms (--plots 0): what -q prints does not depend on them,
     # and they were 22 of the 25 s of these four runs
-    argv += ["-n", "40", "-s", "3", "-o", str(out_dir), "-q", "--progress", "--plots", "0"]
-    assert main(argv) == 0
+    same = ["-n", "40", "-s", "3", "-q", "--progress", "--plots", "0"]
+    assert main([*argv, *same, "-o", str(out_dir)]) == 0
     out, err = capsys.readouterr()
-    assert out.splitlines() == ["trials 40  seed 3", f"report: {out_dir / 'report.html'}"]
+    lines = out.splitlines()
+    assert lines[0] == "trials 40  seed 3"
+    assert lines[-1] == f"report: {out_dir / 'report.html'}"
     assert "trials" not in err  # -q turns the bar off, --progress or not
+    # between them a decision for each output with [conformity] (the shipped circular and
+    # positioning studies have some), in the order of result.json, with what it decided
+    doc = json.loads((out_dir / "result.json").read_text(encoding="utf-8"))
+    decided = [(q["name"], q["conformity"]) for q in doc["quantities"] if q.get("conformity")]
+    assert len(lines) == len(decided) + 2
+    for line, (name, c) in zip(lines[1:-1], decided, strict=True):
+        assert line.startswith(f"conformity of {name} (JCGM 106): {c['text']}; {name} = ")
+    # and mtmc run of the same study file prints the same lines
+    study = next((a for a in argv if a.endswith(".toml")), None)
+    if study is not None:
+        assert main(["run", study, *same, "-o", str(tmp_path / "run")]) == 0
+        assert capsys.readouterr().out.splitlines()[:-1] == lines[:-1]
 
 
 #: One command line of each command that writes a result folder with a report (``-o``);

@@ -235,6 +235,12 @@ def test_mtmc_run_prints_the_decision_and_writes_a_folder_that_loads(tmp_path, c
     lib = loads_study(STUDY, file=str(study)).run(trials=4000)
     q = lib.quantity("dx")
     assert q.conformity is not None
-    assert printed[-2] == f"dx: {q.conformity['text']}"  # the library's decision, same seed
+    # the library's decision, same seed, with the estimate and the limits it was held to
+    assert printed[-2] == (
+        f"conformity of dx (JCGM 106): {q.conformity['text']}; dx = "
+        f"{q.conformity['estimate']:.6g} mm against T_L = -0.004 mm, T_U = 0.004 mm, "
+        f"acceptance limits A_L = {q.conformity['acceptance'][0]:.6g} mm, "
+        f"A_U = {q.conformity['acceptance'][1]:.6g} mm"
+    )
     assert printed[-1] == f"report: {out / 'report.html'}"
     assert load_result(out).quantity("dx").conformity == q.conformity

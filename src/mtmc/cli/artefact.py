@@ -16,9 +16,9 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import fail, load_study_of_kind, print_json, print_quiet, with_u
-from mtmc.cli.run import StudyOptions, study_command
-from mtmc.cli.run_options import run_lines, run_message
+from mtmc.cli.common import fail, load_study_of_kind, print_json, with_u
+from mtmc.cli.run import StudyOptions, print_outcome, study_command
+from mtmc.cli.run_options import run_message
 from mtmc.errors import InputError, MtmcError
 
 app = typer.Typer(
@@ -111,7 +111,7 @@ def simulate_cmd(
         )
         return
     if options.quiet:
-        print_quiet(result, outdir)
+        print_outcome(result, outdir, seed_line=True)
         return
     con = Console()
     t = Table(
@@ -152,10 +152,7 @@ def simulate_cmd(
         f"mean volumetric error {out['volumetric_mean_um']:.2f} µm; "
         f"trials {out['trials']}  seed {out['seed']}"
     )
-    for line in run_lines(run):
-        typer.echo(line)
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
+    print_outcome(result, outdir, seed_line=False)
 
 
 @app.command("fit")

@@ -19,12 +19,11 @@ from mtmc.cli.common import (
     fail,
     load_study_of_kind,
     print_json,
-    print_quiet,
     print_trials_seed,
 )
 from mtmc.cli.positioning import parse_columns
-from mtmc.cli.run import StudyOptions, study_command, summary_table
-from mtmc.cli.run_options import run_lines, run_message
+from mtmc.cli.run import StudyOptions, print_outcome, study_command, summary_table
+from mtmc.cli.run_options import run_message
 from mtmc.csvtable import read_pairs
 from mtmc.errors import InputError, MtmcError
 
@@ -173,23 +172,18 @@ def evaluate_cmd(
 def _print(result: Any, out: dict[str, Any], as_json: bool, options: StudyOptions) -> None:
     """What both circle commands print of their result.
 
-    ``out`` with --json; else the table of mtmc run, the trials and seed, how the run went,
-    the notes and the report (with -q: the trials and seed, and the report).
+    ``out`` with --json; else the table of mtmc run, the trials and seed and the notes,
+    then what every study command ends with (:func:`mtmc.cli.run.print_outcome`).
     """
     if as_json:
         print_json(out)
         return
-    if options.quiet:
-        print_quiet(result, options.outdir)
-        return
-    Console().print(summary_table(result))  # the table of mtmc run, as the report rounds
-    print_trials_seed(result.trials, result.seed)
-    for line in run_lines(result.extra.get("run")):
-        typer.echo(line)
-    for note in out["notes"]:
-        typer.echo(f"note: {note}")
-    if options.outdir is not None:
-        typer.echo(f"report: {options.outdir / 'report.html'}")
+    if not options.quiet:
+        Console().print(summary_table(result))  # the table of mtmc run, as the report rounds
+        print_trials_seed(result.trials, result.seed)
+        for note in out["notes"]:
+            typer.echo(f"note: {note}")
+    print_outcome(result, options.outdir, seed_line=options.quiet)
 
 
 @app.command("simulate")

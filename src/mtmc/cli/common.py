@@ -41,8 +41,8 @@ QUIET_OPTION: Any = typer.Option(
     False,
     "--quiet",
     "-q",
-    help="No progress bar and no table: the line 'trials M  seed S' (and the report's "
-    "path, with -o) only.",
+    help="No progress bar and no table: the line 'trials M  seed S' stays, with how the run "
+    "went (adaptive, trials left out), the JCGM 106 decisions and the report's path.",
 )
 
 #: ``-o/--output`` of the commands that run a Monte Carlo and may keep it.
@@ -173,13 +173,6 @@ def seed_option(default: str) -> Any:
 def print_trials_seed(trials: int, seed: int) -> None:
     """Print ``trials M  seed S``: what repeats a Monte Carlo run (``-n M -s S``)."""
     typer.echo(f"trials {trials}  seed {seed}")
-
-
-def print_quiet(result: Any, outdir: Path | None) -> None:
-    """What ``-q`` leaves of a study command's output: the trials and seed, the report."""
-    print_trials_seed(result.trials, result.seed)
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
 
 
 #: ``--workers N``: blocks of trials (or grid points) evaluated at once.

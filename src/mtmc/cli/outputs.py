@@ -12,12 +12,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import typer
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import input_specs, print_json, print_trials_seed, validated_text
-from mtmc.cli.run_options import run_lines
+from mtmc.cli.common import input_specs, print_json, validated_text
+from mtmc.cli.run import print_outcome
 from mtmc.errors import InputError, MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
@@ -170,11 +169,7 @@ def print_outputs(
         return
     if not quiet:
         _print(out, result.p, with_gum)
-    print_trials_seed(out["trials"], out["seed"])
-    for line in run_lines(result.extra.get("run")):
-        typer.echo(line)
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
+    print_outcome(result, outdir, seed_line=True)
 
 
 def _print(out: dict[str, Any], p: float, with_gum: bool) -> None:

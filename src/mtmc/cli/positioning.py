@@ -18,9 +18,9 @@ from rich import box
 from rich.console import Console
 from rich.table import Table
 
-from mtmc.cli.common import JSON_OPTION, fail, load_study_of_kind, print_json, print_trials_seed
-from mtmc.cli.run import StudyOptions, study_command
-from mtmc.cli.run_options import run_lines, run_message
+from mtmc.cli.common import JSON_OPTION, fail, load_study_of_kind, print_json
+from mtmc.cli.run import StudyOptions, print_outcome, study_command
+from mtmc.cli.run_options import run_message
 from mtmc.csvtable import read_pairs
 from mtmc.errors import InputError, MtmcError
 
@@ -124,14 +124,10 @@ def evaluate_cmd(
     if as_json:
         print_json(out)
         return
-    if options.quiet:
-        print_trials_seed(result.trials, result.seed)
-    else:
+    if not options.quiet:
         _print(result, out)
-    if compensation is not None:
-        typer.echo(f"compensation table: {compensation}")
-    if options.outdir is not None:
-        typer.echo(f"report: {options.outdir / 'report.html'}")
+    written = () if compensation is None else (f"compensation table: {compensation}",)
+    print_outcome(result, options.outdir, seed_line=options.quiet, written=written)
 
 
 def _decimals(text: str) -> int:
@@ -173,18 +169,6 @@ def _print(result: Any, out: dict[str, Any]) -> None:
     for name, p in out["parameters"].items():
         if p["covers"].startswith("not evaluated") or p["U"] == 0:
             typer.echo(f"{name}: {p['covers']}")
-    for name, c in out.get("conformity", {}).items():
-        typer.echo(
-            f"conformity of {name} (JCGM 106): {c['text']}; {name} = {c['estimate']:.6g} "
-            f"{unit} against T = {c['upper']:g} {unit}"
-            + (
-                f", acceptance limit {c['acceptance'][1]:.6g} {unit}"
-                if c["rule"] == "guarded" and c["acceptance"][1] is not None
-                else ""
-            )
-        )
-    for line in run_lines(result.extra.get("run")):
-        typer.echo(line)
     for note in out["notes"]:
         typer.echo(f"note: {note}")
     for warning in out["warnings"]:

@@ -35,14 +35,13 @@ from mtmc.cli.common import (
     parallel_options,
     plots_value,
     print_json,
-    print_trials_seed,
     progress_flag,
     quiet_numpy,
     seed_option,
     validated_text,
 )
-from mtmc.cli.run import command_line, run_study
-from mtmc.cli.run_options import ADAPTIVE_OPTION, run_lines
+from mtmc.cli.run import command_line, print_outcome, run_study
+from mtmc.cli.run_options import ADAPTIVE_OPTION
 from mtmc.errors import InputError, MtmcError
 
 if TYPE_CHECKING:  # the library is imported inside the commands: a fast --help
@@ -412,11 +411,7 @@ def propagate(
         return
     if not quiet:
         _print(out, model.text)
-    print_trials_seed(out["trials"], out["seed"])
-    for line in run_lines(result.extra.get("run")):
-        typer.echo(line)
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
+    print_outcome(result, outdir, seed_line=True)
 
 
 def check_sensitivity_trials(trials: int) -> None:

@@ -50,7 +50,9 @@ from mtmc.cli.run_options import (
 from mtmc.errors import MtmcError
 
 __all__ = [
+    "decision_lines",
     "default_outdir",
+    "print_outcome",
     "report_cmd",
     "run_cmd",
     "command_line",
@@ -92,6 +94,69 @@ def summary_table(result: Any) -> Table:
             "" if v is None else v.verdict,
         )
     return table
+
+
+def decision_lines(result: Any) -> list[str]:
+    """The JCGM 106 decision of each output with a ``[conformity]`` table, a line each.
+
+    The decision (:attr:`mtmc.uncertainty.decision.Conformity.text`), then the estimate
+    and the limits it was held to: the tolerance limits ``T_L``, ``T_U`` and, under
+    guarded acceptance, the acceptance limits ``A_L``, ``A_U``, in the output's unit.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as N
+    >>> c = {"text": "conforms, p_c = 0.998, rule: guarded acceptance, w = 0.5·U",
+    ...      "estimate": 5.2, "lower": None, "upper": 10.0, "rule": "guarded",
+    ...      "acceptance": [None, 9.1]}
+    >>> decision_lines(N(quantities=[N(name="E", unit="µm", conformity=c)]))
+    ['conformity of E (JCGM 106): conforms, p_c = 0.998, rule: guarded acceptance,
+      w = 0.5·U; E = 5.2 µm against T_U = 10 µm, acceptance limit A_U = 9.1 µm']
+    """
+    lines = []
+    for q in result.quantities:
+        c = q.conformity
+        if c is None:
+            continue
+        unit = q.unit
+        limits = [
+            f"T_{s} = {v:g} {unit}"
+            for s, v in zip("LU", (c["lower"], c["upper"]), strict=True)
+            if v is not None
+        ]
+        line = (
+            f"conformity of {q.name} (JCGM 106): {c['text']}; {q.name} = {c['estimate']:.6g} {unit}"
+        )
+        line += " against " + ", ".join(limits)
+        if c["rule"] == "guarded":
+            accept = [
+                f"A_{s} = {a:.6g} {unit}"
+                for s, a, t in zip("LU", c["acceptance"], (c["lower"], c["upper"]), strict=True)
+                if a is not None and t is not None
+            ]
+            if accept:
+                line += f", acceptance limit{'s' if len(accept) > 1 else ''} " + ", ".join(accept)
+        lines.append(line)
+    return lines
+
+
+def print_outcome(
+    result: Any, outdir: Path | None, *, seed_line: bool, written: tuple[str, ...] = ()
+) -> None:
+    """The lines every study command prints after its own table and notes.
+
+    With ``seed_line`` (``-q``, where no table states the seed) first the line
+    ``trials M  seed S``; then how the run went
+    (:func:`mtmc.cli.run_options.run_lines`: adaptive, trials left out), the JCGM 106
+    decisions (:func:`decision_lines`), the files ``written`` beside the folder (``"what:
+    path"``), and last the report's path where there is a result folder.
+    """
+    if seed_line:
+        print_trials_seed(result.trials, result.seed)
+    for line in [*run_lines(result.extra.get("run")), *decision_lines(result), *written]:
+        typer.echo(line)
+    if outdir is not None:
+        typer.echo(f"report: {outdir / 'report.html'}")
 
 
 def run_summary(result: Any, outdir: Path) -> dict[str, Any]:
@@ -372,16 +437,9 @@ def run_cmd(
     if as_json:
         print_json(run_summary(result, out))
         return
-    if quiet:
-        print_trials_seed(result.trials, result.seed)
-    else:
+    if not quiet:
         Console().print(summary_table(result))
-    for line in run_lines(result.extra.get("run")):
-        typer.echo(line)
-    for q in result.quantities:  # the JCGM 106 decision of an output with [conformity]
-        if q.conformity is not None:
-            typer.echo(f"{q.name}: {q.conformity['text']}")
-    typer.echo(f"report: {out / 'report.html'}")
+    print_outcome(result, out, seed_line=quiet)
 
 
 def report_cmd(

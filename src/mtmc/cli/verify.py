@@ -33,7 +33,7 @@ from mtmc.cli.common import (
     warn,
     with_u,
 )
-from mtmc.cli.run import command_line, run_study
+from mtmc.cli.run import command_line, print_outcome, run_study
 from mtmc.errors import MtmcError
 
 app = typer.Typer(
@@ -301,9 +301,7 @@ def simulate_cmd(
         return
     if not quiet:
         _print_simulated(out)
-    print_trials_seed(result.trials, result.seed)
-    if outdir is not None:
-        typer.echo(f"report: {outdir / 'report.html'}")
+    print_outcome(result, outdir, seed_line=True)
 
 
 def _check_identified(r: Any, data: Path) -> None:
