@@ -1,4 +1,4 @@
-"""README, getting-started and performance say what the code does.
+"""README, getting-started, performance and conformity say what the code does.
 
 The number of studies the demo runs, as each of them words it, is ``len(STUDIES)``; the
 Python snippets of README and getting-started run, and write nothing into the folder they
@@ -98,3 +98,21 @@ def test_python_snippets_run_and_leave_the_folder_as_it_was(
 
 def test_few_lowers_every_trial_count() -> None:
     assert _few("f(trials=10**6); g(trials=200_000)") == "f(trials=500); g(trials=500)"
+
+
+def test_the_conformity_guide_prints_what_mtmc_run_prints(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The worked example of docs/conformity.md: its study, run as written (200 000 trials,
+    seed 1), prints the decision line the guide shows."""
+    from mtmc.cli.main import main
+
+    text = (ROOT / "docs" / "conformity.md").read_text(encoding="utf-8")
+    study = re.search(r'```toml\n(kind = "propagate".*?)```', text, flags=re.S)
+    shown = re.search(r"```text\n(conformity of .*?)\n```", text)
+    assert study is not None
+    assert shown is not None
+    path = tmp_path / "x_axis_acceptance.toml"
+    path.write_text(study.group(1), encoding="utf-8")
+    assert main(["run", str(path), "-o", str(tmp_path / "out"), "-q", "--plots", "0"]) == 0
+    assert shown.group(1) in capsys.readouterr().out.splitlines()
