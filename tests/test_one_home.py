@@ -31,6 +31,7 @@ HOMES: dict[str, tuple[str, ...]] = {
     "artefact/model.py": ("in_axes",),
     "csvtable.py": ("read_csv", "read_pairs", "read_units"),
     "study/units.py": ("read_unit", "model_unit", "check_model_units"),
+    "study/result.py": ("warnings",),
     "cli/run.py": ("study_command", "StudyOptions", "print_outcome", "decision_lines"),
     "geometry/checks.py": ("in_batch",),
     "verification/definition.py": ("point_set", "tracker_name"),

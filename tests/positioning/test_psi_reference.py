@@ -116,12 +116,37 @@ def test_run_1_at_15_mm_is_flagged_by_grubbs_and_kept():
 def test_the_warning_reaches_the_terminal_and_the_json(capsys):
     argv = ["positioning", "evaluate", str(DATA), "-n", "2000", "-s", "1"]
     assert main(argv) == 0
-    text = capsys.readouterr().out
-    assert "warning: run 1 at P = 15 mm ↑ reads 100.347 µm" in text
+    # on stderr, as every command warns, and under -q too
+    err = capsys.readouterr().err
+    assert "mtmc: warning: run 1 at P = 15 mm ↑ reads 100.347 µm" in err
+    assert main([*argv, "-q"]) == 0
+    assert "mtmc: warning: run 1 at P = 15 mm ↑ reads 100.347 µm" in capsys.readouterr().err
     assert main([*argv, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert len(out["warnings"]) == 2
     assert "Grubbs' test" in out["warnings"][0]
+
+
+def test_mtmc_run_of_a_study_of_the_file_warns_as_positioning_evaluate(tmp_path, capsys):
+    # one reading of a result's warnings (StudyResult.warnings): the study's own and its
+    # kind's, here the positioning test's outliers, printed by StudyOptions.run for both
+    argv = ["-n", "2000", "-s", "1", "-q", "--plots", "0"]
+    assert main(["positioning", "evaluate", str(DATA), *argv]) == 0
+    evaluated = capsys.readouterr()
+    study = tmp_path / "psi.toml"
+    study.write_text(f'kind = "positioning"\ntitle = "PSI"\ndata = "{DATA.as_posix()}"\n')
+    assert main(["run", str(study), *argv, "-o", str(tmp_path / "r")]) == 0
+    ran = capsys.readouterr()
+    lines = [line for line in ran.err.splitlines() if line.startswith("mtmc: warning: ")]
+    assert len(lines) == 2
+    assert "Grubbs' test" in lines[0]
+    assert ran.err == evaluated.err
+    assert ran.out.splitlines()[0] == evaluated.out.splitlines()[0] == "trials 2000  seed 1"
+    as_json = ["-n", "2000", "-s", "1", "--json", "--plots", "0", "-o", str(tmp_path / "j")]
+    assert main(["run", str(study), *as_json]) == 0
+    assert json.loads(capsys.readouterr().out)["warnings"] == [
+        line.removeprefix("mtmc: warning: ") for line in lines
+    ]
 
 
 def test_the_report_and_the_notes_of_the_psi_test(tmp_path, capsys):

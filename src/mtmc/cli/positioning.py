@@ -136,7 +136,11 @@ def _decimals(text: str) -> int:
 
 
 def _print(result: Any, out: dict[str, Any]) -> None:
-    """The table of the parameters, what U covers, the decisions, the notes and warnings."""
+    """The table of the parameters, what U covers, and the notes.
+
+    The decisions and the rest follow (:func:`mtmc.cli.run.print_outcome`); the warnings
+    went to stderr (:meth:`mtmc.cli.run.StudyOptions.run`).
+    """
     unit = out["unit"]
     table = Table(
         title=f"{result.title} ({result.trials} trials, seed {result.seed})",
@@ -171,5 +175,3 @@ def _print(result: Any, out: dict[str, Any]) -> None:
             typer.echo(f"{name}: {p['covers']}")
     for note in out["notes"]:
         typer.echo(f"note: {note}")
-    for warning in out["warnings"]:
-        typer.echo(f"warning: {warning}")

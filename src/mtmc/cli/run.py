@@ -208,7 +208,7 @@ def run_summary(result: Any, outdir: Path) -> dict[str, Any]:
         "output": str(outdir),
         "report": str(outdir / "report.html"),
         "quantities": quantities,
-        "warnings": list(result.extra.get("warnings", ())),
+        "warnings": result.warnings,
         "run": result.extra.get("run"),
     }
 
@@ -322,9 +322,11 @@ class StudyOptions:
     def run(self, ctx: typer.Context, study: Any, label: str, *, samples: bool = False) -> Any:
         """:func:`run_study` of ``study`` with these options; ``label`` heads the bar.
 
-        ``samples`` is ``mtmc run --samples``: the samples also written as ``.npy``.
+        ``samples`` is ``mtmc run --samples``: the samples also written as ``.npy``. The
+        result's warnings (:attr:`mtmc.study.StudyResult.warnings`) are printed on stderr,
+        ``mtmc: warning: …``, before the command prints anything else.
         """
-        return run_study(
+        result = run_study(
             study,
             self.outdir,
             label=label,
@@ -338,6 +340,8 @@ class StudyOptions:
             nan_policy=None if self.nan is None else nan_policy(self.nan),
             plotted=self.plotted,
         )
+        warn(result.warnings)
+        return result
 
 
 def study_command(fn: Callable[..., None]) -> Callable[..., None]:
@@ -433,7 +437,6 @@ def run_cmd(
         result = options.run(ctx, load_study(study), study.name, samples=samples)
     except (MtmcError, OSError) as exc:
         fail(run_message(exc) + _reader_of(study, exc))
-    warn(result.extra.get("warnings", ()))
     if as_json:
         print_json(run_summary(result, out))
         return

@@ -875,6 +875,18 @@ class StudyResult:
     samples: Mapping[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
     input_files: tuple[InputFile, ...] = ()
 
+    @property
+    def warnings(self) -> list[str]:
+        """Every warning of the run: the study's and its kind's, one line each.
+
+        The study's are ``extra["warnings"]`` (a Type A input, a tracker position that
+        cannot see a point); a kind's own, ``extra[kind]["warnings"]`` (the readings of a
+        positioning test that Grubbs' test flags).
+        """
+        own = self.extra.get(self.kind)
+        kinds = own.get("warnings", ()) if isinstance(own, Mapping) else ()
+        return [*self.extra.get("warnings", ()), *kinds]
+
     def quantity(self, name: str) -> Quantity:
         """The quantity called ``name``."""
         for q in self.quantities:
