@@ -197,7 +197,7 @@ def simulate_record(result: Any, outdir: Path | None) -> dict[str, Any]:
     values = next(f for f in result.fields if f.name == "calibration_u").values
     out["point_u_um"] = {"max": float(values.max()), "mean": float(values.mean())}
     out["point_u_gum_um"] = extra["point_u_gum_um"]
-    out["warnings"] = list(result.extra.get("warnings", ()))
+    out["warnings"] = result.warnings
     out["run"] = result.extra.get("run")
     out["output"] = None if outdir is None else str(outdir)
     return out
