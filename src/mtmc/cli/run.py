@@ -429,7 +429,17 @@ def run_cmd(
         fail("--adaptive chooses the number of trials itself (JCGM 101 §7.9); not with --trials")
     out = outdir if outdir is not None else default_outdir(study)
     options = StudyOptions(
-        trials, seed, out, workers, executor, scheduler, progress, quiet, adaptive, nan, plotted
+        trials=trials,
+        seed=seed,
+        outdir=out,
+        workers=workers,
+        executor=executor,
+        scheduler=scheduler,
+        progress=progress,
+        quiet=quiet,
+        adaptive=adaptive,
+        nan=nan,
+        plotted=plotted,
     )
     try:
         from mtmc.study import load_study
