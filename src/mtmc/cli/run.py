@@ -119,10 +119,9 @@ def decision_lines(result: Any) -> list[str]:
         if c is None:
             continue
         unit = q.unit
+        tolerance = (c["lower"], c["upper"])
         limits = [
-            f"T_{s} = {v:g} {unit}"
-            for s, v in zip("LU", (c["lower"], c["upper"]), strict=True)
-            if v is not None
+            f"T_{s} = {v:g} {unit}" for s, v in zip("LU", tolerance, strict=True) if v is not None
         ]
         line = (
             f"conformity of {q.name} (JCGM 106): {c['text']}; {q.name} = {c['estimate']:.6g} {unit}"
@@ -131,7 +130,7 @@ def decision_lines(result: Any) -> list[str]:
         if c["rule"] == "guarded":
             accept = [
                 f"A_{s} = {a:.6g} {unit}"
-                for s, a, t in zip("LU", c["acceptance"], (c["lower"], c["upper"]), strict=True)
+                for s, a, t in zip("LU", c["acceptance"], tolerance, strict=True)
                 if a is not None and t is not None
             ]
             if accept:
